@@ -1,0 +1,280 @@
+//! The indexed polygon mesh model and its validation.
+//!
+//! Faces are stored in compressed-row form (`face_offsets` + `face_indices`) so that n-gons cost
+//! nothing extra and a 10 M-triangle mesh is three flat vectors. Normals and UVs are
+//! *face-varying*: a value table plus one index per face corner, which is how OBJ stores them and
+//! what subdivision needs for UV seams.
+
+use crate::MeshError;
+
+/// A face-varying attribute: `values`, and for each face corner (same order as
+/// [`Mesh::face_indices`]) the index of its value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FaceVarying<T> {
+    /// Distinct values.
+    pub values: Vec<T>,
+    /// One index into `values` per face corner.
+    pub indices: Vec<u32>,
+}
+
+/// A sharpness value on the edge between two vertices (Blender's edge crease, OpenSubdiv's
+/// sharpness). `a` and `b` are vertex indices in either order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crease {
+    /// First vertex of the edge.
+    pub a: u32,
+    /// Second vertex of the edge.
+    pub b: u32,
+    /// Sharpness: 0 smooth, 1 Blender's full crease; OpenSubdiv treats ≥ 10 as infinitely sharp.
+    pub value: f32,
+}
+
+/// An indexed polygon mesh with n-gon faces.
+///
+/// Invariants (checked by [`Mesh::validate`]): `face_offsets` starts at 0, is non-decreasing and
+/// ends at `face_indices.len()`; every face has ≥ 3 corners; every index is in range; every
+/// coordinate is finite; attribute arrays have the lengths their docs say.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Face `f` uses corners `face_offsets[f]..face_offsets[f + 1]`; length = faces + 1.
+    pub face_offsets: Vec<u32>,
+    /// Vertex index of each face corner.
+    pub face_indices: Vec<u32>,
+    /// Optional face-varying normals.
+    pub normals: Option<FaceVarying<[f32; 3]>>,
+    /// Optional face-varying texture coordinates.
+    pub uvs: Option<FaceVarying<[f32; 2]>>,
+    /// Edge creases (empty when none).
+    pub creases: Vec<Crease>,
+    /// Per-face group index into `group_names` (empty when the mesh has no groups).
+    pub face_groups: Vec<u32>,
+    /// Names of the face groups (materials, CAD face ids).
+    pub group_names: Vec<String>,
+}
+
+impl Default for Mesh {
+    fn default() -> Self {
+        Mesh {
+            positions: Vec::new(),
+            face_offsets: vec![0],
+            face_indices: Vec::new(),
+            normals: None,
+            uvs: None,
+            creases: Vec::new(),
+            face_groups: Vec::new(),
+            group_names: Vec::new(),
+        }
+    }
+}
+
+impl Mesh {
+    /// Number of faces.
+    pub fn face_count(&self) -> usize {
+        self.face_offsets.len().saturating_sub(1)
+    }
+
+    /// Number of stored vertices (referenced or not).
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// The vertex indices of face `f`.
+    ///
+    /// # Panics
+    /// If `f` is out of range or the offsets are inconsistent (call [`Mesh::validate`] first on
+    /// untrusted data).
+    pub fn face(&self, f: usize) -> &[u32] {
+        let (s, e) = (self.face_offsets[f] as usize, self.face_offsets[f + 1] as usize);
+        &self.face_indices[s..e]
+    }
+
+    /// Iterates over the faces as slices of vertex indices.
+    pub fn faces(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
+        self.face_offsets
+            .windows(2)
+            .map(|w| &self.face_indices[w[0] as usize..w[1] as usize])
+    }
+
+    /// Appends a face (no validation; see [`Mesh::validate`]).
+    pub fn push_face(&mut self, vertices: &[u32]) {
+        self.face_indices.extend_from_slice(vertices);
+        self.face_offsets.push(self.face_indices.len() as u32);
+    }
+
+    /// Number of triangles after fan triangulation (a face of n corners gives n − 2).
+    pub fn triangle_count(&self) -> usize {
+        self.face_offsets
+            .windows(2)
+            .map(|w| (w[1] - w[0]).saturating_sub(2) as usize)
+            .sum()
+    }
+
+    /// Axis-aligned bounds `(min, max)` of the *referenced* vertices, or `None` for a mesh with
+    /// no faces.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        if self.face_indices.is_empty() {
+            return None;
+        }
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for &v in &self.face_indices {
+            let p = self.positions[v as usize];
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        Some((lo, hi))
+    }
+
+    /// Checks every invariant of the model and returns the first violation, naming the element.
+    ///
+    /// # Errors
+    /// [`MeshError::Invalid`] with a message such as "face 12 uses vertex 9000; the mesh has
+    /// 8000 vertices".
+    pub fn validate(&self) -> Result<(), MeshError> {
+        let bad = |m: String| Err(MeshError::Invalid(m));
+        for (i, p) in self.positions.iter().enumerate() {
+            if let Some(k) = p.iter().position(|c| !c.is_finite()) {
+                return bad(format!(
+                    "vertex {i} has a non-finite coordinate {} = {}",
+                    ["x", "y", "z"][k],
+                    p[k]
+                ));
+            }
+        }
+        if self.face_offsets.first() != Some(&0) {
+            return bad("face offsets must start with 0".into());
+        }
+        if *self.face_offsets.last().unwrap() as usize != self.face_indices.len() {
+            return bad(format!(
+                "face offsets end at {} but there are {} face corners",
+                self.face_offsets.last().unwrap(),
+                self.face_indices.len()
+            ));
+        }
+        let nv = self.positions.len();
+        for (f, w) in self.face_offsets.windows(2).enumerate() {
+            if w[1] < w[0] {
+                return bad(format!("face offsets decrease at face {f}"));
+            }
+            if w[1] - w[0] < 3 {
+                return bad(format!("face {f} has {} vertices; a face needs at least 3", w[1] - w[0]));
+            }
+            for &v in &self.face_indices[w[0] as usize..w[1] as usize] {
+                if v as usize >= nv {
+                    return bad(format!("face {f} uses vertex {v}; the mesh has {nv} vertices"));
+                }
+            }
+        }
+        let corners = self.face_indices.len();
+        if let Some(n) = &self.normals {
+            check_face_varying("normal", n, corners)?;
+            if let Some((i, _)) =
+                n.values.iter().enumerate().find(|(_, v)| v.iter().any(|c| !c.is_finite()))
+            {
+                return bad(format!("normal {i} has a non-finite component"));
+            }
+        }
+        if let Some(t) = &self.uvs {
+            check_face_varying("uv", t, corners)?;
+            if let Some((i, _)) =
+                t.values.iter().enumerate().find(|(_, v)| v.iter().any(|c| !c.is_finite()))
+            {
+                return bad(format!("uv {i} has a non-finite component"));
+            }
+        }
+        for (i, c) in self.creases.iter().enumerate() {
+            if c.a as usize >= nv || c.b as usize >= nv {
+                return bad(format!(
+                    "crease {i} joins vertices {} and {}; the mesh has {nv} vertices",
+                    c.a, c.b
+                ));
+            }
+            if !c.value.is_finite() || c.value < 0.0 {
+                return bad(format!("crease {i} has value {}; it must be finite and ≥ 0", c.value));
+            }
+        }
+        if !self.face_groups.is_empty() {
+            if self.face_groups.len() != self.face_count() {
+                return bad(format!(
+                    "{} face groups given for {} faces",
+                    self.face_groups.len(),
+                    self.face_count()
+                ));
+            }
+            let ng = self.group_names.len();
+            if let Some((f, g)) = self.face_groups.iter().enumerate().find(|(_, g)| **g as usize >= ng)
+            {
+                return bad(format!("face {f} is in group {g}; the mesh has {ng} groups"));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_face_varying<T>(what: &str, a: &FaceVarying<T>, corners: usize) -> Result<(), MeshError> {
+    if a.indices.len() != corners {
+        return Err(MeshError::Invalid(format!(
+            "{} {what} indices given for {corners} face corners",
+            a.indices.len()
+        )));
+    }
+    let n = a.values.len();
+    if let Some((c, v)) = a.indices.iter().enumerate().find(|(_, v)| **v as usize >= n) {
+        return Err(MeshError::Invalid(format!(
+            "face corner {c} uses {what} {v}; there are {n} {what}s"
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Mesh {
+        let mut m = Mesh::default();
+        m.positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        m.push_face(&[0, 1, 2, 3]);
+        m
+    }
+
+    #[test]
+    fn valid_quad_counts() {
+        let m = quad();
+        m.validate().unwrap();
+        assert_eq!((m.face_count(), m.triangle_count()), (1, 2));
+        assert_eq!(m.bounds(), Some(([0.0; 3], [1.0, 1.0, 0.0])));
+    }
+
+    #[test]
+    fn out_of_range_index_is_named() {
+        let mut m = quad();
+        m.push_face(&[0, 1, 9000]);
+        let e = m.validate().unwrap_err().to_string();
+        assert_eq!(e, "face 1 uses vertex 9000; the mesh has 4 vertices");
+    }
+
+    #[test]
+    fn nan_and_small_faces_are_named() {
+        let mut m = quad();
+        m.positions[2][1] = f32::NAN;
+        assert_eq!(m.validate().unwrap_err().to_string(), "vertex 2 has a non-finite coordinate y = NaN");
+        let mut m = quad();
+        m.push_face(&[0, 1]);
+        assert_eq!(
+            m.validate().unwrap_err().to_string(),
+            "face 1 has 2 vertices; a face needs at least 3"
+        );
+    }
+
+    #[test]
+    fn face_varying_length_is_checked() {
+        let mut m = quad();
+        m.uvs = Some(FaceVarying { values: vec![[0.0; 2]], indices: vec![0, 0, 0] });
+        assert_eq!(m.validate().unwrap_err().to_string(), "3 uv indices given for 4 face corners");
+    }
+}
