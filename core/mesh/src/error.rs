@@ -12,8 +12,9 @@ pub enum MeshError {
     /// The mesh breaks an invariant (index out of range, NaN coordinate, face with < 3 corners...).
     #[error("{0}")]
     Invalid(String),
-    /// A file could not be parsed; `line` is 1-based for text formats, 0 where it does not apply.
-    #[error("{path}:{line}: {message}")]
+    /// A file could not be parsed; `line` is 1-based for text formats, 0 where it does not apply
+    /// (binary data), in which case the message is shown as `path: message`.
+    #[error("{path}:{}{message}", line_prefix(*line))]
     Parse {
         /// The file (or `<memory>`).
         path: String,
@@ -37,6 +38,14 @@ pub enum MeshError {
         #[source]
         source: std::io::Error,
     },
+    /// Reading stopped because the caller's cancel flag was set (see `io::ReadOptions::cancel`).
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// `"12: "` for a text line, `" "` when the line does not apply.
+fn line_prefix(line: u64) -> String {
+    if line == 0 { " ".to_string() } else { format!("{line}: ") }
 }
 
 impl MeshError {
@@ -47,6 +56,7 @@ impl MeshError {
             MeshError::TooLarge(_) => "too_large",
             MeshError::Unsupported(_) => "unsupported",
             MeshError::Io { .. } => "io",
+            MeshError::Cancelled => "cancelled",
         }
     }
 }

@@ -1,0 +1,362 @@
+//! The local-socket server: one reader thread per connection, one thread per request, replies
+//! multiplexed on the connection by request id (docs/protocol.md).
+//!
+//! The daemon keeps no per-client state beyond the connection. Operations come from the
+//! [`Registry`]; `hello`, `ping`, `cancel` and `shutdown` are built in because they concern
+//! the server itself.
+
+use crate::arrays::{Arrays, OwnedArray};
+use crate::error::{ErrorCode, OpError};
+use crate::frame::{Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame};
+use crate::job::{CancelToken, JobContext, Progress};
+use crate::registry::{Registry, Request, Response, run_guarded, unknown_op};
+use interprocess::local_socket::{Listener, Stream, traits::ListenerExt as _};
+use serde_json::{Map, Value, json};
+use std::collections::HashMap;
+use std::io::{self, BufReader};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Operations the server answers itself.
+const BUILTIN_OPS: [&str; 4] = ["cancel", "hello", "ping", "shutdown"];
+
+/// Server settings.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct ServerOptions {
+    /// Frame size limits.
+    pub limits: Limits,
+    /// Most requests one connection may have running at once.
+    pub max_in_flight_per_connection: usize,
+    /// How long `shutdown` waits for running requests before the server returns anyway.
+    pub shutdown_grace: Duration,
+}
+
+impl Default for ServerOptions {
+    fn default() -> Self {
+        ServerOptions {
+            limits: Limits::default(),
+            max_in_flight_per_connection: 64,
+            shutdown_grace: Duration::from_secs(10),
+        }
+    }
+}
+
+impl ServerOptions {
+    /// Sets the frame limits.
+    pub fn with_limits(mut self, limits: Limits) -> Self {
+        self.limits = limits;
+        self
+    }
+}
+
+struct Shared {
+    registry: Registry,
+    options: ServerOptions,
+    socket: PathBuf,
+    stopping: AtomicBool,
+    in_flight: AtomicUsize,
+}
+
+/// Stops a running server from another thread (signal handler, `shutdown` op).
+#[derive(Clone)]
+pub struct ShutdownHandle(Arc<Shared>);
+
+impl ShutdownHandle {
+    /// Stops accepting connections; the server then waits for running requests and returns.
+    pub fn trigger(&self) {
+        if !self.0.stopping.swap(true, Ordering::SeqCst) {
+            log::info!("shutting down");
+            // Wake the accept loop, which blocks in accept().
+            let _ = crate::socket::connect(&self.0.socket);
+        }
+    }
+}
+
+/// A server over a bound listener.
+pub struct Server {
+    shared: Arc<Shared>,
+    listener: Listener,
+}
+
+impl Server {
+    /// A server answering on `listener` (bound at `socket`, see [`crate::socket::bind`]).
+    pub fn new(listener: Listener, socket: &Path, registry: Registry, options: ServerOptions) -> Self {
+        let shared = Arc::new(Shared {
+            registry,
+            options,
+            socket: socket.to_path_buf(),
+            stopping: AtomicBool::new(false),
+            in_flight: AtomicUsize::new(0),
+        });
+        Server { shared, listener }
+    }
+
+    /// A handle that stops this server.
+    pub fn shutdown_handle(&self) -> ShutdownHandle {
+        ShutdownHandle(self.shared.clone())
+    }
+
+    /// Serves until shut down, then waits (up to the grace period) for running requests.
+    /// The socket file is removed when the server is dropped.
+    ///
+    /// # Errors
+    /// Only when accepting fails persistently; per-client failures never end the server.
+    pub fn serve(self) -> io::Result<()> {
+        log::info!("tessd listening on {}", self.shared.socket.display());
+        let mut failures = 0u32;
+        for conn in self.listener.incoming() {
+            if self.shared.stopping.load(Ordering::SeqCst) {
+                break;
+            }
+            match conn {
+                Ok(stream) => {
+                    failures = 0;
+                    let shared = self.shared.clone();
+                    let spawned = std::thread::Builder::new()
+                        .name("tessd-conn".into())
+                        .spawn(move || Connection::new(stream, shared).run());
+                    if let Err(e) = spawned {
+                        log::error!("cannot start a connection thread: {e}");
+                    }
+                }
+                Err(e) => {
+                    failures += 1;
+                    log::warn!("accept failed: {e}");
+                    if failures > 100 {
+                        return Err(e);
+                    }
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+            }
+        }
+        let deadline = Instant::now() + self.shared.options.shutdown_grace;
+        while self.shared.in_flight.load(Ordering::SeqCst) > 0 && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        log::info!("stopped");
+        Ok(())
+    }
+}
+
+/// One client connection: reads frames, runs requests, writes replies.
+struct Connection {
+    stream: Arc<Stream>,
+    write_lock: Arc<Mutex<()>>,
+    jobs: Arc<Mutex<HashMap<u64, CancelToken>>>,
+    shared: Arc<Shared>,
+}
+
+impl Connection {
+    fn new(stream: Stream, shared: Arc<Shared>) -> Connection {
+        Connection {
+            stream: Arc::new(stream),
+            write_lock: Arc::new(Mutex::new(())),
+            jobs: Arc::new(Mutex::new(HashMap::new())),
+            shared,
+        }
+    }
+
+    fn run(self) {
+        let mut reader = BufReader::with_capacity(64 << 10, &*self.stream);
+        loop {
+            match read_frame(&mut reader, &self.shared.options.limits) {
+                Ok(frame) => self.dispatch(frame),
+                Err(FrameError::Closed) => break,
+                Err(FrameError::Io(e)) => {
+                    log::debug!("connection read failed: {e}");
+                    break;
+                }
+                Err(e) => {
+                    // The byte stream is out of step: answer once, then close.
+                    log::info!("closing connection after a bad frame: {e}");
+                    self.reply(&Value::Null, Err(OpError::new(code_of(&e), e.to_string())));
+                    break;
+                }
+            }
+        }
+        // Closing the connection cancels everything still running on it.
+        for token in lock(&self.jobs).values() {
+            token.cancel();
+        }
+    }
+
+    fn dispatch(&self, frame: Frame) {
+        let Frame { mut json, arrays } = frame;
+        let raw_id = json.get("id").cloned().unwrap_or(Value::Null);
+        let parsed = parse_envelope(&mut json);
+        let (id, op, params) = match parsed {
+            Ok(p) => p,
+            Err(e) => return self.reply(&raw_id, Err(e)),
+        };
+        match op.as_str() {
+            "hello" => self.reply(&raw_id, Ok(Response::json(self.hello()))),
+            "ping" => {
+                let echo = params.get("echo").cloned().unwrap_or(Value::Null);
+                self.reply(&raw_id, Ok(Response::json(json!({"pong": true, "echo": echo}))))
+            }
+            "cancel" => {
+                let result = match params.get("id").and_then(Value::as_u64) {
+                    Some(target) => {
+                        let token = lock(&self.jobs).get(&target).cloned();
+                        token.as_ref().map(CancelToken::cancel);
+                        Ok(Response::json(json!({"cancelled": token.is_some()})))
+                    }
+                    None => Err(OpError::request("cancel needs `params.id`, the request to stop")),
+                };
+                self.reply(&raw_id, result)
+            }
+            "shutdown" => {
+                self.reply(&raw_id, Ok(Response::json(json!({"ok": true}))));
+                ShutdownHandle(self.shared.clone()).trigger();
+            }
+            _ => self.start_job(id, raw_id, op, params, arrays),
+        }
+    }
+
+    fn hello(&self) -> Value {
+        json!({
+            "server": "tessd",
+            "version": env!("CARGO_PKG_VERSION"),
+            "protocol": PROTOCOL_VERSION,
+            "ops": self.known_ops(),
+            "capabilities": self.shared.registry.capabilities(),
+            "pid": std::process::id(),
+        })
+    }
+
+    /// The registered operations and the built-in ones, sorted.
+    fn known_ops(&self) -> Vec<String> {
+        let mut ops = self.shared.registry.names();
+        ops.extend(BUILTIN_OPS.map(String::from));
+        ops.sort();
+        ops
+    }
+
+    fn start_job(&self, id: u64, raw_id: Value, op: String, params: Map<String, Value>, arrays: Arrays) {
+        let Some(operation) = self.shared.registry.get(&op) else {
+            return self.reply(&raw_id, Err(unknown_op(&op, &self.known_ops())));
+        };
+        let token = CancelToken::default();
+        {
+            let mut jobs = lock(&self.jobs);
+            if jobs.contains_key(&id) {
+                drop(jobs);
+                return self
+                    .reply(&raw_id, Err(OpError::request(format!("request id {id} is already running"))));
+            }
+            if jobs.len() >= self.shared.options.max_in_flight_per_connection {
+                drop(jobs);
+                return self.reply(
+                    &raw_id,
+                    Err(OpError::new(
+                        ErrorCode::TooLarge,
+                        format!(
+                            "this connection already runs {} requests, the most allowed",
+                            self.shared.options.max_in_flight_per_connection
+                        ),
+                    )),
+                );
+            }
+            jobs.insert(id, token.clone());
+        }
+        self.shared.in_flight.fetch_add(1, Ordering::SeqCst);
+        let this = Connection {
+            stream: self.stream.clone(),
+            write_lock: self.write_lock.clone(),
+            jobs: self.jobs.clone(),
+            shared: self.shared.clone(),
+        };
+        let spawned = std::thread::Builder::new().name(format!("tessd-{op}")).spawn(move || {
+            let started = Instant::now();
+            let sink = |p: Progress| {
+                let msg = json!({"id": id, "type": "progress", "progress": {
+                    "fraction": p.fraction, "stage": p.stage, "message": p.message}});
+                this.send(msg, &[]);
+            };
+            let ctx = JobContext::new(&sink, token);
+            let request = Request { params, arrays, base_dir: None };
+            let result = run_guarded(operation.as_ref(), request, &ctx);
+            match &result {
+                Ok(_) => log::debug!("{op} #{id} done in {:?}", started.elapsed()),
+                Err(e) => log::info!("{op} #{id} failed: {e}"),
+            }
+            lock(&this.jobs).remove(&id);
+            this.reply(&Value::from(id), result);
+            this.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
+        });
+        if let Err(e) = spawned {
+            lock(&self.jobs).remove(&id);
+            self.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
+            self.reply(&raw_id, Err(OpError::new(ErrorCode::Internal, format!("cannot start job: {e}"))));
+        }
+    }
+
+    /// Sends the final frame of a request.
+    fn reply(&self, id: &Value, result: Result<Response, OpError>) {
+        match result {
+            Ok(r) => {
+                let files: Vec<Value> =
+                    r.files.iter().map(|p| Value::from(p.display().to_string())).collect();
+                let msg = json!({"id": id, "type": "ok", "result": r.result, "files": files, "arrays": []});
+                self.send(msg, &r.arrays);
+            }
+            Err(e) => {
+                let msg = json!({"id": id, "type": "error",
+                                 "error": {"code": e.code.as_str(), "message": e.message}});
+                self.send(msg, &[]);
+            }
+        }
+    }
+
+    fn send(&self, msg: Value, arrays: &[OwnedArray]) {
+        let Value::Object(map) = msg else { unreachable!("replies are objects") };
+        let _guard = lock(&self.write_lock);
+        if let Err(e) = write_frame(&mut &*self.stream, map, arrays) {
+            log::debug!("reply not delivered: {e}");
+        }
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn code_of(e: &FrameError) -> ErrorCode {
+    match e.code() {
+        "too_large" => ErrorCode::TooLarge,
+        _ => ErrorCode::InvalidFrame,
+    }
+}
+
+/// Checks a request's `id`, `op` and `params`.
+fn parse_envelope(json: &mut Map<String, Value>) -> Result<(u64, String, Map<String, Value>), OpError> {
+    let id = match json.get("id") {
+        Some(v) => v.as_u64().ok_or_else(|| {
+            OpError::request(format!("`id` must be a non-negative integer, got {}", describe(v)))
+        })?,
+        None => return Err(OpError::request("the request has no `id`")),
+    };
+    let op = match json.remove("op") {
+        Some(Value::String(s)) => s,
+        Some(v) => return Err(OpError::request(format!("`op` must be a string, got {}", json_kind(&v)))),
+        None => return Err(OpError::request("the request has no `op`")),
+    };
+    let params = match json.remove("params") {
+        None | Some(Value::Null) => Map::new(),
+        Some(Value::Object(m)) => m,
+        Some(v) => {
+            return Err(OpError::request(format!("`params` must be an object, got {}", json_kind(&v))));
+        }
+    };
+    Ok((id, op, params))
+}
+
+fn describe(v: &Value) -> String {
+    match v {
+        Value::Number(n) => format!("{n}"),
+        other => json_kind(other).to_string(),
+    }
+}

@@ -1,0 +1,32 @@
+//! The daemon's operations: thin adapters (parse, validate, call the library, encode) filled
+//! into the [`Registry`] that the server and job files share.
+
+pub mod debug_sleep;
+pub mod mesh_arrays;
+pub mod mesh_convert;
+pub mod mesh_stats;
+
+use tessd_ipc::registry::Registry;
+
+/// Every operation of this build, and the capabilities `hello` reports.
+pub fn registry() -> Registry {
+    let mut r = Registry::new();
+    r.register("mesh.stats", mesh_stats::run)
+        .register("mesh.convert", mesh_convert::run)
+        .register("debug.sleep", debug_sleep::run);
+    for cap in [
+        "mesh.read.obj",
+        "mesh.read.ply",
+        "mesh.read.stl",
+        "mesh.read.off",
+        "mesh.write.obj",
+        "mesh.write.ply",
+        "mesh.write.stl",
+        "mesh.write.off",
+        "progress",
+        "cancel",
+    ] {
+        r.add_capability(cap);
+    }
+    r
+}

@@ -1,0 +1,63 @@
+//! The error type of this crate.
+
+use tessd_mesh::MeshError;
+use thiserror::Error;
+
+/// Errors from writing a USD stage.
+///
+/// Everything that can be checked is checked *before* the first byte is written, so an
+/// [`UsdError::InvalidMesh`], [`UsdError::InvalidOption`] or [`UsdError::TooLarge`] never leaves
+/// half a stage in the output.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum UsdError {
+    /// A mesh breaks an invariant of [`tessd_mesh::Mesh`] (see [`tessd_mesh::Mesh::validate`]);
+    /// `prim` names the mesh prim it was meant for (with the LOD variant, if any).
+    #[error("mesh prim \"{prim}\": {source}")]
+    InvalidMesh {
+        /// The mesh prim's name as given in its options (plus ` (LODn)` for LOD levels).
+        prim: String,
+        /// What is wrong with the mesh.
+        #[source]
+        source: MeshError,
+    },
+    /// An option cannot be written as given (non-finite transform or `metersPerUnit`, the Loop
+    /// scheme on a mesh that is not all triangles, no LOD levels...).
+    #[error("{0}")]
+    InvalidOption(String),
+    /// An index does not fit USD's 32-bit signed `int`.
+    #[error("{0}")]
+    TooLarge(String),
+    /// Writing failed. `path` is the file, or `<stream>` when writing to a caller's writer.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file concerned, or `<stream>`.
+        path: String,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl UsdError {
+    /// A short stable machine code for this error, matching the codes of the wire protocol
+    /// (`invalid_mesh`, `invalid_request`, `too_large`, `io`).
+    pub fn code(&self) -> &'static str {
+        match self {
+            UsdError::InvalidMesh { .. } => "invalid_mesh",
+            UsdError::InvalidOption(_) => "invalid_request",
+            UsdError::TooLarge(_) => "too_large",
+            UsdError::Io { .. } => "io",
+        }
+    }
+
+    pub(crate) fn stream(source: std::io::Error) -> UsdError {
+        UsdError::Io {
+            path: STREAM.to_string(),
+            source,
+        }
+    }
+}
+
+/// The `path` of [`UsdError::Io`] for failures of a caller-supplied writer.
+pub(crate) const STREAM: &str = "<stream>";

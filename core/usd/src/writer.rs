@@ -1,0 +1,564 @@
+//! The one stage writer; the public entry points are thin wrappers around [`write_root`].
+
+use std::fmt::Write as _;
+use std::io::{self, Write};
+
+use tessd_mesh::Mesh;
+
+use crate::UsdError;
+use crate::names::UniqueNames;
+use crate::options::{MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme};
+
+/// Writes a stage holding one mesh: the root `Xform` (the `defaultPrim`) with one `Mesh` child.
+///
+/// # Errors
+/// [`UsdError::InvalidMesh`] when `mesh.validate()` fails, [`UsdError::InvalidOption`] /
+/// [`UsdError::TooLarge`] for options or sizes USD cannot hold (all checked before anything is
+/// written), [`UsdError::Io`] when `w` fails.
+pub fn write_mesh_stage(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    stage: &StageOptions,
+    prim: &MeshPrimOptions,
+) -> Result<(), UsdError> {
+    write_stage(
+        w,
+        stage,
+        &[MeshPrim {
+            mesh,
+            options: prim.clone(),
+            transform: None,
+        }],
+    )
+}
+
+/// Writes a stage holding several meshes (e.g. several Blender objects) as sibling `Mesh` prims
+/// under the root `Xform`, each with its optional transform. Clashing prim names are made
+/// unique (`Cube`, `Cube_1`).
+///
+/// # Errors
+/// As [`write_mesh_stage`].
+pub fn write_stage(
+    w: &mut dyn Write,
+    stage: &StageOptions,
+    prims: &[MeshPrim<'_>],
+) -> Result<(), UsdError> {
+    write_root(w, stage, Body::Prims(prims))
+}
+
+/// Writes a stage whose root `Xform` has a variant set `LOD` with one variant per level,
+/// `LOD0` (= `levels[0]`, the finest, selected by default) to `LOD{n-1}`; each variant holds
+/// the `Mesh` prim named by `prim.name`:
+///
+/// ```text
+/// def Xform "Root" (
+///     kind = "component"
+///     variants = {
+///         string LOD = "LOD0"
+///     }
+///     prepend variantSets = "LOD"
+/// )
+/// {
+///     variantSet "LOD" = {
+///         "LOD0" {
+///             def Mesh "mesh" { ... }
+///         }
+///         "LOD1" { ... }
+///     }
+/// }
+/// ```
+///
+/// # Errors
+/// As [`write_mesh_stage`]; [`UsdError::InvalidOption`] when `levels` is empty.
+pub fn write_lod_variants(
+    w: &mut dyn Write,
+    stage: &StageOptions,
+    levels: &[&Mesh],
+    prim: &MeshPrimOptions,
+) -> Result<(), UsdError> {
+    write_root(
+        w,
+        stage,
+        Body::Lod {
+            levels,
+            options: prim,
+        },
+    )
+}
+
+/// What goes under the root prim.
+enum Body<'a> {
+    Prims(&'a [MeshPrim<'a>]),
+    Lod {
+        levels: &'a [&'a Mesh],
+        options: &'a MeshPrimOptions,
+    },
+}
+
+/// The name of the LOD variant set.
+const LOD_SET: &str = "LOD";
+
+/// The core writer: checks everything, then streams the layer.
+fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result<(), UsdError> {
+    check_stage(stage)?;
+    match &body {
+        Body::Prims(prims) => {
+            for p in prims.iter() {
+                check_prim(p.mesh, &p.options, &p.options.name)?;
+                if p.transform
+                    .iter()
+                    .flatten()
+                    .flatten()
+                    .any(|v| !v.is_finite())
+                {
+                    return Err(UsdError::InvalidOption(format!(
+                        "mesh prim \"{}\": the transform has a non-finite entry",
+                        p.options.name
+                    )));
+                }
+            }
+        }
+        Body::Lod { levels, options } => {
+            if levels.is_empty() {
+                return Err(UsdError::InvalidOption("no LOD levels to write".into()));
+            }
+            for (i, m) in levels.iter().enumerate() {
+                check_prim(m, options, &format!("{} (LOD{i})", options.name))?;
+            }
+        }
+    }
+
+    let mut out = Out::new(w);
+    let root = crate::sanitize_identifier(&stage.default_prim);
+    out.push("#usda 1.0\n(\n");
+    out.push_fmt(format_args!("    defaultPrim = \"{root}\"\n"));
+    if let Some(doc) = &stage.doc {
+        out.push("    doc = ");
+        out.push_string_literal(doc);
+        out.push("\n");
+    }
+    out.push("    metersPerUnit = ");
+    out.push_f64(stage.meters_per_unit);
+    out.push_fmt(format_args!(
+        "\n    upAxis = \"{}\"\n)\n\n",
+        stage.up_axis.token()
+    ));
+
+    out.push_fmt(format_args!(
+        "def Xform \"{root}\" (\n    kind = \"component\"\n"
+    ));
+    if let Body::Lod { .. } = body {
+        out.push_fmt(format_args!(
+            "    variants = {{\n        string {LOD_SET} = \"LOD0\"\n    }}\n    \
+             prepend variantSets = \"{LOD_SET}\"\n"
+        ));
+    }
+    out.push(")\n{\n");
+    match body {
+        Body::Prims(prims) => {
+            let mut names = UniqueNames::default();
+            for (i, p) in prims.iter().enumerate() {
+                if i > 0 {
+                    out.push("\n");
+                }
+                let name = names.claim(&p.options.name, "mesh");
+                write_mesh(&mut out, 1, p.mesh, &p.options, &name, p.transform.as_ref())?;
+            }
+        }
+        Body::Lod { levels, options } => {
+            let name = UniqueNames::default().claim(&options.name, "mesh");
+            out.push_fmt(format_args!("    variantSet \"{LOD_SET}\" = {{\n"));
+            for (i, m) in levels.iter().enumerate() {
+                out.push_fmt(format_args!("        \"LOD{i}\" {{\n"));
+                write_mesh(&mut out, 3, m, options, &name, None)?;
+                out.push("        }\n");
+            }
+            out.push("    }\n");
+        }
+    }
+    out.push("}\n");
+    out.finish()
+}
+
+fn check_stage(stage: &StageOptions) -> Result<(), UsdError> {
+    let m = stage.meters_per_unit;
+    if !m.is_finite() || m <= 0.0 {
+        return Err(UsdError::InvalidOption(format!(
+            "metersPerUnit must be finite and > 0, not {m}"
+        )));
+    }
+    Ok(())
+}
+
+/// Largest index USD's `int` can hold.
+const MAX_INDEX: usize = i32::MAX as usize;
+
+fn check_prim(mesh: &Mesh, options: &MeshPrimOptions, label: &str) -> Result<(), UsdError> {
+    mesh.validate().map_err(|source| UsdError::InvalidMesh {
+        prim: label.to_string(),
+        source,
+    })?;
+    let too_large = |what: &str, n: usize| {
+        UsdError::TooLarge(format!(
+            "mesh prim \"{label}\": {n} {what} do not fit USD's 32-bit int indices"
+        ))
+    };
+    // Each of these is indexed by USD `int`s (faces by GeomSubset indices).
+    let indexed = [
+        ("vertices", mesh.positions.len()),
+        (
+            "normals",
+            mesh.normals
+                .as_ref()
+                .filter(|_| options.write_normals)
+                .map_or(0, |n| n.values.len()),
+        ),
+        (
+            "UVs",
+            mesh.uvs
+                .as_ref()
+                .filter(|_| options.write_uvs)
+                .map_or(0, |t| t.values.len()),
+        ),
+        ("faces", mesh.face_count()),
+    ];
+    if let Some((what, n)) = indexed.into_iter().find(|(_, n)| *n > MAX_INDEX + 1) {
+        return Err(too_large(what, n));
+    }
+    let non_triangle = match options.subdivision_scheme {
+        Some(SubdivisionScheme::Loop) => mesh.faces().enumerate().find(|(_, f)| f.len() != 3),
+        _ => None,
+    };
+    if let Some((f, face)) = non_triangle {
+        return Err(UsdError::InvalidOption(format!(
+            "mesh prim \"{label}\": the loop subdivision scheme needs a triangle mesh; face {f} \
+             has {} vertices",
+            face.len()
+        )));
+    }
+    let uv = crate::sanitize_identifier(&options.uv_primvar_name);
+    if options.write_uvs
+        && mesh.uvs.is_some()
+        && options.write_normals
+        && mesh.normals.is_some()
+        && uv == "normals"
+    {
+        return Err(UsdError::InvalidOption(format!(
+            "mesh prim \"{label}\": the UV primvar cannot be named \"normals\""
+        )));
+    }
+    Ok(())
+}
+
+/// Writes `def Mesh "name" { ... }` at indentation level `ind`.
+fn write_mesh(
+    out: &mut Out<'_>,
+    ind: usize,
+    mesh: &Mesh,
+    options: &MeshPrimOptions,
+    name: &str,
+    transform: Option<&[[f64; 4]; 4]>,
+) -> Result<(), UsdError> {
+    let pad = "    ".repeat(ind);
+    let pad1 = "    ".repeat(ind + 1);
+    out.push_fmt(format_args!("{pad}def Mesh \"{name}\"\n{pad}{{\n"));
+
+    // Extent of all points, as UsdGeomPointBased::ComputeExtent computes it.
+    if let Some((lo, hi)) = extent(&mesh.positions) {
+        out.push_fmt(format_args!("{pad1}float3[] extent = ["));
+        out.push_tuple(&lo);
+        out.push(", ");
+        out.push_tuple(&hi);
+        out.push("]\n");
+    }
+    out.push_fmt(format_args!("{pad1}int[] faceVertexCounts = "));
+    out.push_int_array(mesh.face_offsets.windows(2).map(|w| w[1] - w[0]))?;
+    out.push_fmt(format_args!("{pad1}int[] faceVertexIndices = "));
+    out.push_int_array(mesh.face_indices.iter().copied())?;
+    out.push_fmt(format_args!(
+        "{pad1}uniform bool doubleSided = {}\n{pad1}uniform token orientation = \"rightHanded\"\n",
+        options.double_sided
+    ));
+    out.push_fmt(format_args!("{pad1}point3f[] points = "));
+    out.push_tuple_array(&mesh.positions)?;
+
+    if let Some(n) = mesh.normals.as_ref().filter(|_| options.write_normals) {
+        out.push_fmt(format_args!("{pad1}normal3f[] primvars:normals = "));
+        out.push_tuple_array_open(&n.values)?;
+        out.push_fmt(format_args!(
+            " (\n{pad1}    interpolation = \"faceVarying\"\n{pad1})\n"
+        ));
+        out.push_fmt(format_args!("{pad1}int[] primvars:normals:indices = "));
+        out.push_int_array(n.indices.iter().copied())?;
+    }
+    if let Some(t) = mesh.uvs.as_ref().filter(|_| options.write_uvs) {
+        let uv = crate::sanitize_identifier(&options.uv_primvar_name);
+        out.push_fmt(format_args!("{pad1}texCoord2f[] primvars:{uv} = "));
+        out.push_tuple_array_open(&t.values)?;
+        out.push_fmt(format_args!(
+            " (\n{pad1}    interpolation = \"faceVarying\"\n{pad1})\n"
+        ));
+        out.push_fmt(format_args!("{pad1}int[] primvars:{uv}:indices = "));
+        out.push_int_array(t.indices.iter().copied())?;
+    }
+    if !mesh.creases.is_empty() {
+        // One crease per edge: lengths of 2, one sharpness each.
+        out.push_fmt(format_args!("{pad1}int[] creaseIndices = "));
+        out.push_int_array(mesh.creases.iter().flat_map(|c| [c.a, c.b]))?;
+        out.push_fmt(format_args!("{pad1}int[] creaseLengths = "));
+        out.push_int_array(mesh.creases.iter().map(|_| 2))?;
+        out.push_fmt(format_args!("{pad1}float[] creaseSharpnesses = "));
+        out.push_float_array(mesh.creases.iter().map(|c| c.value))?;
+    }
+    let scheme = options
+        .subdivision_scheme
+        .map_or("none", SubdivisionScheme::token);
+    out.push_fmt(format_args!(
+        "{pad1}uniform token subdivisionScheme = \"{scheme}\"\n"
+    ));
+    if !mesh.face_groups.is_empty() {
+        // `face_groups` gives every face exactly one group, so the subsets partition the faces.
+        out.push_fmt(format_args!(
+            "{pad1}uniform token subsetFamily:materialBind:familyType = \"partition\"\n"
+        ));
+    }
+    if let Some(m) = transform {
+        out.push_fmt(format_args!("{pad1}matrix4d xformOp:transform = ( "));
+        for (r, row) in m.iter().enumerate() {
+            if r > 0 {
+                out.push(", ");
+            }
+            out.push("(");
+            for (c, v) in row.iter().enumerate() {
+                if c > 0 {
+                    out.push(", ");
+                }
+                out.push_f64(*v);
+            }
+            out.push(")");
+        }
+        out.push(" )\n");
+        out.push_fmt(format_args!(
+            "{pad1}uniform token[] xformOpOrder = [\"xformOp:transform\"]\n"
+        ));
+    }
+    if !mesh.face_groups.is_empty() {
+        write_subsets(out, &pad1, mesh)?;
+    }
+    out.push_fmt(format_args!("{pad}}}\n"));
+    Ok(())
+}
+
+/// One `GeomSubset` per non-empty face group, in group order.
+fn write_subsets(out: &mut Out<'_>, pad: &str, mesh: &Mesh) -> Result<(), UsdError> {
+    // Counting sort of the faces by group: `order[start[g]..start[g + 1]]` are group g's faces.
+    let ng = mesh.group_names.len();
+    let mut start = vec![0usize; ng + 1];
+    for &g in &mesh.face_groups {
+        start[g as usize + 1] += 1;
+    }
+    for g in 0..ng {
+        start[g + 1] += start[g];
+    }
+    let mut fill = start.clone();
+    let mut order = vec![0u32; mesh.face_groups.len()];
+    for (f, &g) in mesh.face_groups.iter().enumerate() {
+        order[fill[g as usize]] = f as u32;
+        fill[g as usize] += 1;
+    }
+    let mut names = UniqueNames::default();
+    for (g, group_name) in mesh.group_names.iter().enumerate() {
+        let faces = &order[start[g]..start[g + 1]];
+        if faces.is_empty() {
+            continue;
+        }
+        let name = names.claim(group_name, "group");
+        out.push_fmt(format_args!(
+            "\n{pad}def GeomSubset \"{name}\"\n{pad}{{\n\
+             {pad}    uniform token elementType = \"face\"\n\
+             {pad}    uniform token familyName = \"materialBind\"\n\
+             {pad}    int[] indices = "
+        ));
+        out.push_int_array(faces.iter().copied())?;
+        out.push_fmt(format_args!("{pad}}}\n"));
+    }
+    Ok(())
+}
+
+fn extent(points: &[[f32; 3]]) -> Option<([f32; 3], [f32; 3])> {
+    let first = *points.first()?;
+    let (mut lo, mut hi) = (first, first);
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    Some((lo, hi))
+}
+
+/// Size at which the text buffer is handed to the writer.
+const CHUNK: usize = 1 << 16;
+
+/// Streams text to a writer in chunks of about [`CHUNK`] bytes, so that a large mesh never
+/// becomes one giant `String`.
+struct Out<'w> {
+    w: &'w mut dyn Write,
+    buf: String,
+}
+
+impl<'w> Out<'w> {
+    fn new(w: &'w mut dyn Write) -> Self {
+        Out {
+            w,
+            buf: String::with_capacity(CHUNK + 1024),
+        }
+    }
+
+    fn push(&mut self, s: &str) {
+        self.buf.push_str(s);
+    }
+
+    fn push_fmt(&mut self, args: std::fmt::Arguments<'_>) {
+        // Writing to a String cannot fail.
+        let _ = self.buf.write_fmt(args);
+    }
+
+    /// Hands the buffer to the writer once it is full. Called inside array loops.
+    fn spill(&mut self) -> Result<(), UsdError> {
+        if self.buf.len() >= CHUNK {
+            self.w
+                .write_all(self.buf.as_bytes())
+                .map_err(UsdError::stream)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<(), UsdError> {
+        let r: io::Result<()> = self
+            .w
+            .write_all(self.buf.as_bytes())
+            .and_then(|_| self.w.flush());
+        self.buf.clear();
+        r.map_err(UsdError::stream)
+    }
+
+    fn push_f32(&mut self, v: f32) {
+        push_f32(&mut self.buf, v);
+    }
+
+    fn push_f64(&mut self, v: f64) {
+        push_f64(&mut self.buf, v);
+    }
+
+    fn push_tuple<const N: usize>(&mut self, v: &[f32; N]) {
+        self.buf.push('(');
+        for (k, c) in v.iter().enumerate() {
+            if k > 0 {
+                self.buf.push_str(", ");
+            }
+            self.push_f32(*c);
+        }
+        self.buf.push(')');
+    }
+
+    /// `[a, b, c]` and a newline.
+    fn push_int_array(&mut self, values: impl Iterator<Item = u32>) -> Result<(), UsdError> {
+        self.buf.push('[');
+        for (i, v) in values.enumerate() {
+            if i > 0 {
+                self.buf.push_str(", ");
+            }
+            self.push_fmt(format_args!("{v}"));
+            self.spill()?;
+        }
+        self.buf.push_str("]\n");
+        Ok(())
+    }
+
+    /// `[a, b, c]` of floats and a newline.
+    fn push_float_array(&mut self, values: impl Iterator<Item = f32>) -> Result<(), UsdError> {
+        self.buf.push('[');
+        for (i, v) in values.enumerate() {
+            if i > 0 {
+                self.buf.push_str(", ");
+            }
+            self.push_f32(v);
+            self.spill()?;
+        }
+        self.buf.push_str("]\n");
+        Ok(())
+    }
+
+    /// `[(x, y, z), ...]` and a newline.
+    fn push_tuple_array<const N: usize>(&mut self, values: &[[f32; N]]) -> Result<(), UsdError> {
+        self.push_tuple_array_open(values)?;
+        self.buf.push('\n');
+        Ok(())
+    }
+
+    /// `[(x, y, z), ...]` without the newline (metadata may follow).
+    fn push_tuple_array_open<const N: usize>(
+        &mut self,
+        values: &[[f32; N]],
+    ) -> Result<(), UsdError> {
+        self.buf.push('[');
+        for (i, v) in values.iter().enumerate() {
+            if i > 0 {
+                self.buf.push_str(", ");
+            }
+            self.push_tuple(v);
+            self.spill()?;
+        }
+        self.buf.push(']');
+        Ok(())
+    }
+
+    /// A double-quoted `.usda` string literal with `\`, `"` and control characters escaped.
+    fn push_string_literal(&mut self, s: &str) {
+        self.buf.push('"');
+        for c in s.chars() {
+            match c {
+                '"' => self.buf.push_str("\\\""),
+                '\\' => self.buf.push_str("\\\\"),
+                '\n' => self.buf.push_str("\\n"),
+                '\r' => self.buf.push_str("\\r"),
+                '\t' => self.buf.push_str("\\t"),
+                c if (c as u32) < 0x20 || c as u32 == 0x7f => {
+                    self.push_fmt(format_args!("\\x{:02x}", c as u32));
+                }
+                c => self.buf.push(c),
+            }
+        }
+        self.buf.push('"');
+    }
+}
+
+/// Shortest round-trip text of a finite `f32`. Plain decimal in `[1e-5, 1e15)` (Rust's `{}`),
+/// exponent form outside it (`1e20`, `1.5e-7`) so that no number turns into a 40-digit integer
+/// literal; negative zero keeps its sign (`-0.0`).
+pub(crate) fn push_f32(buf: &mut String, v: f32) {
+    debug_assert!(v.is_finite());
+    let a = v.abs();
+    let _ = if v == 0.0 {
+        buf.write_str(if v.is_sign_negative() { "-0.0" } else { "0" })
+    } else if (1e-5..1e15).contains(&a) {
+        write!(buf, "{v}")
+    } else {
+        write!(buf, "{v:e}")
+    };
+}
+
+/// [`push_f32`] for `f64`.
+pub(crate) fn push_f64(buf: &mut String, v: f64) {
+    debug_assert!(v.is_finite());
+    let a = v.abs();
+    let _ = if v == 0.0 {
+        buf.write_str(if v.is_sign_negative() { "-0.0" } else { "0" })
+    } else if (1e-5..1e15).contains(&a) {
+        write!(buf, "{v}")
+    } else {
+        write!(buf, "{v:e}")
+    };
+}

@@ -1,0 +1,188 @@
+"""Starting and stopping the daemon from a host tool.
+
+:func:`ensure_daemon` returns the socket of a running daemon, starting ``tessd serve`` in the
+background first when none answers; :func:`stop_daemon` asks one to shut down.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from typing import IO, Optional, Sequence
+
+from .client import Client, TessdError
+from .frame import ProtocolError
+from .socket_path import default_socket_dir, is_windows, resolve_socket
+from .transport import DaemonUnavailable
+
+#: Exit code of ``tessd serve`` when another daemon already serves the socket.
+EXIT_ALREADY_SERVING = 3
+
+
+class DaemonStartError(DaemonUnavailable):
+    """The daemon could not be started (binary missing, it exited, or it never answered)."""
+
+
+def ping(socket: Optional[str] = None, timeout: float = 2.0) -> bool:
+    """Whether a tessd daemon answers ``ping`` on ``socket`` within ``timeout`` seconds."""
+    try:
+        with Client(socket, timeout=timeout) as client:
+            client.call("ping", {"echo": "tessd.ping"}, timeout=timeout)
+        return True
+    except (DaemonUnavailable, TimeoutError, ConnectionError):
+        return False
+    except (OSError, TessdError, ProtocolError):
+        return False
+
+
+def find_binary(binary: Optional[str] = None) -> str:
+    """The tessd executable: ``binary``, else ``$TESSD_BIN``, else ``tessd`` on ``PATH``."""
+    for candidate, origin in ((binary, "the binary argument"),
+                              (os.environ.get("TESSD_BIN"), "TESSD_BIN")):
+        if candidate:
+            path = os.fspath(candidate)
+            if os.path.isfile(path) and os.access(path, os.X_OK):
+                return path
+            found = shutil.which(path)
+            if found:
+                return found
+            raise DaemonStartError("%s names %s, which is not an executable file" % (origin, path))
+    found = shutil.which("tessd")
+    if found:
+        return found
+    raise DaemonStartError("cannot find the tessd executable: pass binary=..., set TESSD_BIN, "
+                           "or put tessd on PATH")
+
+
+def _log_path(socket_path: str) -> Optional[str]:
+    """Where a started daemon's stdout/stderr go: next to the socket (None on Windows)."""
+    if is_windows():  # pragma: no cover
+        directory = default_socket_dir() or os.environ.get("TEMP") or "."
+        return os.path.join(directory, "tessd-" + socket_path.rsplit("\\", 1)[-1] + ".log")
+    directory = os.path.dirname(socket_path) or "."
+    base = os.path.basename(socket_path)
+    if base.endswith(".sock"):
+        base = base[: -len(".sock")]
+    return os.path.join(directory, base + ".log")
+
+
+def _tail(path: Optional[str], lines: int = 20) -> str:
+    if not path:
+        return ""
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            size = f.tell()
+            f.seek(max(0, size - 16384))
+            text = f.read().decode("utf-8", "replace")
+    except OSError:
+        return ""
+    tail = text.splitlines()[-lines:]
+    return "\n".join(tail)
+
+
+def _open_log(path: Optional[str]) -> "IO[bytes] | int":
+    if path:
+        try:
+            return open(path, "ab")
+        except OSError:
+            pass
+    return subprocess.DEVNULL
+
+
+def _spawn(binary: str, socket_path: str, args: Sequence[str], log: "IO[bytes] | int") -> subprocess.Popen:
+    cmd = [binary, "serve", "--socket", socket_path] + [str(a) for a in args]
+    kwargs = dict(stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, close_fds=True)
+    if is_windows():  # pragma: no cover
+        flags = getattr(subprocess, "DETACHED_PROCESS", 0x8) | getattr(
+            subprocess, "CREATE_NEW_PROCESS_GROUP", 0x200)
+        kwargs["creationflags"] = flags
+    else:
+        kwargs["start_new_session"] = True
+    return subprocess.Popen(cmd, **kwargs)
+
+
+def ensure_daemon(socket: Optional[str] = None, binary: Optional[str] = None, timeout: float = 10.0,
+                  args: Sequence[str] = ()) -> str:
+    """Makes sure a daemon serves ``socket`` and returns the socket path.
+
+    If a daemon answers ``ping`` there, it is used. Otherwise the binary (see
+    :func:`find_binary`) is started as ``tessd serve --socket PATH *args``, detached in its
+    own session with output appended to ``<socket dir>/<name>.log``, and polled with backoff
+    until it answers. Raises :class:`DaemonStartError` (with the end of the log) if it exits
+    or does not answer within ``timeout`` seconds.
+    """
+    path = resolve_socket(socket, create_dir=True)
+    if ping(path, timeout=min(2.0, timeout)):
+        return path
+    exe = find_binary(binary)
+    log_path = _log_path(path)
+    log = _open_log(log_path)
+    if log is subprocess.DEVNULL:
+        log_path = None
+    try:
+        proc = _spawn(exe, path, args, log)
+    except OSError as e:
+        raise DaemonStartError("cannot start %s: %s" % (exe, e)) from e
+    finally:
+        if log is not subprocess.DEVNULL:
+            log.close()
+    deadline = time.monotonic() + timeout
+    delay = 0.005
+    while True:
+        code = proc.poll()
+        if code is not None:
+            if code == EXIT_ALREADY_SERVING and ping(path, timeout=2.0):
+                return path  # another caller started one first
+            raise DaemonStartError(_start_failure(
+                "tessd serve --socket %s exited with status %d" % (path, code), log_path))
+        if ping(path, timeout=max(0.1, min(2.0, deadline - time.monotonic()))):
+            return path
+        if time.monotonic() >= deadline:
+            proc.kill()
+            proc.wait()
+            raise DaemonStartError(_start_failure(
+                "tessd serve --socket %s did not answer within %gs" % (path, timeout), log_path))
+        time.sleep(delay)
+        delay = min(delay * 2, 0.2)
+
+
+def _start_failure(what: str, log_path: Optional[str]) -> str:
+    tail = _tail(log_path)
+    if tail:
+        return "%s; the end of %s:\n%s" % (what, log_path, tail)
+    return what
+
+
+def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0) -> bool:
+    """Asks the daemon on ``socket`` to shut down and waits until it stops answering.
+
+    Returns False if no daemon was running there. Raises ``TimeoutError`` if it still
+    answers after ``timeout`` seconds.
+    """
+    path = resolve_socket(socket)
+    try:
+        with Client(path, timeout=timeout) as client:
+            client.call("shutdown", timeout=timeout)
+    except DaemonUnavailable:
+        return False
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            probe = Client(path, timeout=1.0)
+        except (DaemonUnavailable, OSError):
+            return True
+        probe.close()
+        time.sleep(0.02)
+    raise TimeoutError("the daemon on %s still accepts connections %gs after shutdown"
+                       % (path, timeout))
+
+
+__all__ = ["DaemonStartError", "ensure_daemon", "find_binary", "ping", "stop_daemon"]
+
+
+if __name__ == "__main__":  # pragma: no cover - manual use: python -m tessd.daemon [socket]
+    print(ensure_daemon(sys.argv[1] if len(sys.argv) > 1 else None))

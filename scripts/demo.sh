@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Sets up a fresh machine (scripts/setup.sh) and runs `tessd demo` on the bundled sample,
+# writing its results to ./tessd-demo/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+exec target/release/tessd demo "$@"
