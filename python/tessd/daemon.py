@@ -10,6 +10,7 @@ import os
 import shutil
 import subprocess
 import sys
+import threading
 import time
 from typing import IO, Optional, Sequence
 
@@ -140,6 +141,7 @@ def ensure_daemon(socket: Optional[str] = None, binary: Optional[str] = None, ti
             raise DaemonStartError(_start_failure(
                 "tessd serve --socket %s exited with status %d" % (path, code), log_path))
         if ping(path, timeout=max(0.1, min(2.0, deadline - time.monotonic()))):
+            _reap_later(proc)
             return path
         if time.monotonic() >= deadline:
             proc.kill()
@@ -148,6 +150,12 @@ def ensure_daemon(socket: Optional[str] = None, binary: Optional[str] = None, ti
                 "tessd serve --socket %s did not answer within %gs" % (path, timeout), log_path))
         time.sleep(delay)
         delay = min(delay * 2, 0.2)
+
+
+def _reap_later(proc: subprocess.Popen) -> None:
+    """Waits for the detached daemon in a background thread, so that it leaves no zombie
+    process when it exits while this host process runs on."""
+    threading.Thread(target=proc.wait, name="tessd-daemon-reaper", daemon=True).start()
 
 
 def _start_failure(what: str, log_path: Optional[str]) -> str:

@@ -200,9 +200,10 @@ def test_bad_request(conn, case):
         assert "mesh.explode" in message["error"]["message"]
 
 
-def test_duplicate_in_flight_id(conn):
+@pytest.mark.parametrize("second_op", ["debug.sleep", "ping"])
+def test_duplicate_in_flight_id(conn, second_op):
     conn.send(raw_frame({"id": 77, "op": "debug.sleep", "params": {"seconds": 0.5, "steps": 5}}))
-    conn.send(raw_frame({"id": 77, "op": "ping"}))
+    conn.send(raw_frame({"id": 77, "op": second_op, "params": {"seconds": 0.1, "steps": 1}}))
     finals = []
     while len(finals) < 2:
         frame = conn.recv_frame()

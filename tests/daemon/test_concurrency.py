@@ -90,7 +90,7 @@ def test_32_clients_x_200_requests(daemon, meshes):
                         assert arrays == {}
                     else:
                         j = i // 2
-                        if j % 20 == 7:
+                        if j % 50 == 7:
                             result, _ = c.call("mesh.stats", {"input": meshes["bunny_path"]})
                             check_stats(result, meshes["bunny"], "client %d request %d bunny" % (k, i))
                         elif j % 2 == 0:

@@ -112,7 +112,10 @@ impl ArrayDesc {
     /// A message naming the entry and the field at fault.
     pub fn parse_table(v: &Value, payload_len: u64) -> Result<Vec<ArrayDesc>, String> {
         let Value::Array(items) = v else {
-            return Err(format!("`arrays` must be a list, got {}", crate::frame::json_kind(v)));
+            return Err(format!(
+                "`arrays` must be a list, got {}",
+                crate::frame::json_kind(v)
+            ));
         };
         let mut out: Vec<ArrayDesc> = Vec::with_capacity(items.len().min(1024));
         for (i, item) in items.iter().enumerate() {
@@ -122,8 +125,11 @@ impl ArrayDesc {
             }
             out.push(d);
         }
-        let mut spans: Vec<(u64, u64, usize)> =
-            out.iter().enumerate().map(|(i, d)| (d.offset, d.offset + d.length, i)).collect();
+        let mut spans: Vec<(u64, u64, usize)> = out
+            .iter()
+            .enumerate()
+            .map(|(i, d)| (d.offset, d.offset + d.length, i))
+            .collect();
         spans.sort_unstable();
         for w in spans.windows(2) {
             if w[1].0 < w[0].1 {
@@ -161,9 +167,16 @@ impl ArrayDesc {
         let shape: Vec<u64> = match m.get("shape") {
             Some(Value::Array(dims)) if dims.len() <= 8 => dims
                 .iter()
-                .map(|d| d.as_u64().ok_or_else(|| format!("array {name:?} has a bad dimension {d}")))
+                .map(|d| {
+                    d.as_u64()
+                        .ok_or_else(|| format!("array {name:?} has a bad dimension {d}"))
+                })
                 .collect::<Result<_, _>>()?,
-            _ => return Err(format!("array {name:?} needs a `shape` list of at most 8 dimensions")),
+            _ => {
+                return Err(format!(
+                    "array {name:?} needs a `shape` list of at most 8 dimensions"
+                ));
+            }
         };
         let (offset, length) = (field("offset")?, field("length")?);
         let expected = shape
@@ -177,17 +190,31 @@ impl ArrayDesc {
             ));
         }
         if offset % 8 != 0 {
-            return Err(format!("array {name:?} offset {offset} is not a multiple of 8"));
+            return Err(format!(
+                "array {name:?} offset {offset} is not a multiple of 8"
+            ));
         }
-        if offset.checked_add(length).is_none_or(|end| end > payload_len) {
+        if offset
+            .checked_add(length)
+            .is_none_or(|end| end > payload_len)
+        {
             return Err(format!(
                 "array {name:?} spans bytes {offset}..{} but the payload has {payload_len}",
                 offset.saturating_add(length)
             ));
         }
-        Ok(ArrayDesc { name, dtype, shape, offset, length })
+        Ok(ArrayDesc {
+            name,
+            dtype,
+            shape,
+            offset,
+            length,
+        })
     }
 }
+
+/// A received array viewed in place: its elements and its shape.
+pub type TypedView<'a, T> = (&'a [T], &'a [u64]);
 
 /// Arrays received in a frame: the payload buffer and its table.
 #[derive(Debug, Default)]
@@ -208,7 +235,11 @@ impl Arrays {
             max: usize::MAX as u64,
         })?;
         let words = vec![0u64; len.div_ceil(8)];
-        Ok(Arrays { words, len, descs: Vec::new() })
+        Ok(Arrays {
+            words,
+            len,
+            descs: Vec::new(),
+        })
     }
 
     pub(crate) fn bytes_mut(&mut self) -> &mut [u8] {
@@ -223,7 +254,11 @@ impl Arrays {
     /// file goes through exactly the code path of a socket request).
     pub fn from_owned(arrays: &[OwnedArray]) -> Arrays {
         let (descs, len) = layout(arrays);
-        let mut out = Arrays { words: vec![0u64; len as usize / 8], len: len as usize, descs };
+        let mut out = Arrays {
+            words: vec![0u64; len as usize / 8],
+            len: len as usize,
+            descs,
+        };
         for (a, d) in arrays.iter().zip(out.descs.clone()) {
             out.bytes_mut()[d.offset as usize..(d.offset + d.length) as usize]
                 .copy_from_slice(a.bytes());
@@ -262,7 +297,7 @@ impl Arrays {
     ///
     /// # Errors
     /// When the array's dtype is not `T`'s (the message names the array and both dtypes).
-    pub fn get<T: Element>(&self, name: &str) -> Option<Result<(&[T], &[u64]), String>> {
+    pub fn get<T: Element>(&self, name: &str) -> Option<Result<TypedView<'_, T>, String>> {
         let d = self.desc(name)?;
         if d.dtype != T::DTYPE {
             return Some(Err(format!(
@@ -310,8 +345,17 @@ impl OwnedArray {
     /// # Panics
     /// If the shape's element count differs from `data.len()` (a bug in the caller).
     pub fn new<E: Element>(name: &str, shape: Vec<u64>, data: Vec<E>) -> OwnedArray {
-        assert_eq!(shape.iter().product::<u64>(), data.len() as u64, "shape of {name}");
-        OwnedArray { name: name.into(), dtype: E::DTYPE, shape, data: Box::new(data) }
+        assert_eq!(
+            shape.iter().product::<u64>(),
+            data.len() as u64,
+            "shape of {name}"
+        );
+        OwnedArray {
+            name: name.into(),
+            dtype: E::DTYPE,
+            shape,
+            data: Box::new(data),
+        }
     }
 
     /// Wraps a vector of fixed-size rows (e.g. `[f32; 3]` positions) as an `[n, N]` array.
@@ -320,7 +364,12 @@ impl OwnedArray {
         [E; N]: Pod,
     {
         let shape = vec![data.len() as u64, N as u64];
-        OwnedArray { name: name.into(), dtype: E::DTYPE, shape, data: Box::new(data) }
+        OwnedArray {
+            name: name.into(),
+            dtype: E::DTYPE,
+            shape,
+            data: Box::new(data),
+        }
     }
 
     /// The array's name.

@@ -48,7 +48,11 @@ impl Client {
             source,
         })?;
         let limits = Limits::default().with_max_payload(u64::MAX);
-        Ok(Client { reader: BufReader::with_capacity(64 << 10, stream), next_id: 1, limits })
+        Ok(Client {
+            reader: BufReader::with_capacity(64 << 10, stream),
+            next_id: 1,
+            limits,
+        })
     }
 
     /// Sends `op` and waits for its final reply, passing progress frames to `on_progress`.
@@ -80,7 +84,10 @@ impl Client {
                 _ => {
                     let err = frame.json.get("error");
                     let field = |k: &str| {
-                        err.and_then(|e| e.get(k)).and_then(Value::as_str).unwrap_or("").to_string()
+                        err.and_then(|e| e.get(k))
+                            .and_then(Value::as_str)
+                            .unwrap_or("")
+                            .to_string()
                     };
                     let code = ErrorCode::parse(&field("code"));
                     return Err(OpError::new(code, field("message")).into());
@@ -92,9 +99,17 @@ impl Client {
 
 fn parse_progress(json: &Map<String, Value>) -> Progress {
     let p = json.get("progress");
-    let s = |k: &str| p.and_then(|p| p.get(k)).and_then(Value::as_str).unwrap_or("").to_string();
+    let s = |k: &str| {
+        p.and_then(|p| p.get(k))
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string()
+    };
     Progress {
-        fraction: p.and_then(|p| p.get("fraction")).and_then(Value::as_f64).unwrap_or(0.0),
+        fraction: p
+            .and_then(|p| p.get("fraction"))
+            .and_then(Value::as_f64)
+            .unwrap_or(0.0),
         stage: s("stage"),
         message: s("message"),
     }

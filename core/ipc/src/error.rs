@@ -45,10 +45,19 @@ impl ErrorCode {
     /// Parses a wire code (unknown codes map to `Internal`).
     pub fn parse(s: &str) -> ErrorCode {
         use ErrorCode::*;
-        [InvalidFrame, InvalidRequest, InvalidMesh, InvalidBrep, TooLarge, Unsupported, Io, Cancelled]
-            .into_iter()
-            .find(|c| c.as_str() == s)
-            .unwrap_or(Internal)
+        [
+            InvalidFrame,
+            InvalidRequest,
+            InvalidMesh,
+            InvalidBrep,
+            TooLarge,
+            Unsupported,
+            Io,
+            Cancelled,
+        ]
+        .into_iter()
+        .find(|c| c.as_str() == s)
+        .unwrap_or(Internal)
     }
 }
 
@@ -65,7 +74,10 @@ pub struct OpError {
 impl OpError {
     /// An error with `code` and `message`.
     pub fn new(code: ErrorCode, message: impl Into<String>) -> OpError {
-        OpError { code, message: message.into() }
+        OpError {
+            code,
+            message: message.into(),
+        }
     }
 
     /// An `invalid_request` error.

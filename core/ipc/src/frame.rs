@@ -30,7 +30,10 @@ pub struct Limits {
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits { max_json: MAX_JSON_LEN, max_payload: 4 << 30 }
+        Limits {
+            max_json: MAX_JSON_LEN,
+            max_payload: 4 << 30,
+        }
     }
 }
 
@@ -157,11 +160,17 @@ impl Header {
         }
         let flags = u16::from_le_bytes([h[6], h[7]]);
         if flags != 0 {
-            return Err(FrameError::Reserved { field: "flags", value: flags.into() });
+            return Err(FrameError::Reserved {
+                field: "flags",
+                value: flags.into(),
+            });
         }
         let reserved = u32::from_le_bytes(h[12..16].try_into().unwrap());
         if reserved != 0 {
-            return Err(FrameError::Reserved { field: "reserved", value: reserved });
+            return Err(FrameError::Reserved {
+                field: "reserved",
+                value: reserved,
+            });
         }
         let json_len = u32::from_le_bytes(h[8..12].try_into().unwrap());
         let max = limits.max_json.min(MAX_JSON_LEN);
@@ -170,9 +179,15 @@ impl Header {
         }
         let payload_len = u64::from_le_bytes(h[16..24].try_into().unwrap());
         if payload_len > limits.max_payload {
-            return Err(FrameError::PayloadTooLarge { len: payload_len, max: limits.max_payload });
+            return Err(FrameError::PayloadTooLarge {
+                len: payload_len,
+                max: limits.max_payload,
+            });
         }
-        Ok(Header { json_len, payload_len })
+        Ok(Header {
+            json_len,
+            payload_len,
+        })
     }
 }
 
@@ -193,7 +208,11 @@ fn read_full(r: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
 fn read_part(r: &mut impl Read, buf: &mut [u8], part: &'static str) -> Result<(), FrameError> {
     let got = read_full(r, buf)?;
     if got < buf.len() {
-        return Err(FrameError::Truncated { part, expected: buf.len() as u64, got: got as u64 });
+        return Err(FrameError::Truncated {
+            part,
+            expected: buf.len() as u64,
+            got: got as u64,
+        });
     }
     Ok(())
 }
@@ -229,7 +248,10 @@ pub fn read_frame(r: &mut impl Read, limits: &Limits) -> Result<Frame, FrameErro
         Some(v) => ArrayDesc::parse_table(v, header.payload_len).map_err(FrameError::BadArrays)?,
     };
     payload.set_descs(descs);
-    Ok(Frame { json, arrays: payload })
+    Ok(Frame {
+        json,
+        arrays: payload,
+    })
 }
 
 /// Parses a JSON object from bytes.
@@ -268,7 +290,10 @@ pub fn write_frame(
 ) -> io::Result<()> {
     let (descs, payload_len) = crate::arrays::layout(arrays);
     if !arrays.is_empty() || json.contains_key("arrays") {
-        json.insert("arrays".into(), descs.iter().map(ArrayDesc::to_json).collect());
+        json.insert(
+            "arrays".into(),
+            descs.iter().map(ArrayDesc::to_json).collect(),
+        );
     }
     // Header and JSON go out in one write: small replies then cost one system call.
     let mut head = vec![0u8; HEADER_LEN];
@@ -277,7 +302,13 @@ pub fn write_frame(
         .ok()
         .filter(|&n| n <= MAX_JSON_LEN)
         .ok_or_else(|| io::Error::other("JSON document over 16 MiB"))?;
-    head[..HEADER_LEN].copy_from_slice(&Header { json_len, payload_len }.encode());
+    head[..HEADER_LEN].copy_from_slice(
+        &Header {
+            json_len,
+            payload_len,
+        }
+        .encode(),
+    );
     w.write_all(&head)?;
     const PAD: [u8; 8] = [0; 8];
     for a in arrays {

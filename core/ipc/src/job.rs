@@ -27,6 +27,12 @@ impl CancelToken {
         self.0.store(true, Ordering::Relaxed);
     }
 
+    /// The shared flag itself, for library code that polls an `Arc<AtomicBool>`
+    /// (e.g. `tessd_mesh::io::ReadOptions::with_cancel`).
+    pub fn flag(&self) -> Arc<AtomicBool> {
+        self.0.clone()
+    }
+
     /// Whether cancellation was asked for.
     pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::Relaxed)
@@ -47,7 +53,11 @@ const PROGRESS_INTERVAL: Duration = Duration::from_millis(10);
 impl<'a> JobContext<'a> {
     /// A context reporting to `sink` and stopping when `cancel` is set.
     pub fn new(sink: &'a (dyn Fn(Progress) + Sync), cancel: CancelToken) -> JobContext<'a> {
-        JobContext { sink, cancel, last: std::sync::Mutex::new(None) }
+        JobContext {
+            sink,
+            cancel,
+            last: std::sync::Mutex::new(None),
+        }
     }
 
     /// Reports progress (rate-limited), then checks for cancellation.
@@ -79,7 +89,11 @@ impl<'a> JobContext<'a> {
     /// # Errors
     /// [`OpError::cancelled`] when the job was cancelled.
     pub fn checkpoint(&self) -> Result<(), OpError> {
-        if self.cancel.is_cancelled() { Err(OpError::cancelled()) } else { Ok(()) }
+        if self.cancel.is_cancelled() {
+            Err(OpError::cancelled())
+        } else {
+            Ok(())
+        }
     }
 
     /// The job's cancel token, for handing to library code that polls it.

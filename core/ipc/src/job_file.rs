@@ -25,18 +25,29 @@ pub fn parse(text: &str) -> Result<Vec<JobSpec>, OpError> {
     let v: Value = serde_json::from_str(text)
         .map_err(|e| OpError::request(format!("job file is not valid JSON: {e}")))?;
     let Value::Object(mut top) = v else {
-        return Err(OpError::request(format!("job file must hold an object, got {}", json_kind(&v))));
+        return Err(OpError::request(format!(
+            "job file must hold an object, got {}",
+            json_kind(&v)
+        )));
     };
     match top.remove("jobs") {
         Some(Value::Array(items)) => items
             .into_iter()
             .enumerate()
             .map(|(i, item)| match item {
-                Value::Object(m) => spec(m).map_err(|e| OpError::request(format!("job {i}: {}", e.message))),
-                other => Err(OpError::request(format!("job {i} must be an object, got {}", json_kind(&other)))),
+                Value::Object(m) => {
+                    spec(m).map_err(|e| OpError::request(format!("job {i}: {}", e.message)))
+                }
+                other => Err(OpError::request(format!(
+                    "job {i} must be an object, got {}",
+                    json_kind(&other)
+                ))),
             })
             .collect(),
-        Some(other) => Err(OpError::request(format!("`jobs` must be a list, got {}", json_kind(&other)))),
+        Some(other) => Err(OpError::request(format!(
+            "`jobs` must be a list, got {}",
+            json_kind(&other)
+        ))),
         None => Ok(vec![spec(top)?]),
     }
 }
@@ -50,7 +61,10 @@ fn spec(mut m: Map<String, Value>) -> Result<JobSpec, OpError> {
         None => Map::new(),
         Some(Value::Object(p)) => p,
         Some(other) => {
-            return Err(OpError::request(format!("`params` must be an object, got {}", json_kind(&other))));
+            return Err(OpError::request(format!(
+                "`params` must be an object, got {}",
+                json_kind(&other)
+            )));
         }
     };
     Ok(JobSpec { op, params })
@@ -66,6 +80,10 @@ pub fn run(
     base_dir: &Path,
     ctx: &JobContext,
 ) -> Result<Response, OpError> {
-    let request = Request { params: job.params, base_dir: Some(base_dir.to_path_buf()), ..Request::default() };
+    let request = Request {
+        params: job.params,
+        base_dir: Some(base_dir.to_path_buf()),
+        ..Request::default()
+    };
     registry.run(&job.op, request, ctx)
 }

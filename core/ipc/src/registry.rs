@@ -75,7 +75,10 @@ pub struct Response {
 impl Response {
     /// A response with only a JSON result.
     pub fn json(result: Value) -> Response {
-        Response { result, ..Response::default() }
+        Response {
+            result,
+            ..Response::default()
+        }
     }
 }
 
@@ -143,14 +146,19 @@ impl Registry {
     /// # Errors
     /// `invalid_request` for an unknown operation, or the operation's error.
     pub fn run(&self, name: &str, request: Request, ctx: &JobContext) -> Result<Response, OpError> {
-        let op = self.get(name).ok_or_else(|| unknown_op(name, &self.names()))?;
+        let op = self
+            .get(name)
+            .ok_or_else(|| unknown_op(name, &self.names()))?;
         run_guarded(op.as_ref(), request, ctx)
     }
 }
 
 /// The error for an unknown operation, listing the known ones.
 pub fn unknown_op(name: &str, known: &[String]) -> OpError {
-    OpError::request(format!("unknown operation {name:?}; known operations: {}", known.join(", ")))
+    OpError::request(format!(
+        "unknown operation {name:?}; known operations: {}",
+        known.join(", ")
+    ))
 }
 
 /// Runs an operation, turning a panic (a tessd bug) into an `internal` error so that the
@@ -167,7 +175,10 @@ pub(crate) fn run_guarded(
                 .map(|s| s.to_string())
                 .or_else(|| p.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            Err(OpError::new(crate::error::ErrorCode::Internal, format!("internal error: {what}")))
+            Err(OpError::new(
+                crate::error::ErrorCode::Internal,
+                format!("internal error: {what}"),
+            ))
         },
     )
 }

@@ -7,7 +7,9 @@
 
 use crate::arrays::{Arrays, OwnedArray};
 use crate::error::{ErrorCode, OpError};
-use crate::frame::{Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame};
+use crate::frame::{
+    Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame,
+};
 use crate::job::{CancelToken, JobContext, Progress};
 use crate::registry::{Registry, Request, Response, run_guarded, unknown_op};
 use interprocess::local_socket::{Listener, Stream, traits::ListenerExt as _};
@@ -83,7 +85,12 @@ pub struct Server {
 
 impl Server {
     /// A server answering on `listener` (bound at `socket`, see [`crate::socket::bind`]).
-    pub fn new(listener: Listener, socket: &Path, registry: Registry, options: ServerOptions) -> Self {
+    pub fn new(
+        listener: Listener,
+        socket: &Path,
+        registry: Registry,
+        options: ServerOptions,
+    ) -> Self {
         let shared = Arc::new(Shared {
             registry,
             options,
@@ -195,7 +202,10 @@ impl Connection {
             "hello" => self.reply(&raw_id, Ok(Response::json(self.hello()))),
             "ping" => {
                 let echo = params.get("echo").cloned().unwrap_or(Value::Null);
-                self.reply(&raw_id, Ok(Response::json(json!({"pong": true, "echo": echo}))))
+                self.reply(
+                    &raw_id,
+                    Ok(Response::json(json!({"pong": true, "echo": echo}))),
+                )
             }
             "cancel" => {
                 let result = match params.get("id").and_then(Value::as_u64) {
@@ -204,7 +214,9 @@ impl Connection {
                         token.as_ref().map(CancelToken::cancel);
                         Ok(Response::json(json!({"cancelled": token.is_some()})))
                     }
-                    None => Err(OpError::request("cancel needs `params.id`, the request to stop")),
+                    None => Err(OpError::request(
+                        "cancel needs `params.id`, the request to stop",
+                    )),
                 };
                 self.reply(&raw_id, result)
             }
@@ -235,7 +247,14 @@ impl Connection {
         ops
     }
 
-    fn start_job(&self, id: u64, raw_id: Value, op: String, params: Map<String, Value>, arrays: Arrays) {
+    fn start_job(
+        &self,
+        id: u64,
+        raw_id: Value,
+        op: String,
+        params: Map<String, Value>,
+        arrays: Arrays,
+    ) {
         let Some(operation) = self.shared.registry.get(&op) else {
             return self.reply(&raw_id, Err(unknown_op(&op, &self.known_ops())));
         };
@@ -244,8 +263,12 @@ impl Connection {
             let mut jobs = lock(&self.jobs);
             if jobs.contains_key(&id) {
                 drop(jobs);
-                return self
-                    .reply(&raw_id, Err(OpError::request(format!("request id {id} is already running"))));
+                return self.reply(
+                    &raw_id,
+                    Err(OpError::request(format!(
+                        "request id {id} is already running"
+                    ))),
+                );
             }
             if jobs.len() >= self.shared.options.max_in_flight_per_connection {
                 drop(jobs);
@@ -269,28 +292,40 @@ impl Connection {
             jobs: self.jobs.clone(),
             shared: self.shared.clone(),
         };
-        let spawned = std::thread::Builder::new().name(format!("tessd-{op}")).spawn(move || {
-            let started = Instant::now();
-            let sink = |p: Progress| {
-                let msg = json!({"id": id, "type": "progress", "progress": {
+        let spawned = std::thread::Builder::new()
+            .name(format!("tessd-{op}"))
+            .spawn(move || {
+                let started = Instant::now();
+                let sink = |p: Progress| {
+                    let msg = json!({"id": id, "type": "progress", "progress": {
                     "fraction": p.fraction, "stage": p.stage, "message": p.message}});
-                this.send(msg, &[]);
-            };
-            let ctx = JobContext::new(&sink, token);
-            let request = Request { params, arrays, base_dir: None };
-            let result = run_guarded(operation.as_ref(), request, &ctx);
-            match &result {
-                Ok(_) => log::debug!("{op} #{id} done in {:?}", started.elapsed()),
-                Err(e) => log::info!("{op} #{id} failed: {e}"),
-            }
-            lock(&this.jobs).remove(&id);
-            this.reply(&Value::from(id), result);
-            this.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
-        });
+                    this.send(msg, &[]);
+                };
+                let ctx = JobContext::new(&sink, token);
+                let request = Request {
+                    params,
+                    arrays,
+                    base_dir: None,
+                };
+                let result = run_guarded(operation.as_ref(), request, &ctx);
+                match &result {
+                    Ok(_) => log::debug!("{op} #{id} done in {:?}", started.elapsed()),
+                    Err(e) => log::info!("{op} #{id} failed: {e}"),
+                }
+                lock(&this.jobs).remove(&id);
+                this.reply(&Value::from(id), result);
+                this.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
+            });
         if let Err(e) = spawned {
             lock(&self.jobs).remove(&id);
             self.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
-            self.reply(&raw_id, Err(OpError::new(ErrorCode::Internal, format!("cannot start job: {e}"))));
+            self.reply(
+                &raw_id,
+                Err(OpError::new(
+                    ErrorCode::Internal,
+                    format!("cannot start job: {e}"),
+                )),
+            );
         }
     }
 
@@ -298,8 +333,11 @@ impl Connection {
     fn reply(&self, id: &Value, result: Result<Response, OpError>) {
         match result {
             Ok(r) => {
-                let files: Vec<Value> =
-                    r.files.iter().map(|p| Value::from(p.display().to_string())).collect();
+                let files: Vec<Value> = r
+                    .files
+                    .iter()
+                    .map(|p| Value::from(p.display().to_string()))
+                    .collect();
                 let msg = json!({"id": id, "type": "ok", "result": r.result, "files": files, "arrays": []});
                 self.send(msg, &r.arrays);
             }
@@ -312,7 +350,9 @@ impl Connection {
     }
 
     fn send(&self, msg: Value, arrays: &[OwnedArray]) {
-        let Value::Object(map) = msg else { unreachable!("replies are objects") };
+        let Value::Object(map) = msg else {
+            unreachable!("replies are objects")
+        };
         let _guard = lock(&self.write_lock);
         if let Err(e) = write_frame(&mut &*self.stream, map, arrays) {
             log::debug!("reply not delivered: {e}");
@@ -332,23 +372,36 @@ fn code_of(e: &FrameError) -> ErrorCode {
 }
 
 /// Checks a request's `id`, `op` and `params`.
-fn parse_envelope(json: &mut Map<String, Value>) -> Result<(u64, String, Map<String, Value>), OpError> {
+fn parse_envelope(
+    json: &mut Map<String, Value>,
+) -> Result<(u64, String, Map<String, Value>), OpError> {
     let id = match json.get("id") {
         Some(v) => v.as_u64().ok_or_else(|| {
-            OpError::request(format!("`id` must be a non-negative integer, got {}", describe(v)))
+            OpError::request(format!(
+                "`id` must be a non-negative integer, got {}",
+                describe(v)
+            ))
         })?,
         None => return Err(OpError::request("the request has no `id`")),
     };
     let op = match json.remove("op") {
         Some(Value::String(s)) => s,
-        Some(v) => return Err(OpError::request(format!("`op` must be a string, got {}", json_kind(&v)))),
+        Some(v) => {
+            return Err(OpError::request(format!(
+                "`op` must be a string, got {}",
+                json_kind(&v)
+            )));
+        }
         None => return Err(OpError::request("the request has no `op`")),
     };
     let params = match json.remove("params") {
         None | Some(Value::Null) => Map::new(),
         Some(Value::Object(m)) => m,
         Some(v) => {
-            return Err(OpError::request(format!("`params` must be an object, got {}", json_kind(&v))));
+            return Err(OpError::request(format!(
+                "`params` must be an object, got {}",
+                json_kind(&v)
+            )));
         }
     };
     Ok((id, op, params))

@@ -18,7 +18,9 @@ pub fn default_dir(create: bool) -> io::Result<PathBuf> {
     {
         return Ok(x);
     }
-    let base = std::env::var_os("TMPDIR").map(PathBuf::from).unwrap_or_else(std::env::temp_dir);
+    let base = std::env::var_os("TMPDIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir);
     let dir = base.join(format!("tessd-{}", current_uid()));
     if create {
         private_dir(&dir)?;
@@ -70,7 +72,10 @@ fn private_dir(dir: &Path) -> io::Result<()> {
     if !meta.is_dir() || meta.uid() != current_uid() {
         return Err(io::Error::new(
             io::ErrorKind::PermissionDenied,
-            format!("{} exists but is not a folder owned by this user", dir.display()),
+            format!(
+                "{} exists but is not a folder owned by this user",
+                dir.display()
+            ),
         ));
     }
     if meta.mode() & 0o077 != 0 {
@@ -89,7 +94,9 @@ fn private_dir(dir: &Path) -> io::Result<()> {
 /// # Errors
 /// When nothing listens there.
 pub fn connect(path: &Path) -> io::Result<Stream> {
-    ConnectOptions::new().name(path.to_fs_name::<GenericFilePath>()?).connect_sync()
+    ConnectOptions::new()
+        .name(path.to_fs_name::<GenericFilePath>()?)
+        .connect_sync()
 }
 
 /// Why [`bind`] failed.
@@ -115,7 +122,10 @@ pub enum BindError {
 /// # Errors
 /// [`BindError::InUse`] when a daemon answers there; [`BindError::Io`] otherwise.
 pub fn bind(path: &Path) -> Result<Listener, BindError> {
-    let io_err = |source| BindError::Io { path: path.to_path_buf(), source };
+    let io_err = |source| BindError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     if std::fs::symlink_metadata(path).is_ok() {
         if connect(path).is_ok() {
             return Err(BindError::InUse(path.to_path_buf()));

@@ -45,7 +45,11 @@ pub enum MeshError {
 
 /// `"12: "` for a text line, `" "` when the line does not apply.
 fn line_prefix(line: u64) -> String {
-    if line == 0 { " ".to_string() } else { format!("{line}: ") }
+    if line == 0 {
+        " ".to_string()
+    } else {
+        format!("{line}: ")
+    }
 }
 
 impl MeshError {

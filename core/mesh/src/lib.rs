@@ -4,6 +4,10 @@
 //! polygon mesh that keeps n-gons (quads matter for subdivision), with optional face-varying
 //! normals and UVs, per-edge creases and face groups (a material or a CAD face id).
 //!
+//! [`io`] reads and writes OBJ, PLY, STL and OFF (streaming, bounded allocation, errors that
+//! name the line or element; writes are atomic), and [`stats`] computes counts and topology
+//! (edges, boundaries, non-manifold edges, components) in linear time.
+//!
 //! ```
 //! use tessd_mesh::Mesh;
 //! let mut m = Mesh::default();

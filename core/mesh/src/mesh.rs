@@ -86,7 +86,10 @@ impl Mesh {
     /// If `f` is out of range or the offsets are inconsistent (call [`Mesh::validate`] first on
     /// untrusted data).
     pub fn face(&self, f: usize) -> &[u32] {
-        let (s, e) = (self.face_offsets[f] as usize, self.face_offsets[f + 1] as usize);
+        let (s, e) = (
+            self.face_offsets[f] as usize,
+            self.face_offsets[f + 1] as usize,
+        );
         &self.face_indices[s..e]
     }
 
@@ -161,27 +164,38 @@ impl Mesh {
                 return bad(format!("face offsets decrease at face {f}"));
             }
             if w[1] - w[0] < 3 {
-                return bad(format!("face {f} has {} vertices; a face needs at least 3", w[1] - w[0]));
+                return bad(format!(
+                    "face {f} has {} vertices; a face needs at least 3",
+                    w[1] - w[0]
+                ));
             }
             for &v in &self.face_indices[w[0] as usize..w[1] as usize] {
                 if v as usize >= nv {
-                    return bad(format!("face {f} uses vertex {v}; the mesh has {nv} vertices"));
+                    return bad(format!(
+                        "face {f} uses vertex {v}; the mesh has {nv} vertices"
+                    ));
                 }
             }
         }
         let corners = self.face_indices.len();
         if let Some(n) = &self.normals {
             check_face_varying("normal", n, corners)?;
-            if let Some((i, _)) =
-                n.values.iter().enumerate().find(|(_, v)| v.iter().any(|c| !c.is_finite()))
+            if let Some((i, _)) = n
+                .values
+                .iter()
+                .enumerate()
+                .find(|(_, v)| v.iter().any(|c| !c.is_finite()))
             {
                 return bad(format!("normal {i} has a non-finite component"));
             }
         }
         if let Some(t) = &self.uvs {
             check_face_varying("uv", t, corners)?;
-            if let Some((i, _)) =
-                t.values.iter().enumerate().find(|(_, v)| v.iter().any(|c| !c.is_finite()))
+            if let Some((i, _)) = t
+                .values
+                .iter()
+                .enumerate()
+                .find(|(_, v)| v.iter().any(|c| !c.is_finite()))
             {
                 return bad(format!("uv {i} has a non-finite component"));
             }
@@ -194,7 +208,10 @@ impl Mesh {
                 ));
             }
             if !c.value.is_finite() || c.value < 0.0 {
-                return bad(format!("crease {i} has value {}; it must be finite and ≥ 0", c.value));
+                return bad(format!(
+                    "crease {i} has value {}; it must be finite and ≥ 0",
+                    c.value
+                ));
             }
         }
         if !self.face_groups.is_empty() {
@@ -206,9 +223,15 @@ impl Mesh {
                 ));
             }
             let ng = self.group_names.len();
-            if let Some((f, g)) = self.face_groups.iter().enumerate().find(|(_, g)| **g as usize >= ng)
+            if let Some((f, g)) = self
+                .face_groups
+                .iter()
+                .enumerate()
+                .find(|(_, g)| **g as usize >= ng)
             {
-                return bad(format!("face {f} is in group {g}; the mesh has {ng} groups"));
+                return bad(format!(
+                    "face {f} is in group {g}; the mesh has {ng} groups"
+                ));
             }
         }
         Ok(())
@@ -223,7 +246,12 @@ fn check_face_varying<T>(what: &str, a: &FaceVarying<T>, corners: usize) -> Resu
         )));
     }
     let n = a.values.len();
-    if let Some((c, v)) = a.indices.iter().enumerate().find(|(_, v)| **v as usize >= n) {
+    if let Some((c, v)) = a
+        .indices
+        .iter()
+        .enumerate()
+        .find(|(_, v)| **v as usize >= n)
+    {
         return Err(MeshError::Invalid(format!(
             "face corner {c} uses {what} {v}; there are {n} {what}s"
         )));
@@ -236,8 +264,10 @@ mod tests {
     use super::*;
 
     fn quad() -> Mesh {
-        let mut m = Mesh::default();
-        m.positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let mut m = Mesh {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            ..Mesh::default()
+        };
         m.push_face(&[0, 1, 2, 3]);
         m
     }
@@ -262,7 +292,10 @@ mod tests {
     fn nan_and_small_faces_are_named() {
         let mut m = quad();
         m.positions[2][1] = f32::NAN;
-        assert_eq!(m.validate().unwrap_err().to_string(), "vertex 2 has a non-finite coordinate y = NaN");
+        assert_eq!(
+            m.validate().unwrap_err().to_string(),
+            "vertex 2 has a non-finite coordinate y = NaN"
+        );
         let mut m = quad();
         m.push_face(&[0, 1]);
         assert_eq!(
@@ -274,7 +307,13 @@ mod tests {
     #[test]
     fn face_varying_length_is_checked() {
         let mut m = quad();
-        m.uvs = Some(FaceVarying { values: vec![[0.0; 2]], indices: vec![0, 0, 0] });
-        assert_eq!(m.validate().unwrap_err().to_string(), "3 uv indices given for 4 face corners");
+        m.uvs = Some(FaceVarying {
+            values: vec![[0.0; 2]],
+            indices: vec![0, 0, 0],
+        });
+        assert_eq!(
+            m.validate().unwrap_err().to_string(),
+            "3 uv indices given for 4 face corners"
+        );
     }
 }

@@ -122,8 +122,9 @@ pub fn compute(mesh: &Mesh) -> MeshStats {
     }
     stats.vertices = referenced.iter().filter(|&&r| r).count() as u64;
     stats.unreferenced_vertices = nv as u64 - stats.vertices;
-    stats.components =
-        (0..nv as u32).filter(|&v| referenced[v as usize] && dsu.find(v) == v).count() as u64;
+    stats.components = (0..nv as u32)
+        .filter(|&v| referenced[v as usize] && dsu.find(v) == v)
+        .count() as u64;
 
     // Edges: file each face side under its smaller vertex (counting sort).
     let sides = |f: &mut dyn FnMut(u32, u32)| {
@@ -176,8 +177,9 @@ pub fn compute(mesh: &Mesh) -> MeshStats {
             i = j;
         }
     }
-    stats.boundary_loops =
-        (0..nv as u32).filter(|&v| on_boundary[v as usize] && dsu.find(v) == v).count() as u64;
+    stats.boundary_loops = (0..nv as u32)
+        .filter(|&v| on_boundary[v as usize] && dsu.find(v) == v)
+        .count() as u64;
     stats
 }
 
@@ -186,8 +188,12 @@ mod tests {
     use super::*;
 
     fn mesh(positions: usize, faces: &[&[u32]]) -> Mesh {
-        let mut m = Mesh::default();
-        m.positions = (0..positions).map(|i| [i as f32, (i * i) as f32, 0.0]).collect();
+        let mut m = Mesh {
+            positions: (0..positions)
+                .map(|i| [i as f32, (i * i) as f32, 0.0])
+                .collect(),
+            ..Mesh::default()
+        };
         for f in faces {
             m.push_face(f);
         }
@@ -197,8 +203,14 @@ mod tests {
     #[test]
     fn tetrahedron_is_closed() {
         let s = compute(&mesh(4, &[&[0, 1, 2], &[0, 3, 1], &[1, 3, 2], &[2, 3, 0]]));
-        assert_eq!((s.vertices, s.edges, s.faces, s.boundary_edges), (4, 6, 4, 0));
-        assert_eq!((s.boundary_loops, s.components, s.euler_characteristic()), (0, 1, 2));
+        assert_eq!(
+            (s.vertices, s.edges, s.faces, s.boundary_edges),
+            (4, 6, 4, 0)
+        );
+        assert_eq!(
+            (s.boundary_loops, s.components, s.euler_characteristic()),
+            (0, 1, 2)
+        );
         assert_eq!(s.face_size_histogram, BTreeMap::from([(3, 4)]));
     }
 
@@ -209,7 +221,10 @@ mod tests {
             11,
             &[&[0, 1, 2, 3], &[1, 4, 5, 2], &[6, 7, 8], &[1, 2, 9]],
         ));
-        assert_eq!((s.stored_vertices, s.vertices, s.unreferenced_vertices), (11, 10, 1));
+        assert_eq!(
+            (s.stored_vertices, s.vertices, s.unreferenced_vertices),
+            (11, 10, 1)
+        );
         assert_eq!((s.faces, s.triangles, s.components), (4, 6, 2));
         assert_eq!(s.non_manifold_edges, 1);
         assert_eq!(s.edges, 4 + 3 + 3 + 2);

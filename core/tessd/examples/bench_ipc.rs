@@ -22,7 +22,8 @@ fn grid(n: u32) -> Mesh {
     for j in 0..=n {
         for i in 0..=n {
             let (x, y) = (i as f32 * s, j as f32 * s);
-            m.positions.push([x, y, 0.05 * (7.0 * x).sin() * (5.0 * y).cos()]);
+            m.positions
+                .push([x, y, 0.05 * (7.0 * x).sin() * (5.0 * y).cos()]);
         }
     }
     m.face_indices.reserve(6 * (n * n) as usize);
@@ -92,7 +93,10 @@ fn main() {
     {
         return load_child(path);
     }
-    let args: Vec<f64> = std::env::args().skip(1).map(|a| a.parse().expect("a number")).collect();
+    let args: Vec<f64> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse().expect("a number"))
+        .collect();
     let tris_m = args.first().copied().unwrap_or(5.0);
     let ply_m = args.get(1).copied().unwrap_or(10.0);
     let dir = tempfile::tempdir().unwrap();
@@ -104,7 +108,12 @@ fn main() {
     let triangles = mesh.face_count();
     let socket = dir.path().join("bench.sock");
     let listener = tessd_ipc::socket::bind(&socket).unwrap();
-    let server = Server::new(listener, &socket, tessd::ops::registry(), ServerOptions::default());
+    let server = Server::new(
+        listener,
+        &socket,
+        tessd::ops::registry(),
+        ServerOptions::default(),
+    );
     let stop = server.shutdown_handle();
     let serving = std::thread::spawn(move || server.serve().unwrap());
     let mut client = Client::connect(&socket).unwrap();
@@ -118,7 +127,9 @@ fn main() {
     let mut received = 0;
     for _ in 0..runs {
         let t = Instant::now();
-        let (_, back) = client.call("mesh.convert", json!({}), &arrays, |_| {}).unwrap();
+        let (_, back) = client
+            .call("mesh.convert", json!({}), &arrays, |_| {})
+            .unwrap();
         t_proto.push(t.elapsed().as_secs_f64());
         received = back.payload_len();
         t_raw.push(raw_echo(dir.path(), &raw_bytes).as_secs_f64());
@@ -126,10 +137,21 @@ fn main() {
     assert_eq!(received, sent.next_multiple_of(8).max(received));
     let mb = (sent + received) as f64 / 1e6;
     let (p, r) = (median(t_proto), median(t_raw));
-    println!("## Socket round trip: {triangles} triangles, {:.1} MB each way, median of {runs}\n", sent as f64 / 1e6);
+    println!(
+        "## Socket round trip: {triangles} triangles, {:.1} MB each way, median of {runs}\n",
+        sent as f64 / 1e6
+    );
     println!("| path | time (ms) | throughput (MB/s, both ways) |\n|---|---|---|");
-    println!("| tessd `mesh.convert` → arrays (frames + mesh validation) | {:.1} | {:.0} |", p * 1e3, mb / p);
-    println!("| raw Unix-socket echo of the same bytes | {:.1} | {:.0} |", r * 1e3, mb / r);
+    println!(
+        "| tessd `mesh.convert` → arrays (frames + mesh validation) | {:.1} | {:.0} |",
+        p * 1e3,
+        mb / p
+    );
+    println!(
+        "| raw Unix-socket echo of the same bytes | {:.1} | {:.0} |",
+        r * 1e3,
+        mb / r
+    );
     println!("\nratio tessd / raw throughput: **{:.2}**\n", r / p);
     stop.trigger();
     serving.join().unwrap();
@@ -140,7 +162,8 @@ fn main() {
     let big = grid(n);
     let ply = dir.path().join("big.ply");
     tessd_mesh::io::write_path(&big, &ply).unwrap();
-    let mesh_bytes = big.positions.len() * 12 + big.face_indices.len() * 4 + big.face_offsets.len() * 4;
+    let mesh_bytes =
+        big.positions.len() * 12 + big.face_indices.len() * 4 + big.face_offsets.len() * 4;
     drop(big);
     let file_mb = std::fs::metadata(&ply).unwrap().len() as f64 / 1e6;
     let (mut t_load, mut t_read) = (Vec::new(), Vec::new());
@@ -160,12 +183,29 @@ fn main() {
         .arg(&ply)
         .output()
         .unwrap();
-    let load_rss: f64 = String::from_utf8_lossy(&child.stdout).trim().parse().unwrap_or(f64::NAN);
-    println!("## Binary PLY load: {} triangles, {file_mb:.0} MB file, median of 3 (file in page cache)\n", 2 * n * n);
+    let load_rss: f64 = String::from_utf8_lossy(&child.stdout)
+        .trim()
+        .parse()
+        .unwrap_or(f64::NAN);
+    println!(
+        "## Binary PLY load: {} triangles, {file_mb:.0} MB file, median of 3 (file in page cache)\n",
+        2 * n * n
+    );
     println!("| path | time (ms) | MB/s |\n|---|---|---|");
-    println!("| `tessd_mesh::io::read_path` (parse + validate) | {:.0} | {:.0} |", l * 1e3, file_mb / l);
-    println!("| `std::fs::read` of the file | {:.0} | {:.0} |", rd * 1e3, file_mb / rd);
+    println!(
+        "| `tessd_mesh::io::read_path` (parse + validate) | {:.0} | {:.0} |",
+        l * 1e3,
+        file_mb / l
+    );
+    println!(
+        "| `std::fs::read` of the file | {:.0} | {:.0} |",
+        rd * 1e3,
+        file_mb / rd
+    );
     let mesh_mib = mesh_bytes as f64 / 1048576.0;
     println!("\nratio load / plain read time: **{:.2}**", l / rd);
-    println!("\npeak RSS of a process that only loads the file: {load_rss:.0} MiB; the mesh itself: {mesh_mib:.0} MiB (ratio {:.2})", load_rss / mesh_mib);
+    println!(
+        "\npeak RSS of a process that only loads the file: {load_rss:.0} MiB; the mesh itself: {mesh_mib:.0} MiB (ratio {:.2})",
+        load_rss / mesh_mib
+    );
 }

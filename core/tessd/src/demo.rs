@@ -32,14 +32,20 @@ impl Daemon {
             .stderr(Stdio::inherit())
             .spawn()
             .context("starting tessd serve")?;
-        let mut daemon = Daemon { child, socket: socket.to_path_buf() };
+        let mut daemon = Daemon {
+            child,
+            socket: socket.to_path_buf(),
+        };
         let deadline = Instant::now() + Duration::from_secs(10);
         while tessd_ipc::socket::connect(socket).is_err() {
             if let Some(status) = daemon.child.try_wait()? {
                 bail!("tessd serve exited early ({status})");
             }
             if Instant::now() > deadline {
-                bail!("tessd serve did not answer on {} within 10 s", socket.display());
+                bail!(
+                    "tessd serve did not answer on {} within 10 s",
+                    socket.display()
+                );
             }
             std::thread::sleep(Duration::from_millis(20));
         }
@@ -78,9 +84,17 @@ pub fn run(out: &Path) -> Result<()> {
     let mut client = Client::connect(&daemon.socket)?;
 
     let (hello, _) = client.call("hello", json!({}), &[], |_| {})?;
-    println!("  daemon {} (protocol {}), ops: {}", hello["version"], hello["protocol"], hello["ops"]);
+    println!(
+        "  daemon {} (protocol {}), ops: {}",
+        hello["version"], hello["protocol"], hello["ops"]
+    );
 
-    let mesh = tessd_mesh::io::read(SPOT_OBJ, Format::Obj, "spot_triangulated.obj", &ReadOptions::default())?;
+    let mesh = tessd_mesh::io::read(
+        SPOT_OBJ,
+        Format::Obj,
+        "spot_triangulated.obj",
+        &ReadOptions::default(),
+    )?;
     let arrays = crate::ops::mesh_arrays::mesh_to_arrays(mesh);
     let (stats, _) = client.call("mesh.stats", json!({}), &arrays, |_| {})?;
     let stats_path = out.join("spot_stats.json");
@@ -96,7 +110,12 @@ pub fn run(out: &Path) -> Result<()> {
     let usd_path = out.join("spot.usda");
     let (converted, _) =
         client.call("mesh.convert", json!({"output": usd_path}), &arrays, |_| {})?;
-    println!("  mesh.convert: {} vertices, {} faces -> {}", converted["vertices"], converted["faces"], usd_path.display());
+    println!(
+        "  mesh.convert: {} vertices, {} faces -> {}",
+        converted["vertices"],
+        converted["faces"],
+        usd_path.display()
+    );
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);
     println!("tessd demo: done, results in {}", out.display());

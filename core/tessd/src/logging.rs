@@ -18,11 +18,22 @@ impl log::Log for Logger {
         if !self.enabled(record.metadata()) {
             return;
         }
-        let t = SystemTime::now().duration_since(UNIX_EPOCH).unwrap_or_default();
-        let line = format!("[{}.{:03} {:5} tessd] {}\n", t.as_secs(), t.subsec_millis(), record.level(), record.args());
+        let t = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap_or_default();
+        let line = format!(
+            "[{}.{:03} {:5} tessd] {}\n",
+            t.as_secs(),
+            t.subsec_millis(),
+            record.level(),
+            record.args()
+        );
         let _ = std::io::stderr().write_all(line.as_bytes());
         if let Some(f) = &self.file {
-            let _ = f.lock().unwrap_or_else(|e| e.into_inner()).write_all(line.as_bytes());
+            let _ = f
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .write_all(line.as_bytes());
         }
     }
 
@@ -43,7 +54,12 @@ pub fn init(file: Option<&std::path::Path>) -> std::io::Result<()> {
         .and_then(|s| s.parse().ok())
         .unwrap_or(log::LevelFilter::Info);
     let file = match file {
-        Some(p) => Some(Mutex::new(std::fs::OpenOptions::new().create(true).append(true).open(p)?)),
+        Some(p) => Some(Mutex::new(
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(p)?,
+        )),
         None => None,
     };
     if log::set_logger(Box::leak(Box::new(Logger { level, file }))).is_ok() {

@@ -88,8 +88,14 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Serve { socket, log, max_payload } => serve(socket.as_deref(), log.as_deref(), max_payload),
-        Command::Job { action: JobAction::Run { file } } => job_run(&file),
+        Command::Serve {
+            socket,
+            log,
+            max_payload,
+        } => serve(socket.as_deref(), log.as_deref(), max_payload),
+        Command::Job {
+            action: JobAction::Run { file },
+        } => job_run(&file),
         Command::Stats { file, json } => {
             let response = run_local("mesh.stats", serde_json::json!({"input": file}))?;
             if json {
@@ -100,7 +106,10 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Convert { input, output } => {
-            let response = run_local("mesh.convert", serde_json::json!({"input": input, "output": output}))?;
+            let response = run_local(
+                "mesh.convert",
+                serde_json::json!({"input": input, "output": output}),
+            )?;
             println!(
                 "wrote {} ({} vertices, {} faces)",
                 output.display(),
@@ -121,8 +130,11 @@ fn serve(socket: Option<&str>, log_file: Option<&Path>, max_payload: u64) -> Res
         .with_limits(tessd_ipc::frame::Limits::default().with_max_payload(max_payload));
     let server = Server::new(listener, &path, tessd::ops::registry(), options);
     let handle = server.shutdown_handle();
-    let mut signals = signal_hook::iterator::Signals::new([signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM])
-        .context("installing signal handlers")?;
+    let mut signals = signal_hook::iterator::Signals::new([
+        signal_hook::consts::SIGINT,
+        signal_hook::consts::SIGTERM,
+    ])
+    .context("installing signal handlers")?;
     std::thread::spawn(move || {
         if let Some(sig) = signals.forever().next() {
             log::info!("signal {sig} received");
@@ -136,9 +148,15 @@ fn serve(socket: Option<&str>, log_file: Option<&Path>, max_payload: u64) -> Res
 /// Runs one operation in this process with a progress bar on a terminal — the same registry
 /// and code path as a socket request.
 fn run_local(op: &str, params: serde_json::Value) -> Result<Response> {
-    let serde_json::Value::Object(params) = params else { unreachable!() };
+    let serde_json::Value::Object(params) = params else {
+        unreachable!()
+    };
     let cwd = std::env::current_dir()?;
-    let request = Request { params, base_dir: Some(cwd), ..Request::default() };
+    let request = Request {
+        params,
+        base_dir: Some(cwd),
+        ..Request::default()
+    };
     with_progress(op, |ctx| tessd::ops::registry().run(op, request, ctx))
 }
 
@@ -173,17 +191,27 @@ fn with_progress(
 }
 
 fn job_run(file: &Path) -> Result<()> {
-    let text = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
-    let jobs = tessd_ipc::job_file::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let base = file.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let text =
+        std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
+    let jobs = tessd_ipc::job_file::parse(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let base = file
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let registry = tessd::ops::registry();
     let mut failed = 0;
     for (i, job) in jobs.into_iter().enumerate() {
         let label = format!("job {i} ({})", job.op);
-        match with_progress(&label, |ctx| tessd_ipc::job_file::run(&registry, job, base, ctx)) {
+        match with_progress(&label, |ctx| {
+            tessd_ipc::job_file::run(&registry, job, base, ctx)
+        }) {
             Ok(r) => {
                 let files: Vec<String> = r.files.iter().map(|p| p.display().to_string()).collect();
-                println!("{}", serde_json::json!({"job": i, "result": r.result, "files": files}));
+                println!(
+                    "{}",
+                    serde_json::json!({"job": i, "result": r.result, "files": files})
+                );
             }
             Err(e) => {
                 eprintln!("tessd: {e:#}");
@@ -199,8 +227,18 @@ fn job_run(file: &Path) -> Result<()> {
 
 fn print_stats(file: &Path, s: &serde_json::Value) {
     println!("{}", file.display());
-    for key in ["vertices", "stored_vertices", "unreferenced_vertices", "faces", "triangles", "edges",
-                "boundary_edges", "boundary_loops", "non_manifold_edges", "components"] {
+    for key in [
+        "vertices",
+        "stored_vertices",
+        "unreferenced_vertices",
+        "faces",
+        "triangles",
+        "edges",
+        "boundary_edges",
+        "boundary_loops",
+        "non_manifold_edges",
+        "components",
+    ] {
         println!("  {key:22} {}", s[key]);
     }
     println!("  {:22} {}", "face sizes", s["face_sizes"]);

@@ -20,7 +20,11 @@ fn shared_mesh(name: &str) -> PathBuf {
 
 fn run_ok(cmd: &mut Command) -> Output {
     let out = cmd.output().unwrap();
-    assert!(out.status.success(), "failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     out
 }
 
@@ -28,10 +32,18 @@ struct Daemon(Child);
 
 impl Daemon {
     fn start(socket: &Path) -> Daemon {
-        let child = tessd().arg("serve").arg("--socket").arg(socket).spawn().unwrap();
+        let child = tessd()
+            .arg("serve")
+            .arg("--socket")
+            .arg(socket)
+            .spawn()
+            .unwrap();
         let t = Instant::now();
         while tessd_ipc::socket::connect(socket).is_err() {
-            assert!(t.elapsed() < Duration::from_secs(10), "daemon did not start");
+            assert!(
+                t.elapsed() < Duration::from_secs(10),
+                "daemon did not start"
+            );
             std::thread::sleep(Duration::from_millis(20));
         }
         Daemon(child)
@@ -58,7 +70,11 @@ impl Drop for Daemon {
 
 #[test]
 fn stats_json_matches_manifest_counts() {
-    let out = run_ok(tessd().args(["stats", "--json"]).arg(shared_mesh("stanford_bunny.obj")));
+    let out = run_ok(
+        tessd()
+            .args(["stats", "--json"])
+            .arg(shared_mesh("stanford_bunny.obj")),
+    );
     let s: Value = serde_json::from_slice(&out.stdout).unwrap();
     // MANIFEST.md: 35947 vertices of which 1113 unreferenced, 69451 triangles, 223 boundary
     // edges in 5 loops.
@@ -69,14 +85,30 @@ fn stats_json_matches_manifest_counts() {
     assert_eq!(s["boundary_edges"], 223);
     assert_eq!(s["boundary_loops"], 5);
     assert_eq!(s["non_manifold_edges"], 0);
-    let out = run_ok(tessd().args(["stats", "--json"]).arg(shared_mesh("mpi_polygons.off")));
+    let out = run_ok(
+        tessd()
+            .args(["stats", "--json"])
+            .arg(shared_mesh("mpi_polygons.off")),
+    );
     let s: Value = serde_json::from_slice(&out.stdout).unwrap();
     // MANIFEST.md: face sizes 3:13, 4:12, 5:2, 6:10, 7:3, 8:6, 9:2, 10:4.
-    assert_eq!(s["face_sizes"], json!({"3": 13, "4": 12, "5": 2, "6": 10, "7": 3, "8": 6, "9": 2, "10": 4}));
-    let tri: u64 = [(3, 13), (4, 12), (5, 2), (6, 10), (7, 3), (8, 6), (9, 2), (10, 4)]
-        .iter()
-        .map(|(n, c)| (n - 2) * c)
-        .sum();
+    assert_eq!(
+        s["face_sizes"],
+        json!({"3": 13, "4": 12, "5": 2, "6": 10, "7": 3, "8": 6, "9": 2, "10": 4})
+    );
+    let tri: u64 = [
+        (3, 13),
+        (4, 12),
+        (5, 2),
+        (6, 10),
+        (7, 3),
+        (8, 6),
+        (9, 2),
+        (10, 4),
+    ]
+    .iter()
+    .map(|(n, c)| (n - 2) * c)
+    .sum();
     assert_eq!(s["triangles"], tri);
 }
 
@@ -84,7 +116,12 @@ fn stats_json_matches_manifest_counts() {
 fn convert_rejects_unknown_format_and_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out_path = dir.path().join("out.xyz");
-    let out = tessd().arg("convert").arg(shared_mesh("suzanne.obj")).arg(&out_path).output().unwrap();
+    let out = tessd()
+        .arg("convert")
+        .arg(shared_mesh("suzanne.obj"))
+        .arg(&out_path)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("xyz"));
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
@@ -114,20 +151,34 @@ fn job_file_matches_socket_and_writes_outputs() {
     std::fs::write(&job_path, job.to_string()).unwrap();
     // Run from another folder: relative paths resolve against the job file's folder.
     let out = run_ok(tessd().args(["job", "run"]).arg(&job_path).current_dir("/"));
-    let lines: Vec<Value> =
-        String::from_utf8_lossy(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let lines: Vec<Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(lines.len(), 2);
     assert!(dir.path().join("spot.ply").exists());
 
     let socket = dir.path().join("d.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
-    let (over_socket, _) =
-        c.call("mesh.stats", json!({"input": dir.path().join("spot.obj")}), &[], |_| {}).unwrap();
+    let (over_socket, _) = c
+        .call(
+            "mesh.stats",
+            json!({"input": dir.path().join("spot.obj")}),
+            &[],
+            |_| {},
+        )
+        .unwrap();
     assert_eq!(lines[0]["result"], over_socket);
     // The converted file is the same mesh again.
-    let (ply_stats, _) =
-        c.call("mesh.stats", json!({"input": dir.path().join("spot.ply")}), &[], |_| {}).unwrap();
+    let (ply_stats, _) = c
+        .call(
+            "mesh.stats",
+            json!({"input": dir.path().join("spot.ply")}),
+            &[],
+            |_| {},
+        )
+        .unwrap();
     assert_eq!(ply_stats, over_socket);
 }
 
@@ -143,11 +194,19 @@ fn daemon_lifecycle() {
         assert_eq!(mode, 0o600);
     }
     // A second daemon on a live socket refuses, and the first keeps serving.
-    let second = tessd().arg("serve").arg("--socket").arg(&socket).output().unwrap();
+    let second = tessd()
+        .arg("serve")
+        .arg("--socket")
+        .arg(&socket)
+        .output()
+        .unwrap();
     assert_eq!(second.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&second.stderr).contains("already serving"));
     let mut c = Client::connect(&socket).unwrap();
-    assert_eq!(c.call("ping", json!({"echo": 5}), &[], |_| {}).unwrap().0["echo"], 5);
+    assert_eq!(
+        c.call("ping", json!({"echo": 5}), &[], |_| {}).unwrap().0["echo"],
+        5
+    );
     // SIGTERM: clean exit, socket removed.
     // SAFETY: kill() with a valid pid and signal number.
     unsafe { libc::kill(daemon.0.id() as i32, libc::SIGTERM) };
@@ -161,7 +220,10 @@ fn daemon_lifecycle() {
     assert!(socket.exists());
     let mut daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
-    assert_eq!(c.call("hello", json!({}), &[], |_| {}).unwrap().0["server"], "tessd");
+    assert_eq!(
+        c.call("hello", json!({}), &[], |_| {}).unwrap().0["server"],
+        "tessd"
+    );
     c.call("shutdown", json!({}), &[], |_| {}).unwrap();
     assert!(daemon.wait_exit().success());
 }

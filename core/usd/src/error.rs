@@ -61,3 +61,17 @@ impl UsdError {
 
 /// The `path` of [`UsdError::Io`] for failures of a caller-supplied writer.
 pub(crate) const STREAM: &str = "<stream>";
+
+/// File-level failures of [`tessd_mesh::io::write_atomic`] (creating, flushing or renaming the
+/// temporary file) arrive as mesh I/O errors.
+impl From<MeshError> for UsdError {
+    fn from(e: MeshError) -> Self {
+        match e {
+            MeshError::Io { path, source } => UsdError::Io { path, source },
+            other => UsdError::InvalidMesh {
+                prim: String::new(),
+                source: other,
+            },
+        }
+    }
+}

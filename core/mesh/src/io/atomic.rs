@@ -35,7 +35,10 @@ where
     F: FnOnce(&mut dyn Write) -> Result<(), E>,
     E: From<MeshError>,
 {
-    let io_err = |source| MeshError::Io { path: path.display().to_string(), source };
+    let io_err = |source| MeshError::Io {
+        path: path.display().to_string(),
+        source,
+    };
     let Some(file_name) = path.file_name() else {
         return Err(MeshError::Io {
             path: path.display().to_string(),
@@ -48,7 +51,10 @@ where
         _ => Path::new("."),
     };
     let (file, temp) = create_temp(dir, &file_name.to_string_lossy()).map_err(io_err)?;
-    let mut guard = TempGuard { path: temp, armed: true };
+    let mut guard = TempGuard {
+        path: temp,
+        armed: true,
+    };
     let mut w = BufWriter::with_capacity(64 * 1024, file);
     write(&mut w)?;
     w.flush().map_err(io_err)?;
@@ -114,7 +120,10 @@ mod tests {
         assert_eq!(entries(dir.path()), ["out.txt"]);
 
         write_atomic::<MeshError, _>(&path, |w| {
-            w.write_all(b"new").map_err(|e| MeshError::Io { path: "x".into(), source: e })
+            w.write_all(b"new").map_err(|e| MeshError::Io {
+                path: "x".into(),
+                source: e,
+            })
         })
         .unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"new");
@@ -137,6 +146,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("nope").join("x.obj");
         let e = write_atomic::<MeshError, _>(&path, |_| Ok(())).unwrap_err();
-        assert!(matches!(&e, MeshError::Io { path: p, .. } if p.ends_with("x.obj")), "{e}");
+        assert!(
+            matches!(&e, MeshError::Io { path: p, .. } if p.ends_with("x.obj")),
+            "{e}"
+        );
     }
 }

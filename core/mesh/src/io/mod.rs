@@ -100,7 +100,32 @@ pub struct ReadOptions {
 
 impl Default for ReadOptions {
     fn default() -> Self {
-        ReadOptions { max_elements: 1 << 31, input_len: None, cancel: None }
+        ReadOptions {
+            max_elements: 1 << 31,
+            input_len: None,
+            cancel: None,
+        }
+    }
+}
+
+// Builders, since `#[non_exhaustive]` rules out struct literals in other crates.
+impl ReadOptions {
+    /// Sets [`ReadOptions::max_elements`].
+    pub fn with_max_elements(mut self, max_elements: u64) -> Self {
+        self.max_elements = max_elements;
+        self
+    }
+
+    /// Sets [`ReadOptions::input_len`] (e.g. to a byte slice's length).
+    pub fn with_input_len(mut self, input_len: u64) -> Self {
+        self.input_len = Some(input_len);
+        self
+    }
+
+    /// Sets [`ReadOptions::cancel`].
+    pub fn with_cancel(mut self, cancel: Arc<AtomicBool>) -> Self {
+        self.cancel = Some(cancel);
+        self
     }
 }
 
@@ -112,11 +137,22 @@ impl Default for ReadOptions {
 pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Mesh, MeshError> {
     let format = Format::from_path(path)?;
     let name = path.display().to_string();
-    let io_err = |source| MeshError::Io { path: name.clone(), source };
+    let io_err = |source| MeshError::Io {
+        path: name.clone(),
+        source,
+    };
     let file = std::fs::File::open(path).map_err(io_err)?;
     let meta = file.metadata().map_err(io_err)?;
-    let len = if meta.is_file() { Some(meta.len()) } else { options.input_len };
-    read_source(Source::new(file, &name, len, options.cancel.as_deref()), format, options)
+    let len = if meta.is_file() {
+        Some(meta.len())
+    } else {
+        options.input_len
+    };
+    read_source(
+        Source::new(file, &name, len, options.cancel.as_deref()),
+        format,
+        options,
+    )
 }
 
 /// Reads a mesh in `format` from any buffered reader (a file, a socket, `&[u8]` in memory).
@@ -135,7 +171,12 @@ pub fn read(
     name_for_errors: &str,
     options: &ReadOptions,
 ) -> Result<Mesh, MeshError> {
-    let src = Source::new(reader, name_for_errors, options.input_len, options.cancel.as_deref());
+    let src = Source::new(
+        reader,
+        name_for_errors,
+        options.input_len,
+        options.cancel.as_deref(),
+    );
     read_source(src, format, options)
 }
 
@@ -177,7 +218,10 @@ pub fn write(mesh: &Mesh, w: impl Write, format: Format) -> Result<(), MeshError
 }
 
 fn write_named(mesh: &Mesh, w: impl Write, format: Format, name: &str) -> Result<(), MeshError> {
-    let io_err = |source| MeshError::Io { path: name.to_string(), source };
+    let io_err = |source| MeshError::Io {
+        path: name.to_string(),
+        source,
+    };
     let mut w = BufWriter::with_capacity(source::BUF_SIZE, w);
     match format {
         Format::Obj => obj::write(mesh, &mut w).map_err(io_err)?,
@@ -215,20 +259,31 @@ mod tests {
 
     #[test]
     fn format_from_extension() {
-        assert_eq!(Format::from_path(Path::new("a/B.PlY")).unwrap(), Format::Ply);
+        assert_eq!(
+            Format::from_path(Path::new("a/B.PlY")).unwrap(),
+            Format::Ply
+        );
         assert_eq!(Format::from_path(Path::new("x.obj")).unwrap(), Format::Obj);
         let e = Format::from_path(Path::new("x.fbx")).unwrap_err();
         assert_eq!(
             e.to_string(),
             "unsupported mesh file extension '.fbx'; expected .obj, .ply, .stl or .off"
         );
-        assert!(matches!(Format::from_path(Path::new("noext")), Err(MeshError::Unsupported(_))));
+        assert!(matches!(
+            Format::from_path(Path::new("noext")),
+            Err(MeshError::Unsupported(_))
+        ));
     }
 
     #[test]
     fn read_from_memory() {
-        let m = read(&b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"[..], Format::Obj, "m", &Default::default())
-            .unwrap();
+        let m = read(
+            &b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"[..],
+            Format::Obj,
+            "m",
+            &Default::default(),
+        )
+        .unwrap();
         assert_eq!((m.vertex_count(), m.face_count()), (3, 1));
     }
 }

@@ -1,6 +1,6 @@
 //! Wavefront OBJ.
 //!
-//! Read: `v` (x y z; an optional w or vertex colour after them is ignored), `vt` (u [v [w]]),
+//! Read: `v` (x y z; an optional w or vertex colour after them is ignored), `vt` (`u [v [w]]`),
 //! `vn`, `f` with `v`, `v/vt`, `v//vn`, `v/vt/vn` corners, n-gons, negative (relative) indices,
 //! `g` and `usemtl` as face groups, `\` line continuations, CRLF, `#` comments. Everything else
 //! (`o`, `s`, `mtllib`, `l`, `p`, curves...) is ignored.
@@ -15,8 +15,8 @@
 //! - Positive indices may refer to vertices defined later in the file (they are range-checked
 //!   at the end, still naming the line); negative ones are relative to the vertices so far.
 
-use super::source::{Source, element_limit, parse_f32, parse_i64, show, tokens};
 use super::ReadOptions;
+use super::source::{Source, element_limit, parse_f32, parse_i64, show, tokens};
 use crate::{FaceVarying, Mesh, MeshError};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -35,6 +35,14 @@ impl Slot {
             Slot::Vertex => "vertex",
             Slot::Uv => "texture coordinate",
             Slot::Normal => "normal",
+        }
+    }
+
+    fn plural(self) -> &'static str {
+        match self {
+            Slot::Vertex => "vertices",
+            Slot::Uv => "texture coordinates",
+            Slot::Normal => "normals",
         }
     }
 }
@@ -65,7 +73,10 @@ impl Names {
     }
 }
 
-pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Result<Mesh, MeshError> {
+pub(crate) fn read<R: Read>(
+    src: &mut Source<'_, R>,
+    opts: &ReadOptions,
+) -> Result<Mesh, MeshError> {
     let limit = element_limit(opts.max_elements);
     let mut mesh = Mesh::default();
     let mut uv_values: Vec<[f32; 2]> = Vec::new();
@@ -96,10 +107,8 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
                 return Err(src.error("line too long"));
             }
         }
-        if let Some(hash) = line.iter().position(|&b| b == b'#') {
-            line.truncate(hash);
-        }
-        let mut toks = tokens(&line);
+        // A token starting with `#` ends the line's content.
+        let mut toks = tokens(&line).take_while(|t| t[0] != b'#');
         let Some(keyword) = toks.next() else { continue };
         let err = |msg: String| src.error_at(lineno, msg);
         match keyword {
@@ -113,9 +122,13 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
                     *c = parse_f32(t)
                         .ok_or_else(|| err(format!("bad coordinate '{}' in '{what}'", show(t))))?;
                 }
-                let store = if keyword == b"v" { &mut mesh.positions } else { &mut normal_values };
+                let store = if keyword == b"v" {
+                    &mut mesh.positions
+                } else {
+                    &mut normal_values
+                };
                 if store.len() as u64 >= limit {
-                    return Err(too_large(what, limit));
+                    return Err(too_large(src.name(), what, limit));
                 }
                 store.push(p);
             }
@@ -133,7 +146,7 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
                     }
                 }
                 if uv_values.len() as u64 >= limit {
-                    return Err(too_large("vt", limit));
+                    return Err(too_large(src.name(), "vt", limit));
                 }
                 uv_values.push(t);
             }
@@ -151,8 +164,9 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
                     for slot in [Slot::Vertex, Slot::Uv, Slot::Normal] {
                         match parts.next() {
                             Some(p) if !p.is_empty() => {
-                                let i = resolve(p, slot, counts[slot as usize], lineno, &mut max_ref)
-                                    .map_err(&err)?;
+                                let i =
+                                    resolve(p, slot, counts[slot as usize], lineno, &mut max_ref)
+                                        .map_err(&err)?;
                                 corner[slot as usize].push(i);
                             }
                             Some(_) if matches!(slot, Slot::Vertex) => {
@@ -167,21 +181,31 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
                 }
                 let n = corner[0].len();
                 if n < 3 {
-                    return Err(err(format!("face has {n} vertices; a face needs at least 3")));
+                    return Err(err(format!(
+                        "face has {n} vertices; a face needs at least 3"
+                    )));
                 }
                 let faces = mesh.face_count();
                 if faces as u64 >= limit || (mesh.face_indices.len() + n) as u64 > limit {
-                    return Err(too_large("face", limit));
+                    return Err(too_large(src.name(), "f", limit));
                 }
-                if runs.last().is_none_or(|r| r.material != material || r.group != group) {
-                    runs.push(Run { first_face: faces, material, group });
+                if runs
+                    .last()
+                    .is_none_or(|r| r.material != material || r.group != group)
+                {
+                    runs.push(Run {
+                        first_face: faces,
+                        material,
+                        group,
+                    });
                 }
                 mesh.push_face(&corner[0]);
                 keep_attribute(&mut all_uv, &mut uv_idx, &corner[1], n);
                 keep_attribute(&mut all_normal, &mut normal_idx, &corner[2], n);
             }
             b"g" | b"usemtl" => {
-                let name = rest_of_line(&line, keyword.len());
+                let text = memchr::memchr(b'#', &line).map_or(&line[..], |h| &line[..h]);
+                let name = rest_of_line(text, keyword.len());
                 if keyword == b"g" {
                     group = Some(groups.intern(&name));
                 } else {
@@ -199,27 +223,35 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
             return Err(src.error_at(
                 line,
                 format!(
-                    "{} index {max} is out of range; the file has {} {}s",
+                    "{} index {max} is out of range; the file has {} {}",
                     slot.noun(),
                     counts[slot as usize],
-                    slot.noun()
+                    slot.plural()
                 ),
             ));
         }
     }
     let has_faces = mesh.face_count() > 0;
     if all_uv && has_faces {
-        mesh.uvs = Some(FaceVarying { values: uv_values, indices: uv_idx });
+        mesh.uvs = Some(FaceVarying {
+            values: uv_values,
+            indices: uv_idx,
+        });
     }
     if all_normal && has_faces {
-        mesh.normals = Some(FaceVarying { values: normal_values, indices: normal_idx });
+        mesh.normals = Some(FaceVarying {
+            values: normal_values,
+            indices: normal_idx,
+        });
     }
     assign_groups(&mut mesh, &runs, &materials, &groups);
     Ok(mesh)
 }
 
-fn too_large(what: &str, limit: u64) -> MeshError {
-    MeshError::TooLarge(format!("'{what}' records exceed the limit of {limit}"))
+fn too_large(name: &str, what: &str, limit: u64) -> MeshError {
+    MeshError::TooLarge(format!(
+        "{name}: '{what}' records exceed the limit of {limit}"
+    ))
 }
 
 /// Parses one index of a face corner and turns it 0-based.
@@ -249,7 +281,8 @@ fn resolve(
             let back = i.unsigned_abs();
             if back > count {
                 return Err(format!(
-                    "{noun} index {i} is out of range; {count} {noun}s are defined before it"
+                    "{noun} index {i} is out of range; {count} {} are defined before it",
+                    slot.plural()
                 ));
             }
             count - back
@@ -273,9 +306,17 @@ fn keep_attribute(all: &mut bool, indices: &mut Vec<u32>, corner: &[u32], n: usi
 
 /// The text after a keyword, trimmed; `default` when empty.
 fn rest_of_line(line: &[u8], keyword_len: usize) -> String {
-    let start = line.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(0) + keyword_len;
+    let start = line
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(0)
+        + keyword_len;
     let name = String::from_utf8_lossy(line.get(start..).unwrap_or_default().trim_ascii());
-    if name.is_empty() { "default".to_string() } else { name.into_owned() }
+    if name.is_empty() {
+        "default".to_string()
+    } else {
+        name.into_owned()
+    }
 }
 
 /// Turns the recorded runs into `face_groups`: by material when the file had any `usemtl`, else
@@ -300,52 +341,75 @@ fn assign_groups(mesh: &mut Mesh, runs: &[Run], materials: &Names, groups: &Name
     mesh.group_names = names.list;
 }
 
-/// Formats a float so that it reads back to the same `f32`: plain decimals in the usual range,
+/// Appends a float that reads back to the same `f32`: plain decimals in the usual range,
 /// exponent notation for very small or large magnitudes.
-pub(crate) fn fmt_f32(w: &mut impl Write, x: f32) -> std::io::Result<()> {
+pub(crate) fn push_f32(out: &mut Vec<u8>, x: f32) {
+    use std::io::Write as _;
     let a = x.abs();
-    if x == 0.0 || (1e-4..1e15).contains(&a) {
-        write!(w, "{x}")
+    // Writing to a Vec cannot fail.
+    let _ = if x == 0.0 || (1e-4..1e15).contains(&a) {
+        write!(out, "{x}")
     } else {
-        write!(w, "{x:e}")
+        write!(out, "{x:e}")
+    };
+}
+
+/// Appends a decimal integer (the bulk of OBJ and OFF face lines; faster than `write!`).
+pub(crate) fn push_u32(out: &mut Vec<u8>, mut v: u32) {
+    let mut digits = [0u8; 10];
+    let mut i = digits.len();
+    loop {
+        i -= 1;
+        digits[i] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
     }
+    out.extend_from_slice(&digits[i..]);
+}
+
+/// Writes `prefix x y ...` lines, one per value.
+pub(crate) fn write_values<const N: usize>(
+    w: &mut impl Write,
+    prefix: &[u8],
+    values: &[[f32; N]],
+) -> std::io::Result<()> {
+    let mut line = Vec::with_capacity(128);
+    for v in values {
+        line.clear();
+        line.extend_from_slice(prefix);
+        for (k, &c) in v.iter().enumerate() {
+            if k > 0 || !prefix.is_empty() {
+                line.push(b' ');
+            }
+            push_f32(&mut line, c);
+        }
+        line.push(b'\n');
+        w.write_all(&line)?;
+    }
+    Ok(())
 }
 
 pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
     writeln!(w, "# written by tessd-mesh")?;
-    writeln!(w, "# {} vertices, {} faces", mesh.vertex_count(), mesh.face_count())?;
-    for p in &mesh.positions {
-        w.write_all(b"v ")?;
-        fmt_f32(w, p[0])?;
-        w.write_all(b" ")?;
-        fmt_f32(w, p[1])?;
-        w.write_all(b" ")?;
-        fmt_f32(w, p[2])?;
-        w.write_all(b"\n")?;
-    }
+    writeln!(
+        w,
+        "# {} vertices, {} faces",
+        mesh.vertex_count(),
+        mesh.face_count()
+    )?;
+    write_values(w, b"v", &mesh.positions)?;
     if let Some(uv) = &mesh.uvs {
-        for t in &uv.values {
-            w.write_all(b"vt ")?;
-            fmt_f32(w, t[0])?;
-            w.write_all(b" ")?;
-            fmt_f32(w, t[1])?;
-            w.write_all(b"\n")?;
-        }
+        write_values(w, b"vt", &uv.values)?;
     }
     if let Some(n) = &mesh.normals {
-        for v in &n.values {
-            w.write_all(b"vn ")?;
-            fmt_f32(w, v[0])?;
-            w.write_all(b" ")?;
-            fmt_f32(w, v[1])?;
-            w.write_all(b" ")?;
-            fmt_f32(w, v[2])?;
-            w.write_all(b"\n")?;
-        }
+        write_values(w, b"vn", &n.values)?;
     }
     let uv = mesh.uvs.as_ref().map(|a| a.indices.as_slice());
     let nr = mesh.normals.as_ref().map(|a| a.indices.as_slice());
     let mut current_group = None;
+    let mut line = Vec::with_capacity(128);
     for (f, win) in mesh.face_offsets.windows(2).enumerate() {
         if let Some(&g) = mesh.face_groups.get(f)
             && current_group != Some(g)
@@ -353,21 +417,39 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
             current_group = Some(g);
             let name: String = mesh.group_names[g as usize]
                 .chars()
-                .map(|c| if c == '\n' || c == '\r' || c == '#' { '_' } else { c })
+                .map(|c| {
+                    if matches!(c, '\n' | '\r' | '#') {
+                        '_'
+                    } else {
+                        c
+                    }
+                })
                 .collect();
-            writeln!(w, "usemtl {}", if name.trim().is_empty() { "default" } else { &name })?;
+            let name = if name.trim().is_empty() {
+                "default"
+            } else {
+                name.as_str()
+            };
+            writeln!(w, "usemtl {name}")?;
         }
-        w.write_all(b"f")?;
+        line.clear();
+        line.push(b'f');
         for c in win[0] as usize..win[1] as usize {
-            write!(w, " {}", mesh.face_indices[c] + 1)?;
-            match (uv, nr) {
-                (Some(t), Some(n)) => write!(w, "/{}/{}", t[c] + 1, n[c] + 1)?,
-                (Some(t), None) => write!(w, "/{}", t[c] + 1)?,
-                (None, Some(n)) => write!(w, "//{}", n[c] + 1)?,
-                (None, None) => {}
+            line.push(b' ');
+            push_u32(&mut line, mesh.face_indices[c] + 1);
+            if uv.is_some() || nr.is_some() {
+                line.push(b'/');
+            }
+            if let Some(t) = uv {
+                push_u32(&mut line, t[c] + 1);
+            }
+            if let Some(n) = nr {
+                line.push(b'/');
+                push_u32(&mut line, n[c] + 1);
             }
         }
-        w.write_all(b"\n")?;
+        line.push(b'\n');
+        w.write_all(&line)?;
     }
     Ok(())
 }
@@ -378,7 +460,12 @@ mod tests {
     use crate::{Mesh, MeshError};
 
     fn parse(text: &str) -> Result<Mesh, MeshError> {
-        read(text.as_bytes(), Format::Obj, "t.obj", &ReadOptions::default())
+        read(
+            text.as_bytes(),
+            Format::Obj,
+            "t.obj",
+            &ReadOptions::default(),
+        )
     }
 
     #[test]

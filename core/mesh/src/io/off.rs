@@ -9,7 +9,7 @@
 //! Write: plain ASCII `OFF` (positions and faces only).
 
 use super::ReadOptions;
-use super::obj::fmt_f32;
+use super::obj::{push_u32, write_values};
 use super::source::{Source, element_limit, parse_f32, parse_i64, show, tokens};
 use crate::{FaceVarying, Mesh, MeshError};
 use std::io::{Read, Write};
@@ -50,12 +50,18 @@ fn parse_keyword(tok: &[u8]) -> Option<Result<Header, String>> {
     }
     Some(match rest {
         b"" => Ok(h),
-        b"4" | b"n" | b"4n" => Err(format!("'{}' (higher-dimensional OFF) is not supported", show(tok))),
+        b"4" | b"n" | b"4n" => Err(format!(
+            "'{}' (higher-dimensional OFF) is not supported",
+            show(tok)
+        )),
         _ => return None,
     })
 }
 
-pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Result<Mesh, MeshError> {
+pub(crate) fn read<R: Read>(
+    src: &mut Source<'_, R>,
+    opts: &ReadOptions,
+) -> Result<Mesh, MeshError> {
     let limit = element_limit(opts.max_elements);
     let mut line = Vec::new();
     if !content_line(src, &mut line)? {
@@ -67,12 +73,21 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
         Some(Err(msg)) => return Err(MeshError::Unsupported(format!("{}: {msg}", src.name()))),
         None if parse_i64(first).is_some() => (Header::default(), 0),
         None => {
-            return Err(src.error(format!("not an OFF file: expected 'OFF', got '{}'", show(first))));
+            return Err(src.error(format!(
+                "not an OFF file: expected 'OFF', got '{}'",
+                show(first)
+            )));
         }
     };
     let mut counts: Vec<Vec<u8>> = tokens(&line).skip(skip).map(<[u8]>::to_vec).collect();
-    if counts.first().is_some_and(|t| t.eq_ignore_ascii_case(b"BINARY")) {
-        return Err(MeshError::Unsupported(format!("{}: binary OFF is not supported", src.name())));
+    if counts
+        .first()
+        .is_some_and(|t| t.eq_ignore_ascii_case(b"BINARY"))
+    {
+        return Err(MeshError::Unsupported(format!(
+            "{}: binary OFF is not supported",
+            src.name()
+        )));
     }
     if counts.len() < 2 {
         if !content_line(src, &mut line)? {
@@ -81,7 +96,9 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
         counts = tokens(&line).map(<[u8]>::to_vec).collect();
     }
     let count = |k: usize, what: &str| -> Result<u64, MeshError> {
-        let tok = counts.get(k).ok_or_else(|| src.error(format!("OFF counts line has no {what} count")))?;
+        let tok = counts
+            .get(k)
+            .ok_or_else(|| src.error(format!("OFF counts line has no {what} count")))?;
         parse_i64(tok)
             .and_then(|c| u64::try_from(c).ok())
             .ok_or_else(|| src.error(format!("bad {what} count '{}'", show(tok))))
@@ -110,9 +127,9 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
         }
         let mut t = tokens(&line);
         for (k, v) in values[..wanted].iter_mut().enumerate() {
-            let tok = t
-                .next()
-                .ok_or_else(|| src.error(format!("vertex {i}: expected {wanted} values, got {k}")))?;
+            let tok = t.next().ok_or_else(|| {
+                src.error(format!("vertex {i}: expected {wanted} values, got {k}"))
+            })?;
             *v = parse_f32(tok)
                 .ok_or_else(|| src.error(format!("vertex {i}: bad coordinate '{}'", show(tok))))?;
         }
@@ -138,7 +155,9 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
         let n = parse_i64(tok)
             .ok_or_else(|| src.error(format!("face {i}: bad vertex count '{}'", show(tok))))?;
         if n < 3 {
-            return Err(src.error(format!("face {i} has {n} vertices; a face needs at least 3")));
+            return Err(src.error(format!(
+                "face {i} has {n} vertices; a face needs at least 3"
+            )));
         }
         if mesh.face_indices.len() as u64 + n as u64 > limit {
             return Err(MeshError::TooLarge(format!(
@@ -162,30 +181,33 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
         mesh.face_offsets.push(mesh.face_indices.len() as u32);
     }
     if header.normals {
-        mesh.normals = Some(FaceVarying { values: normals, indices: mesh.face_indices.clone() });
+        mesh.normals = Some(FaceVarying {
+            values: normals,
+            indices: mesh.face_indices.clone(),
+        });
     }
     if uvs_on {
-        mesh.uvs = Some(FaceVarying { values: uvs, indices: mesh.face_indices.clone() });
+        mesh.uvs = Some(FaceVarying {
+            values: uvs,
+            indices: mesh.face_indices.clone(),
+        });
     }
     Ok(mesh)
 }
 
 pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
     writeln!(w, "OFF\n{} {} 0", mesh.vertex_count(), mesh.face_count())?;
-    for p in &mesh.positions {
-        fmt_f32(w, p[0])?;
-        w.write_all(b" ")?;
-        fmt_f32(w, p[1])?;
-        w.write_all(b" ")?;
-        fmt_f32(w, p[2])?;
-        w.write_all(b"\n")?;
-    }
+    write_values(w, b"", &mesh.positions)?;
+    let mut line = Vec::with_capacity(128);
     for face in mesh.faces() {
-        write!(w, "{}", face.len())?;
-        for v in face {
-            write!(w, " {v}")?;
+        line.clear();
+        push_u32(&mut line, face.len() as u32);
+        for &v in face {
+            line.push(b' ');
+            push_u32(&mut line, v);
         }
-        w.write_all(b"\n")?;
+        line.push(b'\n');
+        w.write_all(&line)?;
     }
     Ok(())
 }
@@ -196,13 +218,20 @@ mod tests {
     use crate::{Mesh, MeshError};
 
     fn parse(text: &str) -> Result<Mesh, MeshError> {
-        read(text.as_bytes(), Format::Off, "t.off", &ReadOptions::default())
+        read(
+            text.as_bytes(),
+            Format::Off,
+            "t.off",
+            &ReadOptions::default(),
+        )
     }
 
     #[test]
     fn variants_comments_and_colours() {
-        let m = parse("# c\nCOFF 4 1 0\n0 0 0 255 0 0 255\n1 0 0 1 1 1 1\n1 1 0 1 1 1 1\n\n\
-                       0 1 0 1 1 1 1 # corner\n4 0 1 2 3 255 0 0\n")
+        let m = parse(
+            "# c\nCOFF 4 1 0\n0 0 0 255 0 0 255\n1 0 0 1 1 1 1\n1 1 0 1 1 1 1\n\n\
+                       0 1 0 1 1 1 1 # corner\n4 0 1 2 3 255 0 0\n",
+        )
         .unwrap();
         assert_eq!((m.vertex_count(), m.face(0)), (4, &[0u32, 1, 2, 3][..]));
         let m = parse("NOFF\n3 1\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n").unwrap();
@@ -214,9 +243,15 @@ mod tests {
     #[test]
     fn errors() {
         let e = parse("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n").unwrap_err();
-        assert_eq!(e.to_string(), "t.off:6: face 0: vertex index 3 is out of range; the file has 3 vertices");
+        assert_eq!(
+            e.to_string(),
+            "t.off:6: face 0: vertex index 3 is out of range; the file has 3 vertices"
+        );
         let e = parse("OFF\n3 1 0\n0 0 0\n1 0 0\n").unwrap_err();
         assert_eq!(e.to_string(), "t.off:4: vertex 2: file ends");
-        assert!(matches!(parse("4OFF\n1 0 0\n"), Err(MeshError::Unsupported(_))));
+        assert!(matches!(
+            parse("4OFF\n1 0 0\n"),
+            Err(MeshError::Unsupported(_))
+        ));
     }
 }

@@ -70,7 +70,11 @@ impl Scalar {
             ($t:ty, $n:literal) => {{
                 let mut a = [0u8; $n];
                 a.copy_from_slice(&b[..$n]);
-                if big_endian { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }
+                if big_endian {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }
             }};
         }
         match self {
@@ -115,7 +119,9 @@ impl Element {
     }
 
     fn find(&self, names: &[&str]) -> Option<usize> {
-        self.props.iter().position(|p| names.contains(&p.name.as_str()))
+        self.props
+            .iter()
+            .position(|p| names.contains(&p.name.as_str()))
     }
 }
 
@@ -167,10 +173,15 @@ fn read_header<R: Read>(src: &mut Source<'_, R>) -> Result<(Encoding, Vec<Elemen
                     .or_else(|| std::str::from_utf8(count).ok()?.parse::<u64>().ok())
                     .ok_or_else(|| src.error(format!("bad element count '{}'", show(count))))?;
                 let name = String::from_utf8_lossy(name).into_owned();
-                elements.push(Element { name, count, props: Vec::new() });
+                elements.push(Element {
+                    name,
+                    count,
+                    props: Vec::new(),
+                });
             }
             b"property" => {
-                let bad_type = |t: &[u8]| src.error(format!("unknown PLY property type '{}'", show(t)));
+                let bad_type =
+                    |t: &[u8]| src.error(format!("unknown PLY property type '{}'", show(t)));
                 let ty = t.next().unwrap_or_default();
                 let kind = if ty == b"list" {
                     let (c, i) = (t.next().unwrap_or_default(), t.next().unwrap_or_default());
@@ -211,8 +222,15 @@ enum Next {
 
 /// Decodes values of either encoding, with the context needed for error messages.
 enum Decoder<'s, 'a, R> {
-    Ascii { src: &'s mut Source<'a, R>, line: Vec<u8>, pos: usize },
-    Binary { src: &'s mut Source<'a, R>, big_endian: bool },
+    Ascii {
+        src: &'s mut Source<'a, R>,
+        line: Vec<u8>,
+        pos: usize,
+    },
+    Binary {
+        src: &'s mut Source<'a, R>,
+        big_endian: bool,
+    },
 }
 
 impl<R: Read> Decoder<'_, '_, R> {
@@ -352,7 +370,11 @@ impl VertexLayout {
             slots[u] = Some(6);
             slots[v] = Some(7);
         }
-        Ok(VertexLayout { slots, normals, uvs })
+        Ok(VertexLayout {
+            slots,
+            normals,
+            uvs,
+        })
     }
 }
 
@@ -390,7 +412,9 @@ fn read_vertices<R: Read>(
         let mut fields = Vec::new();
         let mut offset = 0;
         for (p, slot) in element.props.iter().zip(&layout.slots) {
-            let Kind::Scalar(t) = p.kind else { unreachable!("fixed_size has only scalars") };
+            let Kind::Scalar(t) = p.kind else {
+                unreachable!("fixed_size has only scalars")
+            };
             if let Some(k) = slot {
                 fields.push((offset, t, usize::from(*k)));
             }
@@ -440,18 +464,22 @@ struct FaceCtx {
 }
 
 impl FaceCtx {
+    /// Checks a face of `n` corners; the error continues "face 12".
     fn check_size(&self, mesh: &Mesh, n: u64) -> Result<(), String> {
         if n < 3 {
-            return Err(format!("has {n} vertices; a face needs at least 3"));
+            return Err(format!(" has {n} vertices; a face needs at least 3"));
         }
         if mesh.face_indices.len() as u64 + n > self.limit {
-            return Err(format!("face corners exceed the limit of {}", self.limit));
+            return Err(format!(": face corners exceed the limit of {}", self.limit));
         }
         Ok(())
     }
 
     fn out_of_range(&self, v: impl std::fmt::Display) -> String {
-        format!("vertex index {v} is out of range; the file has {} vertices", self.vertices)
+        format!(
+            "vertex index {v} is out of range; the file has {} vertices",
+            self.vertices
+        )
     }
 }
 
@@ -462,11 +490,20 @@ fn read_faces<R: Read>(
     mesh: &mut Mesh,
 ) -> Result<(), MeshError> {
     let name = element.name.as_str();
+    // `Some(signed)` for the fast path: little-endian, one property `list uchar int|uint`.
     let fast = match (&*dec, element.props.as_slice()) {
         (
-            Decoder::Binary { big_endian: false, .. },
-            [Property { kind: Kind::List { count: Scalar::U8, item }, .. }],
-        ) if matches!(item, Scalar::I32 | Scalar::U32) => Some(*item == Scalar::I32),
+            Decoder::Binary {
+                big_endian: false, ..
+            },
+            [only],
+        ) => match only.kind {
+            Kind::List {
+                count: Scalar::U8,
+                item: item @ (Scalar::I32 | Scalar::U32),
+            } => Some(item == Scalar::I32),
+            _ => None,
+        },
         _ => None,
     };
     if let (Some(signed), Decoder::Binary { src, .. }) = (fast, &mut *dec) {
@@ -482,12 +519,16 @@ fn read_faces<R: Read>(
                 return Err(src.error_at(0, format!("{name} {i}: file ends")));
             }
             if let Err(e) = ctx.check_size(mesh, u64::from(n)) {
-                return Err(src.error_at(0, format!("{name} {i} {e}")));
+                return Err(src.error_at(0, format!("{name} {i}{e}")));
             }
             for c in b[1..need].chunks_exact(4) {
                 let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
                 if v >= nv || (signed && v > i32::MAX as u32) {
-                    let shown = if signed { i64::from(v as i32) } else { i64::from(v) };
+                    let shown = if signed {
+                        i64::from(v as i32)
+                    } else {
+                        i64::from(v)
+                    };
                     return Err(src.error_at(0, format!("{name} {i}: {}", ctx.out_of_range(shown))));
                 }
                 mesh.face_indices.push(v);
@@ -508,7 +549,7 @@ fn read_faces<R: Read>(
                             Decoder::Ascii { src, .. } => src.line(),
                             Decoder::Binary { .. } => 0,
                         };
-                        return Err(dec.src().error_at(line, format!("{name} {i} {e}")));
+                        return Err(dec.src().error_at(line, format!("{name} {i}{e}")));
                     }
                     for _ in 0..n {
                         let v = dec.value(item, name, i)?;
@@ -530,6 +571,10 @@ fn read_faces<R: Read>(
 }
 
 fn skip_element<R: Read>(dec: &mut Decoder<'_, '_, R>, element: &Element) -> Result<(), MeshError> {
+    if element.props.is_empty() {
+        // Records of nothing: do not spin through a hostile count.
+        return Ok(());
+    }
     if let (Decoder::Binary { src, .. }, Some(size)) = (&mut *dec, element.fixed_size()) {
         let want = element.count.saturating_mul(size as u64);
         let got = src.skip(want)?;
@@ -564,12 +609,19 @@ fn min_record(element: &Element, encoding: Encoding, index_list: Option<usize>) 
         .sum()
 }
 
-pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Result<Mesh, MeshError> {
+pub(crate) fn read<R: Read>(
+    src: &mut Source<'_, R>,
+    opts: &ReadOptions,
+) -> Result<Mesh, MeshError> {
     let limit = element_limit(opts.max_elements);
     let (encoding, elements) = read_header(src)?;
     let vertex_el = elements.iter().position(|e| e.name == "vertex");
     let face_el = elements.iter().position(|e| e.name == "face");
-    for e in [vertex_el, face_el].into_iter().flatten().map(|i| &elements[i]) {
+    for e in [vertex_el, face_el]
+        .into_iter()
+        .flatten()
+        .map(|i| &elements[i])
+    {
         if e.count > limit {
             return Err(MeshError::TooLarge(format!(
                 "{}: PLY header declares {} {} elements; the limit is {limit}",
@@ -579,7 +631,9 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
             )));
         }
     }
-    let layout = vertex_el.map(|i| VertexLayout::new(&elements[i], src.name())).transpose()?;
+    let layout = vertex_el
+        .map(|i| VertexLayout::new(&elements[i], src.name()))
+        .transpose()?;
     let face_list = match face_el {
         Some(f) => {
             let el = &elements[f];
@@ -608,9 +662,19 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
     }
     let vertices = vertex_el.map_or(0, |v| elements[v].count);
     let mut dec = match encoding {
-        Encoding::Ascii => Decoder::Ascii { src, line: Vec::new(), pos: 0 },
-        Encoding::BinaryLe => Decoder::Binary { src, big_endian: false },
-        Encoding::BinaryBe => Decoder::Binary { src, big_endian: true },
+        Encoding::Ascii => Decoder::Ascii {
+            src,
+            line: Vec::new(),
+            pos: 0,
+        },
+        Encoding::BinaryLe => Decoder::Binary {
+            src,
+            big_endian: false,
+        },
+        Encoding::BinaryBe => Decoder::Binary {
+            src,
+            big_endian: true,
+        },
     };
     for (e, element) in elements.iter().enumerate() {
         if Some(e) == vertex_el
@@ -624,26 +688,40 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
             let faces = src.reserve_hint(element.count, min_record(element, encoding, Some(list)));
             // Corners: bounded by the bytes left when known (exact for a triangle file).
             let corners = match (src.remaining(), element.props[list].kind, encoding) {
-                (Some(rem), Kind::List { count, item }, Encoding::BinaryLe | Encoding::BinaryBe) => {
+                (
+                    Some(rem),
+                    Kind::List { count, item },
+                    Encoding::BinaryLe | Encoding::BinaryBe,
+                ) => {
                     let lists = element.count.saturating_mul(count.size() as u64);
                     (rem.saturating_sub(lists) / item.size() as u64).min(faces as u64 * 4)
                 }
                 _ => faces as u64 * 3,
             };
             mesh.face_offsets.reserve_exact(faces);
-            mesh.face_indices.reserve_exact(usize::try_from(corners).unwrap_or(0));
-            let ctx = FaceCtx { vertices, list, limit };
+            mesh.face_indices
+                .reserve_exact(usize::try_from(corners).unwrap_or(0));
+            let ctx = FaceCtx {
+                vertices,
+                list,
+                limit,
+            };
             read_faces(&mut dec, element, &ctx, &mut mesh)?;
         } else {
             skip_element(&mut dec, element)?;
         }
     }
     if layout.as_ref().is_some_and(|l| l.normals) {
-        mesh.normals =
-            Some(FaceVarying { values: attrs.normals, indices: mesh.face_indices.clone() });
+        mesh.normals = Some(FaceVarying {
+            values: attrs.normals,
+            indices: mesh.face_indices.clone(),
+        });
     }
     if layout.as_ref().is_some_and(|l| l.uvs) {
-        mesh.uvs = Some(FaceVarying { values: attrs.uvs, indices: mesh.face_indices.clone() });
+        mesh.uvs = Some(FaceVarying {
+            values: attrs.uvs,
+            indices: mesh.face_indices.clone(),
+        });
     }
     Ok(mesh)
 }
@@ -652,8 +730,13 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
     let normals = mesh.normals.as_ref().and_then(|n| per_vertex(mesh, n));
     let uvs = mesh.uvs.as_ref().and_then(|t| per_vertex(mesh, t));
     let big_faces = mesh.face_offsets.windows(2).any(|w| w[1] - w[0] > 255);
-    let index_type = if mesh.positions.len() > i32::MAX as usize { "uint" } else { "int" };
-    let mut h = String::from("ply\nformat binary_little_endian 1.0\ncomment written by tessd-mesh\n");
+    let index_type = if mesh.positions.len() > i32::MAX as usize {
+        "uint"
+    } else {
+        "int"
+    };
+    let mut h =
+        String::from("ply\nformat binary_little_endian 1.0\ncomment written by tessd-mesh\n");
     h += &format!("element vertex {}\n", mesh.positions.len());
     h += "property float x\nproperty float y\nproperty float z\n";
     if normals.is_some() {
@@ -707,8 +790,7 @@ mod tests {
     use crate::{Mesh, MeshError};
 
     fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
-        let mut o = ReadOptions::default();
-        o.input_len = Some(bytes.len() as u64);
+        let o = ReadOptions::default().with_input_len(bytes.len() as u64);
         read(bytes, Format::Ply, "t.ply", &o)
     }
 
@@ -722,7 +804,10 @@ mod tests {
             0 2 7 7 0 0 0 0 1 0.5 0.25\n1 0 0 0 0 0 1 0 0\n1 0 1 0 0 0 1 0 0\n0 0 1 0 0 0 1 0 0\n\
             9 4 0 1 2 3 0.5\n3 2 1.5 2.5\n";
         let m = parse(text.as_bytes()).unwrap();
-        assert_eq!(m.positions, [[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]);
+        assert_eq!(
+            m.positions,
+            [[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
+        );
         assert_eq!(m.face(0), &[0, 1, 2, 3]);
         assert_eq!(m.normals.as_ref().unwrap().values[0], [0.0, 0.0, 1.0]);
         assert_eq!(m.uvs.as_ref().unwrap().values[0], [0.5, 0.25]);
@@ -731,10 +816,15 @@ mod tests {
 
     #[test]
     fn binary_round_trip_keeps_per_vertex_normals() {
-        let mut m = Mesh::default();
-        m.positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let mut m = Mesh {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            ..Mesh::default()
+        };
         m.push_face(&[0, 1, 2]);
-        m.normals = Some(crate::FaceVarying { values: vec![[0.0, 0.0, 1.0]], indices: vec![0; 3] });
+        m.normals = Some(crate::FaceVarying {
+            values: vec![[0.0, 0.0, 1.0]],
+            indices: vec![0; 3],
+        });
         let mut out = Vec::new();
         crate::io::write(&m, &mut out, Format::Ply).unwrap();
         let back = parse(&out).unwrap();
@@ -744,8 +834,10 @@ mod tests {
 
     #[test]
     fn big_faces_use_a_uint_count() {
-        let mut m = Mesh::default();
-        m.positions = (0..300).map(|i| [i as f32, (i * i) as f32, 0.0]).collect();
+        let mut m = Mesh {
+            positions: (0..300).map(|i| [i as f32, (i * i) as f32, 0.0]).collect(),
+            ..Mesh::default()
+        };
         m.push_face(&(0..300).collect::<Vec<u32>>());
         let mut out = Vec::new();
         crate::io::write(&m, &mut out, Format::Ply).unwrap();
@@ -756,11 +848,21 @@ mod tests {
     #[test]
     fn header_errors() {
         let e = parse(b"ply\nformat binary_middle_endian 1.0\nend_header\n").unwrap_err();
-        assert_eq!(e.to_string(), "t.ply: unsupported PLY format 'binary_middle_endian'");
+        assert_eq!(
+            e.to_string(),
+            "t.ply: unsupported PLY format 'binary_middle_endian'"
+        );
         let e = parse(b"plx\n").unwrap_err();
-        assert_eq!(e.to_string(), "t.ply:1: not a PLY file: the first line must be 'ply'");
-        let e = parse(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n")
-            .unwrap_err();
-        assert_eq!(e.to_string(), "t.ply: PLY vertex element has no scalar 'y' property");
+        assert_eq!(
+            e.to_string(),
+            "t.ply:1: not a PLY file: the first line must be 'ply'"
+        );
+        let e =
+            parse(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n")
+                .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.ply: PLY vertex element has no scalar 'y' property"
+        );
     }
 }

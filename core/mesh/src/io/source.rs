@@ -84,7 +84,11 @@ impl<'a, R: Read> Source<'a, R> {
 
     /// A `Parse` error at `line` (0 for binary data).
     pub(crate) fn error_at(&self, line: u64, message: impl Into<String>) -> MeshError {
-        MeshError::Parse { path: self.name.to_string(), line, message: message.into() }
+        MeshError::Parse {
+            path: self.name.to_string(),
+            line,
+            message: message.into(),
+        }
     }
 
     /// A `Parse` error at the last line read.
@@ -127,7 +131,12 @@ impl<'a, R: Read> Source<'a, R> {
                 Ok(0) => self.eof = true,
                 Ok(n) => self.end += n,
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(source) => return Err(MeshError::Io { path: self.name.to_string(), source }),
+                Err(source) => {
+                    return Err(MeshError::Io {
+                        path: self.name.to_string(),
+                        source,
+                    });
+                }
             }
         }
         Ok(())
@@ -167,7 +176,7 @@ impl<'a, R: Read> Source<'a, R> {
                 break;
             }
             any = true;
-            if let Some(i) = avail.iter().position(|&b| b == b'\n') {
+            if let Some(i) = memchr::memchr(b'\n', avail) {
                 out.extend_from_slice(&avail[..i]);
                 self.consume(i + 1);
                 break;
@@ -195,7 +204,8 @@ impl<'a, R: Read> Source<'a, R> {
 
 /// Splits a line into whitespace-separated tokens.
 pub(crate) fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
-    line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty())
+    line.split(|b| b.is_ascii_whitespace())
+        .filter(|t| !t.is_empty())
 }
 
 /// Parses a decimal float token (also `nan` / `inf`, which validation then rejects).
@@ -208,9 +218,29 @@ pub(crate) fn parse_f64(tok: &[u8]) -> Option<f64> {
     std::str::from_utf8(tok).ok()?.parse().ok()
 }
 
-/// Parses a decimal integer token.
+/// Parses a decimal integer token (optional sign, digits only).
+///
+/// Face indices are most of an OBJ or OFF file, so the usual short case is done on the bytes
+/// directly; long tokens go through `str::parse` for its overflow handling.
+#[inline]
 pub(crate) fn parse_i64(tok: &[u8]) -> Option<i64> {
-    std::str::from_utf8(tok).ok()?.parse().ok()
+    let (negative, digits) = match tok.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, tok),
+    };
+    if digits.is_empty() || digits.len() > 18 {
+        return std::str::from_utf8(tok).ok()?.parse().ok();
+    }
+    let mut v: i64 = 0;
+    for &b in digits {
+        let d = b.wrapping_sub(b'0');
+        if d > 9 {
+            return None;
+        }
+        v = v * 10 + i64::from(d);
+    }
+    Some(if negative { -v } else { v })
 }
 
 /// A token for an error message: lossy UTF-8, cut to a readable length.
@@ -259,6 +289,32 @@ mod tests {
             total += 13;
         }
         assert_eq!(s.skip(1000).unwrap(), (data.len() % 13) as u64);
+    }
+
+    #[test]
+    fn integers() {
+        for t in [
+            "0",
+            "-0",
+            "+12",
+            "-9223372036854775808",
+            "9223372036854775807",
+            "000000000000000000001",
+        ] {
+            assert_eq!(parse_i64(t.as_bytes()), t.parse().ok(), "{t}");
+        }
+        for t in [
+            "",
+            "-",
+            "+",
+            "1a",
+            "1.0",
+            "--1",
+            "9223372036854775808",
+            " 1",
+        ] {
+            assert_eq!(parse_i64(t.as_bytes()), None, "{t}");
+        }
     }
 
     #[test]

@@ -16,11 +16,12 @@
 use super::ReadOptions;
 use super::source::{Source, element_limit, parse_f32, show, tokens};
 use crate::{Mesh, MeshError};
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::io::{Read, Write};
 
-pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Result<Mesh, MeshError> {
+pub(crate) fn read<R: Read>(
+    src: &mut Source<'_, R>,
+    opts: &ReadOptions,
+) -> Result<Mesh, MeshError> {
     let limit = element_limit(opts.max_elements);
     let len = src.len();
     let head = src.fill(84)?;
@@ -43,62 +44,112 @@ pub(crate) fn read<R: Read>(src: &mut Source<'_, R>, opts: &ReadOptions) -> Resu
 }
 
 /// Assigns one vertex per distinct position.
+///
+/// An open-addressing table of 8-byte slots (`hash tag << 32 | vertex + 1`, 0 = empty) with
+/// linear probing; keys are not stored but compared against `positions`, which keeps the table
+/// at a third of a general hash map's size and most probes to one cache line. In front of it a
+/// small direct-mapped cache catches the repeats: STL files list triangles in mesh order, so
+/// most corners reuse a position seen a few thousand corners earlier.
 struct Welder {
-    map: HashMap<u128, u32, BuildHasherDefault<KeyHasher>>,
+    slots: Vec<u64>,
+    len: usize,
+    cache: Vec<(Key, u32)>,
     limit: u64,
 }
 
+/// The bit pattern of a position, −0.0 taken as +0.0.
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct Key([u32; 3]);
+
+impl Key {
+    #[inline]
+    fn of(p: [f32; 3]) -> Key {
+        Key(p.map(|c| if c == 0.0 { 0 } else { c.to_bits() }))
+    }
+
+    /// A well-mixed 64-bit hash (folded multiplies, as in foldhash).
+    #[inline]
+    fn hash(&self) -> u64 {
+        #[inline]
+        fn mix(a: u64, b: u64) -> u64 {
+            let m = u128::from(a ^ 0x243f_6a88_85a3_08d3) * u128::from(b ^ 0x1319_8a2e_0370_7344);
+            (m >> 64) as u64 ^ m as u64
+        }
+        let [x, y, z] = self.0;
+        mix(
+            mix(u64::from(x) << 32 | u64::from(y), 0x9e37_79b9),
+            u64::from(z),
+        )
+    }
+}
+
 impl Welder {
+    const CACHE: usize = 1 << 14;
+
     fn new(capacity: usize, limit: u64) -> Welder {
-        Welder { map: HashMap::with_capacity_and_hasher(capacity, Default::default()), limit }
+        let slots = (capacity.max(8) * 8 / 7).next_power_of_two();
+        Welder {
+            slots: vec![0; slots],
+            len: 0,
+            cache: vec![(Key([0; 3]), u32::MAX); Self::CACHE],
+            limit,
+        }
     }
 
     /// The vertex at `p`, added to `positions` when new; `None` when the vertex limit is hit.
     #[inline]
     fn vertex(&mut self, p: [f32; 3], positions: &mut Vec<[f32; 3]>) -> Option<u32> {
-        let bits = p.map(|c| if c == 0.0 { 0 } else { c.to_bits() });
-        let key = u128::from(bits[0]) << 64 | u128::from(bits[1]) << 32 | u128::from(bits[2]);
-        let next = positions.len() as u32;
-        let v = *self.map.entry(key).or_insert(next);
-        if v == next {
-            if positions.len() as u64 >= self.limit {
-                return None;
-            }
-            positions.push(p);
+        let key = Key::of(p);
+        let h = key.hash();
+        let c = (h >> 20) as usize & (Self::CACHE - 1);
+        let (k, v) = self.cache[c];
+        if k == key && v != u32::MAX {
+            return Some(v);
         }
+        let tag = h & !0xffff_ffff;
+        let mask = self.slots.len() - 1;
+        let mut i = h as usize & mask;
+        let v = loop {
+            let s = self.slots[i];
+            if s == 0 {
+                if positions.len() as u64 >= self.limit {
+                    return None;
+                }
+                let v = positions.len() as u32;
+                positions.push(p);
+                self.slots[i] = tag | u64::from(v + 1);
+                self.len += 1;
+                if self.len * 8 > self.slots.len() * 7 {
+                    self.grow(positions);
+                }
+                break v;
+            }
+            if s & !0xffff_ffff == tag {
+                let v = (s as u32) - 1;
+                if Key::of(positions[v as usize]) == key {
+                    break v;
+                }
+            }
+            i = (i + 1) & mask;
+        };
+        self.cache[c] = (key, v);
         Some(v)
     }
-}
 
-/// A fast hasher for the 96-bit position keys (folded multiply, as in foldhash); std's SipHash
-/// would dominate the time of reading a large binary STL.
-#[derive(Default)]
-struct KeyHasher(u64);
-
-impl KeyHasher {
-    #[inline]
-    fn mix(a: u64, b: u64) -> u64 {
-        let m = u128::from(a ^ 0x243f_6a88_85a3_08d3) * u128::from(b ^ 0x1319_8a2e_0370_7344);
-        (m >> 64) as u64 ^ m as u64
-    }
-}
-
-impl Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut a = [0u8; 8];
-            a[..chunk.len()].copy_from_slice(chunk);
-            self.0 = Self::mix(self.0, u64::from_le_bytes(a));
+    /// Doubles the table, re-filing every vertex.
+    #[cold]
+    fn grow(&mut self, positions: &[[f32; 3]]) {
+        let mut slots = vec![0u64; self.slots.len() * 2];
+        let mask = slots.len() - 1;
+        for (v, p) in positions.iter().enumerate() {
+            let h = Key::of(*p).hash();
+            let mut i = h as usize & mask;
+            while slots[i] != 0 {
+                i = (i + 1) & mask;
+            }
+            slots[i] = (h & !0xffff_ffff) | (v as u64 + 1);
         }
-    }
-
-    #[inline]
-    fn write_u128(&mut self, i: u128) {
-        self.0 = Self::mix(Self::mix(self.0, i as u64), (i >> 64) as u64);
+        self.slots = slots;
     }
 }
 
@@ -137,21 +188,25 @@ fn read_binary<R: Read>(src: &mut Source<'_, R>, limit: u64) -> Result<Mesh, Mes
     let mut mesh = Mesh::default();
     mesh.face_offsets.reserve_exact(faces);
     mesh.face_indices.reserve_exact(3 * faces);
-    mesh.positions.reserve(faces / 2 + 3);
-    let mut welder = Welder::new(faces / 2 + 3, limit);
+    // A closed triangle mesh has about half as many vertices as triangles; open ones a little
+    // more. Reserving 5/8 avoids a rehash of the map in the usual cases.
+    let vertices = faces / 2 + faces / 8 + 3;
+    mesh.positions.reserve(vertices);
+    let mut welder = Welder::new(vertices, limit);
     for i in 0..n {
         let b = src.fill(50)?;
         if b.len() < 50 {
             return Err(src.error_at(0, format!("triangle {i}: file ends")));
         }
-        let f = |j: usize| f32::from_le_bytes([b[j], b[j + 1], b[j + 2], b[j + 3]]);
-        let corners: [[f32; 3]; 3] = std::array::from_fn(|k| {
-            let o = 12 + 12 * k;
-            [f(o), f(o + 4), f(o + 8)]
-        });
+        let mut corners = [[0f32; 3]; 3];
+        for (c, bytes) in corners.iter_mut().flatten().zip(b[12..48].chunks_exact(4)) {
+            *c = f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+        }
         src.consume(50);
         for p in corners {
-            let v = welder.vertex(p, &mut mesh.positions).ok_or_else(|| too_many(name, limit))?;
+            let v = welder
+                .vertex(p, &mut mesh.positions)
+                .ok_or_else(|| too_many(name, limit))?;
             mesh.face_indices.push(v);
         }
         mesh.face_offsets.push(mesh.face_indices.len() as u32);
@@ -163,7 +218,9 @@ fn read_binary<R: Read>(src: &mut Source<'_, R>, limit: u64) -> Result<Mesh, Mes
 }
 
 fn too_many(name: &str, limit: u64) -> MeshError {
-    MeshError::TooLarge(format!("{name}: STL has more than {limit} distinct vertices"))
+    MeshError::TooLarge(format!(
+        "{name}: STL has more than {limit} distinct vertices"
+    ))
 }
 
 fn read_ascii<R: Read>(src: &mut Source<'_, R>, limit: u64) -> Result<Mesh, MeshError> {
@@ -248,7 +305,10 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write, name: &str) -> Result<(), M
             u32::MAX
         ))
     })?;
-    let io_err = |source| MeshError::Io { path: name.to_string(), source };
+    let io_err = |source| MeshError::Io {
+        path: name.to_string(),
+        source,
+    };
     // Must not start with "solid", or other readers may take the file for ASCII.
     let mut header = [b' '; 80];
     let text = b"binary STL written by tessd-mesh";
@@ -276,9 +336,17 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write, name: &str) -> Result<(), M
 fn facet_normal(p: &[[f32; 3]; 3]) -> [f32; 3] {
     let d = |a: [f32; 3], b: [f32; 3]| [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let (u, v) = (d(p[0], p[1]), d(p[0], p[2]));
-    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
     let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    if len > 0.0 && len.is_finite() { n.map(|c| c / len) } else { [0.0; 3] }
+    if len > 0.0 && len.is_finite() {
+        n.map(|c| c / len)
+    } else {
+        [0.0; 3]
+    }
 }
 
 #[cfg(test)]
@@ -287,9 +355,30 @@ mod tests {
     use crate::{Mesh, MeshError};
 
     fn parse(bytes: &[u8], known_len: bool) -> Result<Mesh, MeshError> {
-        let mut o = ReadOptions::default();
-        o.input_len = known_len.then_some(bytes.len() as u64);
+        let o = ReadOptions {
+            input_len: known_len.then_some(bytes.len() as u64),
+            ..ReadOptions::default()
+        };
         read(bytes, Format::Stl, "t.stl", &o)
+    }
+
+    #[test]
+    fn welder_grows_and_keeps_indices() {
+        let mut w = super::Welder::new(8, u64::from(u32::MAX));
+        let mut positions = Vec::new();
+        let p = |i: u32| [i as f32, (i % 7) as f32, -(i as f32) * 0.5];
+        for round in 0..3 {
+            for i in 0..20_000u32 {
+                assert_eq!(w.vertex(p(i), &mut positions), Some(i), "round {round}");
+            }
+        }
+        assert_eq!(positions.len(), 20_000);
+        assert_eq!(w.vertex([-0.0, 0.0, 0.0], &mut positions), Some(0));
+        let mut w = super::Welder::new(8, 2);
+        let mut positions = Vec::new();
+        assert_eq!(w.vertex(p(1), &mut positions), Some(0));
+        assert_eq!(w.vertex(p(2), &mut positions), Some(1));
+        assert_eq!(w.vertex(p(3), &mut positions), None);
     }
 
     #[test]
@@ -306,8 +395,10 @@ mod tests {
 
     #[test]
     fn binary_with_solid_header_is_detected_by_size() {
-        let mut m = Mesh::default();
-        m.positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let mut m = Mesh {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            ..Mesh::default()
+        };
         m.push_face(&[0, 1, 2, 3]);
         let mut out = Vec::new();
         crate::io::write(&m, &mut out, Format::Stl).unwrap();
@@ -325,7 +416,14 @@ mod tests {
     fn ascii_errors_name_the_line() {
         let e = parse(b"solid x\nfacet normal 0 0 1\nvertex 0 0 q\n", true).unwrap_err();
         assert_eq!(e.to_string(), "t.stl:3: bad coordinate 'q' in 'vertex'");
-        let e = parse(b"solid x\nfacet\nvertex 0 0 0\nvertex 1 0 0\nendfacet\n", true).unwrap_err();
-        assert_eq!(e.to_string(), "t.stl:5: facet has 2 vertices; a facet needs at least 3");
+        let e = parse(
+            b"solid x\nfacet\nvertex 0 0 0\nvertex 1 0 0\nendfacet\n",
+            true,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.stl:5: facet has 2 vertices; a facet needs at least 3"
+        );
     }
 }

@@ -18,15 +18,23 @@ const MAX_SECONDS: f64 = 60.0;
 pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     let seconds = request.f64_param("seconds")?.unwrap_or(1.0);
     if !(0.0..=MAX_SECONDS).contains(&seconds) {
-        return Err(OpError::request(format!("`seconds` must be in 0..={MAX_SECONDS}, got {seconds}")));
+        return Err(OpError::request(format!(
+            "`seconds` must be in 0..={MAX_SECONDS}, got {seconds}"
+        )));
     }
     let steps = request.f64_param("steps")?.unwrap_or(10.0);
     if !(1.0..=1000.0).contains(&steps) || steps.fract() != 0.0 {
-        return Err(OpError::request(format!("`steps` must be an integer in 1..=1000, got {steps}")));
+        return Err(OpError::request(format!(
+            "`steps` must be an integer in 1..=1000, got {steps}"
+        )));
     }
     let steps = steps as u32;
     for i in 0..steps {
-        ctx.progress(f64::from(i) / f64::from(steps), "sleep", &format!("step {} of {steps}", i + 1))?;
+        ctx.progress(
+            f64::from(i) / f64::from(steps),
+            "sleep",
+            &format!("step {} of {steps}", i + 1),
+        )?;
         std::thread::sleep(Duration::from_secs_f64(seconds / f64::from(steps)));
     }
     ctx.progress(1.0, "sleep", "done")?;

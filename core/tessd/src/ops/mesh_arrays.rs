@@ -2,8 +2,9 @@
 //! (docs/protocol.md, "Mesh arrays"), and results as arrays or a written file.
 
 use std::path::PathBuf;
-use tessd_ipc::arrays::{Arrays, Element, OwnedArray};
+use tessd_ipc::arrays::{Arrays, Element, OwnedArray, TypedView};
 use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::Request;
 use tessd_mesh::io::ReadOptions;
 use tessd_mesh::{Crease, FaceVarying, Mesh, MeshError};
@@ -14,6 +15,7 @@ pub fn mesh_error(e: MeshError) -> OpError {
         "too_large" => ErrorCode::TooLarge,
         "unsupported" => ErrorCode::Unsupported,
         "io" => ErrorCode::Io,
+        "cancelled" => ErrorCode::Cancelled,
         _ => ErrorCode::InvalidMesh,
     };
     OpError::new(code, e.to_string())
@@ -24,22 +26,23 @@ fn invalid(message: String) -> OpError {
 }
 
 /// The request's input mesh: read from `params.input` when given, else built from the arrays.
-/// Either way it is validated before it is returned.
+/// Either way it is validated before it is returned; reading a file stops early when the job
+/// is cancelled.
 ///
 /// # Errors
 /// `invalid_request` when there is neither; `invalid_mesh`, `io`, `too_large`, `unsupported`
 /// as the input deserves, naming the element at fault.
-pub fn input_mesh(request: &Request) -> Result<Mesh, OpError> {
+pub fn input_mesh(request: &Request, ctx: &JobContext) -> Result<Mesh, OpError> {
     match request.str_param("input")? {
         Some(path) => {
-            tessd_mesh::io::read_path(&request.resolve(path), &ReadOptions::default()).map_err(mesh_error)
+            let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
+            tessd_mesh::io::read_path(&request.resolve(path), &options).map_err(mesh_error)
         }
         None if request.arrays.desc("positions").is_some() => {
             let group_names = match request.params.get("group_names") {
                 None => Vec::new(),
-                Some(v) => serde_json::from_value::<Vec<String>>(v.clone()).map_err(|_| {
-                    OpError::request("`group_names` must be a list of strings")
-                })?,
+                Some(v) => serde_json::from_value::<Vec<String>>(v.clone())
+                    .map_err(|_| OpError::request("`group_names` must be a list of strings"))?,
             };
             let mesh = mesh_from_arrays(&request.arrays, group_names)?;
             mesh.validate().map_err(mesh_error)?;
@@ -52,15 +55,23 @@ pub fn input_mesh(request: &Request) -> Result<Mesh, OpError> {
 }
 
 /// Typed view of a required or optional array, with a message naming it on a dtype mismatch.
-fn view<'a, T: Element>(arrays: &'a Arrays, name: &str) -> Result<Option<(&'a [T], &'a [u64])>, OpError> {
+fn view<'a, T: Element>(
+    arrays: &'a Arrays,
+    name: &str,
+) -> Result<Option<TypedView<'a, T>>, OpError> {
     arrays.get::<T>(name).transpose().map_err(invalid)
 }
 
 fn rows<const N: usize>(name: &str, data: &[f32], shape: &[u64]) -> Result<Vec<[f32; N]>, OpError> {
     if shape.len() != 2 || shape[1] != N as u64 {
-        return Err(invalid(format!("array {name:?} must have shape [n, {N}], got {shape:?}")));
+        return Err(invalid(format!(
+            "array {name:?} must have shape [n, {N}], got {shape:?}"
+        )));
     }
-    Ok(data.chunks_exact(N).map(|c| std::array::from_fn(|k| c[k])).collect())
+    Ok(data
+        .chunks_exact(N)
+        .map(|c| std::array::from_fn(|k| c[k]))
+        .collect())
 }
 
 /// Builds a mesh from the protocol's arrays (not yet validated).
@@ -89,7 +100,9 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
             let mut total = 0u64;
             for (f, &s) in sizes.iter().enumerate() {
                 if s < 3 {
-                    return Err(invalid(format!("face {f} has {s} vertices; a face needs at least 3")));
+                    return Err(invalid(format!(
+                        "face {f} has {s} vertices; a face needs at least 3"
+                    )));
                 }
                 total += u64::from(s);
                 if total > indices.len() as u64 {
@@ -108,15 +121,25 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
             }
             offsets
         }
-        (1, None) => return Err(invalid("1-D `face_indices` needs a `face_sizes` array".into())),
+        (1, None) => {
+            return Err(invalid(
+                "1-D `face_indices` needs a `face_sizes` array".into(),
+            ));
+        }
         (2, _) => {
             let n = ishape[1] as u32;
             if n < 3 {
-                return Err(invalid(format!("face_indices of shape {ishape:?}: faces need at least 3 vertices")));
+                return Err(invalid(format!(
+                    "face_indices of shape {ishape:?}: faces need at least 3 vertices"
+                )));
             }
             (0..=ishape[0] as u32).map(|f| f * n).collect()
         }
-        _ => return Err(invalid(format!("`face_indices` must be 1-D or 2-D, got shape {ishape:?}"))),
+        _ => {
+            return Err(invalid(format!(
+                "`face_indices` must be 1-D or 2-D, got shape {ishape:?}"
+            )));
+        }
     };
     let corners = indices.len();
     let normals = face_varying::<3>(arrays, "normals", "normal_indices", corners)?;
@@ -125,7 +148,9 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
         None => Vec::new(),
         Some((edges, shape)) => {
             if shape.len() != 2 || shape[1] != 2 {
-                return Err(invalid(format!("`crease_edges` must have shape [n, 2], got {shape:?}")));
+                return Err(invalid(format!(
+                    "`crease_edges` must have shape [n, 2], got {shape:?}"
+                )));
             }
             let (values, _) = view::<f32>(arrays, "crease_values")?
                 .ok_or_else(|| invalid("`crease_edges` needs a `crease_values` array".into()))?;
@@ -136,10 +161,20 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
                     edges.len() / 2
                 )));
             }
-            edges.chunks_exact(2).zip(values).map(|(e, &value)| Crease { a: e[0], b: e[1], value }).collect()
+            edges
+                .chunks_exact(2)
+                .zip(values)
+                .map(|(e, &value)| Crease {
+                    a: e[0],
+                    b: e[1],
+                    value,
+                })
+                .collect()
         }
     };
-    let face_groups = view::<u32>(arrays, "face_groups")?.map(|(g, _)| g.to_vec()).unwrap_or_default();
+    let face_groups = view::<u32>(arrays, "face_groups")?
+        .map(|(g, _)| g.to_vec())
+        .unwrap_or_default();
     Ok(Mesh {
         positions,
         face_offsets,
@@ -158,7 +193,9 @@ fn face_varying<const N: usize>(
     indices: &str,
     corners: usize,
 ) -> Result<Option<FaceVarying<[f32; N]>>, OpError> {
-    let Some((data, shape)) = view::<f32>(arrays, values)? else { return Ok(None) };
+    let Some((data, shape)) = view::<f32>(arrays, values)? else {
+        return Ok(None);
+    };
     let values_rows = rows::<N>(values, data, shape)?;
     let idx = match view::<u32>(arrays, indices)? {
         Some((i, _)) => i.to_vec(),
@@ -170,7 +207,10 @@ fn face_varying<const N: usize>(
             )));
         }
     };
-    Ok(Some(FaceVarying { values: values_rows, indices: idx }))
+    Ok(Some(FaceVarying {
+        values: values_rows,
+        indices: idx,
+    }))
 }
 
 /// The mesh as protocol arrays (1-D `face_indices` with `face_sizes`), moving its buffers.
@@ -178,25 +218,45 @@ pub fn mesh_to_arrays(mesh: Mesh) -> Vec<OwnedArray> {
     let sizes: Vec<u32> = mesh.face_offsets.windows(2).map(|w| w[1] - w[0]).collect();
     let mut out = vec![
         OwnedArray::rows("positions", mesh.positions),
-        OwnedArray::new("face_indices", vec![mesh.face_indices.len() as u64], mesh.face_indices),
+        OwnedArray::new(
+            "face_indices",
+            vec![mesh.face_indices.len() as u64],
+            mesh.face_indices,
+        ),
         OwnedArray::new("face_sizes", vec![sizes.len() as u64], sizes),
     ];
     if let Some(n) = mesh.normals {
-        out.push(OwnedArray::new("normal_indices", vec![n.indices.len() as u64], n.indices));
+        out.push(OwnedArray::new(
+            "normal_indices",
+            vec![n.indices.len() as u64],
+            n.indices,
+        ));
         out.push(OwnedArray::rows("normals", n.values));
     }
     if let Some(t) = mesh.uvs {
-        out.push(OwnedArray::new("uv_indices", vec![t.indices.len() as u64], t.indices));
+        out.push(OwnedArray::new(
+            "uv_indices",
+            vec![t.indices.len() as u64],
+            t.indices,
+        ));
         out.push(OwnedArray::rows("uvs", t.values));
     }
     if !mesh.creases.is_empty() {
         let edges: Vec<[u32; 2]> = mesh.creases.iter().map(|c| [c.a, c.b]).collect();
         let values: Vec<f32> = mesh.creases.iter().map(|c| c.value).collect();
         out.push(OwnedArray::rows("crease_edges", edges));
-        out.push(OwnedArray::new("crease_values", vec![values.len() as u64], values));
+        out.push(OwnedArray::new(
+            "crease_values",
+            vec![values.len() as u64],
+            values,
+        ));
     }
     if !mesh.face_groups.is_empty() {
-        out.push(OwnedArray::new("face_groups", vec![mesh.face_groups.len() as u64], mesh.face_groups));
+        out.push(OwnedArray::new(
+            "face_groups",
+            vec![mesh.face_groups.len() as u64],
+            mesh.face_groups,
+        ));
     }
     out
 }

@@ -21,7 +21,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         // Refuse an unknown format before reading a large input.
         tessd_mesh::io::Format::from_path(path).map_err(mesh_error)?;
     }
-    let mesh = input_mesh(&request)?;
+    let mesh = input_mesh(&request, ctx)?;
     ctx.progress(0.5, "write", "")?;
     let counts = json!({"vertices": mesh.vertex_count(), "faces": mesh.face_count()});
     match output {
@@ -34,14 +34,23 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             ctx.progress(1.0, "done", "")?;
             let mut result = counts;
             result["output"] = json!(path.display().to_string());
-            Ok(Response { result, files: vec![path], ..Response::default() })
+            Ok(Response {
+                result,
+                files: vec![path],
+                ..Response::default()
+            })
         }
-        None => Ok(Response { result: counts, arrays: mesh_to_arrays(mesh), files: Vec::new() }),
+        None => Ok(Response {
+            result: counts,
+            arrays: mesh_to_arrays(mesh),
+            files: Vec::new(),
+        }),
     }
 }
 
 fn is_usda(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("usda"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("usda"))
 }
 
 /// Writes the mesh as a USD stage; `params.up_axis` (`"Y"`/`"Z"`, default Z) and
@@ -52,17 +61,26 @@ fn write_usda(request: &Request, mesh: &tessd_mesh::Mesh, path: &Path) -> Result
     let up = match request.str_param("up_axis")? {
         None | Some("Z") | Some("z") => UpAxis::Z,
         Some("Y") | Some("y") => UpAxis::Y,
-        Some(other) => return Err(OpError::request(format!("`up_axis` must be \"Y\" or \"Z\", got {other:?}"))),
+        Some(other) => {
+            return Err(OpError::request(format!(
+                "`up_axis` must be \"Y\" or \"Z\", got {other:?}"
+            )));
+        }
     };
     let mut stage = StageOptions::default().with_up_axis(up);
     if let Some(m) = request.f64_param("meters_per_unit")? {
         stage = stage.with_meters_per_unit(m);
     }
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let name = request.str_param("name")?.map_or(stem, str::to_string);
     let prim = MeshPrimOptions::default().with_name(name);
-    tessd_usd::write_usda_file(path, |w| tessd_usd::write_mesh_stage(w, mesh, &stage, &prim))
-        .map_err(usd_error)
+    tessd_usd::write_usda_file(path, |w| {
+        tessd_usd::write_mesh_stage(w, mesh, &stage, &prim)
+    })
+    .map_err(usd_error)
 }
 
 /// Maps a USD-writer error onto the protocol's codes.

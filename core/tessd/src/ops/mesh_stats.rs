@@ -13,7 +13,7 @@ use tessd_mesh::stats::MeshStats;
 /// As [`input_mesh`], or `cancelled`.
 pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let mesh = input_mesh(&request)?;
+    let mesh = input_mesh(&request, ctx)?;
     ctx.progress(0.5, "topology", "")?;
     let stats = tessd_mesh::stats::compute(&mesh);
     ctx.progress(1.0, "done", "")?;
@@ -22,8 +22,11 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
 
 /// The JSON form of mesh statistics (the `tessd stats --json` output too).
 pub fn stats_json(s: &MeshStats) -> Value {
-    let histogram: Map<String, Value> =
-        s.face_size_histogram.iter().map(|(k, v)| (k.to_string(), Value::from(*v))).collect();
+    let histogram: Map<String, Value> = s
+        .face_size_histogram
+        .iter()
+        .map(|(k, v)| (k.to_string(), Value::from(*v)))
+        .collect();
     let bounds = match s.bounds {
         Some((lo, hi)) => json!({"min": lo, "max": hi}),
         None => Value::Null,
