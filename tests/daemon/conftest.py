@@ -1,8 +1,7 @@
 """Fixtures for the daemon tests: real `tessd serve` processes on real sockets.
 
-The binary is `$TESSD_BIN`, else `target/release/tessd`, else `target/debug/tessd` (relative
-to the repository root). Tests that need a daemon are skipped when none is built. Shared mesh
-data comes from `$TESSD_SHARED_DATA`, default `<repo>/../shared/data`.
+The binary and the shared data are found by `tests/locate.py`; a missing binary or data
+folder fails the tests (it is never a reason to skip).
 """
 
 from __future__ import annotations
@@ -17,24 +16,21 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "python"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from daemon_util import DaemonProcess, find_tessd_binary, short_tmpdir  # noqa: E402
+import locate  # noqa: E402
+from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
 
 
 @pytest.fixture(scope="session")
 def tessd_bin() -> str:
-    """Path of the tessd binary (skips the test when there is none)."""
-    path = find_tessd_binary()
-    if path is None:
-        pytest.skip("no tessd binary: set TESSD_BIN or run `cargo build -p tessd`")
-    return path
+    """Path of the tessd binary."""
+    return str(locate.tessd_bin())
 
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
-    """The shared test-data folder (skips when missing)."""
-    path = Path(os.environ.get("TESSD_SHARED_DATA") or (REPO.parent / "shared" / "data"))
-    if not (path / "mesh").is_dir():
-        pytest.skip("shared test data not found at %s (set TESSD_SHARED_DATA)" % path)
+    """The shared test-data folder (fails when missing)."""
+    path = locate.shared_data()
+    assert (path / "mesh").is_dir(), f"shared test data not found at {path} (set TESSD_SHARED_DATA)"
     return path
 
 

@@ -25,18 +25,6 @@ from tessd.frame import read_frame  # noqa: E402
 # Locating things
 
 
-def find_tessd_binary() -> Optional[str]:
-    """`$TESSD_BIN`, else target/release/tessd, else target/debug/tessd; None if none exists."""
-    env = os.environ.get("TESSD_BIN")
-    if env:
-        return env
-    for profile in ("release", "debug"):
-        p = REPO / "target" / profile / "tessd"
-        if p.is_file() and os.access(p, os.X_OK):
-            return str(p)
-    return None
-
-
 @contextlib.contextmanager
 def short_tmpdir():
     """A temporary folder with a short path (sockets need < 108 bytes), removed afterwards."""

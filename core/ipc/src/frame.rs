@@ -110,7 +110,8 @@ impl FrameError {
     /// The protocol error code for this error (`too_large` or `invalid_frame`).
     pub fn code(&self) -> &'static str {
         match self {
-            FrameError::PayloadTooLarge { .. } | FrameError::JsonLength { .. } => "too_large",
+            FrameError::PayloadTooLarge { .. } => "too_large",
+            FrameError::JsonLength { len, max } if len > max => "too_large",
             _ => "invalid_frame",
         }
     }

@@ -198,6 +198,12 @@ impl Connection {
             Ok(p) => p,
             Err(e) => return self.reply(&raw_id, Err(e)),
         };
+        // Every request, built-in or not, must have an id no running request uses: a client
+        // routes replies by id, and one id must get exactly one final frame.
+        if lock(&self.jobs).contains_key(&id) {
+            let message = format!("request id {id} is already running");
+            return self.reply(&raw_id, Err(OpError::request(message)));
+        }
         match op.as_str() {
             "hello" => self.reply(&raw_id, Ok(Response::json(self.hello()))),
             "ping" => {

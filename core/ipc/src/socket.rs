@@ -18,9 +18,11 @@ pub fn default_dir(create: bool) -> io::Result<PathBuf> {
     {
         return Ok(x);
     }
+    // An empty TMPDIR counts as unset (as Python's tempfile and the tessd client read it).
     let base = std::env::var_os("TMPDIR")
+        .filter(|t| !t.is_empty())
         .map(PathBuf::from)
-        .unwrap_or_else(std::env::temp_dir);
+        .unwrap_or_else(|| PathBuf::from("/tmp"));
     let dir = base.join(format!("tessd-{}", current_uid()));
     if create {
         private_dir(&dir)?;
@@ -43,7 +45,7 @@ pub fn default_socket(create_dir: bool) -> io::Result<PathBuf> {
 /// As [`default_dir`].
 pub fn resolve(name_or_path: Option<&str>, create_dir: bool) -> io::Result<PathBuf> {
     match name_or_path {
-        None => default_socket(create_dir),
+        None | Some("") => default_socket(create_dir),
         Some(s) if s.contains('/') || s.contains(std::path::MAIN_SEPARATOR) => Ok(PathBuf::from(s)),
         Some(name) => Ok(default_dir(create_dir)?.join(format!("{name}.sock"))),
     }

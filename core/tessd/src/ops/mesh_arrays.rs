@@ -81,13 +81,17 @@ fn rows<const N: usize>(name: &str, data: &[f32], shape: &[u64]) -> Result<Vec<[
 pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mesh, OpError> {
     let positions = match (view::<f32>(arrays, "positions"), arrays.desc("positions")) {
         (Ok(Some((p, shape))), _) => rows::<3>("positions", p, shape)?,
-        (Err(_), Some(_)) => match view::<f64>(arrays, "positions")? {
-            Some((p, shape)) => {
-                let p32: Vec<f32> = p.iter().map(|&x| x as f32).collect();
-                rows::<3>("positions", &p32, shape)?
-            }
-            None => unreachable!("the array exists"),
-        },
+        (Err(_), Some(d)) if d.dtype == tessd_ipc::arrays::DType::F64 => {
+            let (p, shape) = view::<f64>(arrays, "positions")?.expect("the array exists");
+            let p32: Vec<f32> = p.iter().map(|&x| x as f32).collect();
+            rows::<3>("positions", &p32, shape)?
+        }
+        (Err(_), Some(d)) => {
+            return Err(invalid(format!(
+                "array \"positions\" has dtype {}; expected f32 or f64",
+                d.dtype.name()
+            )));
+        }
         (Err(e), None) => return Err(e),
         (Ok(None), _) => return Err(invalid("the `positions` array is missing".into())),
     };
