@@ -4,4 +4,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-exec target/release/tessd demo "$@"
+exec "${CARGO_TARGET_DIR:-target}/release/tessd" demo "$@"

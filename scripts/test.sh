@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-export TESSD_BIN="$PWD/target/release/tessd"
+export TESSD_BIN="${CARGO_TARGET_DIR:-$PWD/target}/release/tessd"
 export TESSD_SHARED_DATA="${TESSD_SHARED_DATA:-$PWD/../shared/data}"
 echo "== cargo test"
 cargo test --workspace --release

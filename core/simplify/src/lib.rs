@@ -1,0 +1,337 @@
+//! # tessd-simplify — vertex clustering with quality and complexity goals
+//!
+//! The simplification stage of the mesh pipeline (`mesh → simplify`), after Belblidia &
+//! Perrin, *Simplification de surfaces polygonales complexes* (paper 004), which extends
+//! Rossignac & Borrel's clustering (1993). Clustering survives the messy topology CAD exports
+//! have — duplicate facets, coincident vertices, stacked solids — because it never looks at
+//! adjacency, only at where vertices are.
+//!
+//! The pipeline (section 2), one file per step:
+//!
+//! 1. [`weights`] — a weight per vertex (longest incident edge by default);
+//! 2. [`triangulate`] — optional fan triangulation of polygons;
+//! 3. a partition of the bounding volume — regular (`grid_partition.rs`), or adaptive binary
+//!    splitting driven by a quality or a complexity goal (`adaptive_partition.rs`, sections
+//!    3–5);
+//! 4. a representative per cell — weighted barycentre or heaviest vertex (the paper), or the
+//!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000);
+//! 5. elimination of what collapsed (`elimination.rs`);
+//!
+//! and beyond the paper: boundary/feature preservation ([`features`]), normals, UVs and face
+//! groups carried through (`attributes.rs`), the partition as boxes for "show partition"
+//! ([`partition_boxes`]), and LOD chains ([`lod`]).
+//!
+//! ```
+//! use tessd_mesh::Mesh;
+//! use tessd_simplify::{simplify, Count, Method, SimplifyOptions};
+//!
+//! // A 20 × 20 grid of quads.
+//! let mut m = Mesh::default();
+//! for j in 0..21 { for i in 0..21 { m.positions.push([i as f32, j as f32, 0.0]); } }
+//! for j in 0..20 { for i in 0..20 { let v = j * 21 + i; m.push_face(&[v, v + 1, v + 22, v + 21]); } }
+//!
+//! let options = SimplifyOptions::new(Method::Complexity(Count::Relative(0.25)));
+//! let out = simplify(&m, &options, &mut |_, _| true).unwrap();
+//! assert_eq!(out.report.output_vertices, 110); // 25 % of 441
+//! ```
+#![warn(missing_docs)]
+
+mod adaptive_partition;
+mod attributes;
+mod cell_table;
+mod elimination;
+mod error;
+pub mod features;
+mod grid_partition;
+pub mod lod;
+mod options;
+mod partition;
+pub mod partition_boxes;
+mod quadric;
+mod representative;
+pub mod triangulate;
+pub mod weights;
+
+pub use error::SimplifyError;
+pub use options::{
+    Count, GridSize, Length, Method, ProgressFn, Representative, SimplifyOptions, Weighting,
+};
+pub use partition::{Cell, Partition};
+pub use quadric::Quadric;
+
+use adaptive_partition::{Adaptive, Stop};
+use partition::{UNUSED, weighted_bounds};
+use std::borrow::Cow;
+use std::sync::atomic::Ordering;
+use tessd_mesh::Mesh;
+
+/// Figures about one simplification.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// Referenced input vertices.
+    pub input_vertices: u64,
+    /// Input faces (after the optional triangulation).
+    pub input_faces: u64,
+    /// Output vertices.
+    pub output_vertices: u64,
+    /// Output faces.
+    pub output_faces: u64,
+    /// Cells of the partition that hold vertices.
+    pub clusters: u64,
+    /// Faces removed because they collapsed.
+    pub degenerate_faces: u64,
+    /// Faces removed as duplicates.
+    pub duplicate_faces: u64,
+    /// Largest distance from an input vertex to the representative it merged into.
+    pub max_displacement: f64,
+    /// The quality goal's tolerance in model units, when that method was used.
+    pub tolerance: Option<f64>,
+    /// The complexity goal's vertex count, when that method was used.
+    pub target_vertices: Option<u64>,
+}
+
+/// The simplified mesh, its partition's cells (when asked for) and the figures.
+#[derive(Clone, Debug)]
+pub struct Simplified {
+    /// The result.
+    pub mesh: Mesh,
+    /// Non-empty cells of the partition (empty unless `keep_partition` was set).
+    pub cells: Vec<Cell>,
+    /// Figures.
+    pub report: Report,
+}
+
+/// Simplifies `mesh` as `options` say. `progress(fraction, stage)` is called between stages;
+/// returning `false` cancels.
+///
+/// # Errors
+/// [`SimplifyError::InvalidMesh`] for a mesh that fails validation, [`SimplifyError::Empty`]
+/// for one without faces, [`SimplifyError::InvalidOption`] for a tolerance ≤ 0, a target that
+/// is not below the input's vertex count, or a grid size ≤ 0; [`SimplifyError::Cancelled`].
+pub fn simplify(
+    mesh: &Mesh,
+    options: &SimplifyOptions,
+    progress: &mut ProgressFn,
+) -> Result<Simplified, SimplifyError> {
+    let prepared = Prepared::new(mesh, options)?;
+    prepared.run(options, progress)
+}
+
+/// What every level of a simplification shares: the (triangulated) working mesh, vertex
+/// weights, bounds and feature classes. [`lod::lod_chain`] computes it once for all levels.
+pub(crate) struct Prepared<'a> {
+    work: Cow<'a, Mesh>,
+    weights: Vec<f32>,
+    bounds: Cell,
+    size: f64,
+    classes: Option<Vec<u8>>,
+    input_vertices: u64,
+}
+
+impl<'a> Prepared<'a> {
+    /// Validates `mesh` and prepares it as `options` say (triangulation, weighting, features).
+    pub(crate) fn new(mesh: &'a Mesh, options: &SimplifyOptions) -> Result<Self, SimplifyError> {
+        mesh.validate()?;
+        if mesh.face_count() == 0 {
+            return Err(SimplifyError::Empty);
+        }
+        let work: Cow<Mesh> = if options.triangulate && mesh.faces().any(|f| f.len() > 3) {
+            Cow::Owned(triangulate::triangulate(mesh))
+        } else {
+            Cow::Borrowed(mesh)
+        };
+        let weights = weights::vertex_weights(&work, options.weighting);
+        let bounds = weighted_bounds(&work.positions, &weights).ok_or(SimplifyError::Empty)?;
+        let size = (0..3)
+            .map(|k| f64::from(bounds.max[k] - bounds.min[k]))
+            .fold(0.0, f64::max);
+        let classes = options
+            .preserve_boundaries
+            .then(|| features::feature_classes(&work, options.feature_angle_deg));
+        let input_vertices = weights.iter().filter(|&&w| w > 0.0).count() as u64;
+        Ok(Prepared {
+            work,
+            weights,
+            bounds,
+            size,
+            classes,
+            input_vertices,
+        })
+    }
+
+    /// Runs one simplification (the method, representative and partition flag of `options`;
+    /// the preparation options were fixed by [`Prepared::new`]).
+    pub(crate) fn run(
+        &self,
+        options: &SimplifyOptions,
+        progress: &mut ProgressFn,
+    ) -> Result<Simplified, SimplifyError> {
+        let cancel = options.cancel.as_deref();
+        let mut step = |fraction: f64, stage: &str| -> Result<(), SimplifyError> {
+            let stop = cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+            if stop || !progress(fraction, stage) {
+                Err(SimplifyError::Cancelled)
+            } else {
+                Ok(())
+            }
+        };
+        let (work, weights, bounds) = (&*self.work, &self.weights[..], &self.bounds);
+        let classes = self.classes.as_deref();
+        let mut report = Report {
+            input_vertices: self.input_vertices,
+            input_faces: work.face_count() as u64,
+            ..Report::default()
+        };
+        step(0.1, "partition")?;
+        let adaptive = Adaptive::new(&work.positions, weights, options.representative, cancel);
+        let stopped = |_: Stop| SimplifyError::Cancelled;
+        let (partition, tolerance) = match options.method {
+            Method::Grid(grid) => {
+                let ok = match grid {
+                    GridSize::CellsPerAxis(n) => n >= 1,
+                    GridSize::CellSize(s) => s.is_finite() && s > 0.0,
+                };
+                if !ok {
+                    return Err(SimplifyError::InvalidOption(format!(
+                        "grid size {grid:?} must be positive"
+                    )));
+                }
+                let p = grid_partition::grid_partition(
+                    &work.positions,
+                    weights,
+                    classes,
+                    bounds,
+                    grid,
+                    options.keep_partition,
+                );
+                (p, None)
+            }
+            Method::Quality(length) => {
+                let tol = length.resolve(self.size);
+                if !(tol.is_finite() && tol > 0.0) {
+                    return Err(SimplifyError::InvalidOption(format!(
+                        "the tolerance must be positive; {length:?} gives {tol}"
+                    )));
+                }
+                report.tolerance = Some(tol);
+                // Keep a margin for rounding the representatives to f32.
+                let inner = tol - 4.0 * f64::from(f32::EPSILON) * max_abs(bounds);
+                let p = adaptive.quality(
+                    classes,
+                    bounds,
+                    inner.max(tol * 0.5),
+                    options.keep_partition,
+                );
+                (p.map_err(stopped)?, Some(tol))
+            }
+            Method::Complexity(count) => {
+                let target = count.resolve(self.input_vertices);
+                if target == 0 || target >= self.input_vertices {
+                    return Err(SimplifyError::InvalidOption(format!(
+                        "the target of {target} vertices must be between 1 and the input's {} (exclusive)",
+                        self.input_vertices
+                    )));
+                }
+                report.target_vertices = Some(target);
+                let rep = options.representative;
+                let more = |p: &Partition| {
+                    // The output loses clusters whose faces all collapsed: count what survives.
+                    let reps = representative::place(work, weights, p, rep, None);
+                    let kept = elimination::eliminate(work, &p.cluster_of, &reps);
+                    target.saturating_sub(used_clusters(&kept, p.clusters).1 as u64)
+                };
+                let p = adaptive.complexity(classes, bounds, target, options.keep_partition, more);
+                (p.map_err(stopped)?, None)
+            }
+        };
+        step(0.6, "merge")?;
+        let reps =
+            representative::place(work, weights, &partition, options.representative, tolerance);
+        step(0.75, "eliminate")?;
+        let kept = elimination::eliminate(work, &partition.cluster_of, &reps);
+        let (new_id, used) = used_clusters(&kept, partition.clusters);
+        step(0.9, "attributes")?;
+        let cluster_of = &partition.cluster_of;
+        let mut out = Mesh {
+            positions: Vec::with_capacity(used),
+            face_offsets: kept.face_offsets.clone(),
+            face_indices: kept
+                .face_indices
+                .iter()
+                .map(|&c| new_id[c as usize])
+                .collect(),
+            normals: None,
+            uvs: None,
+            creases: Vec::new(),
+            face_groups: attributes::carry_groups(work, &kept),
+            group_names: if work.face_groups.is_empty() {
+                Vec::new()
+            } else {
+                work.group_names.clone()
+            },
+        };
+        out.positions.extend(
+            (0..partition.clusters)
+                .filter(|&c| new_id[c] != UNUSED)
+                .map(|c| reps[c]),
+        );
+        out.normals = work
+            .normals
+            .as_ref()
+            .map(|n| attributes::carry_face_varying(work, n, cluster_of, &kept, true));
+        out.uvs = work
+            .uvs
+            .as_ref()
+            .map(|t| attributes::carry_face_varying(work, t, cluster_of, &kept, false));
+        report.max_displacement = work
+            .positions
+            .iter()
+            .zip(cluster_of)
+            .filter(|(_, c)| **c != UNUSED)
+            .map(|(p, &c)| dist(*p, reps[c as usize]))
+            .fold(0.0, f64::max);
+        report.clusters = partition.clusters as u64;
+        report.output_vertices = used as u64;
+        report.output_faces = out.face_count() as u64;
+        report.degenerate_faces = kept.degenerate;
+        report.duplicate_faces = kept.duplicates;
+        let cells = if options.keep_partition {
+            partition.cells
+        } else {
+            Vec::new()
+        };
+        step(1.0, "done")?;
+        Ok(Simplified {
+            mesh: out,
+            cells,
+            report,
+        })
+    }
+}
+
+/// New index of every cluster that surviving faces use (in cluster order), and their count.
+fn used_clusters(kept: &elimination::Eliminated, clusters: usize) -> (Vec<u32>, usize) {
+    let mut new_id = vec![UNUSED; clusters];
+    for &c in &kept.face_indices {
+        new_id[c as usize] = 0;
+    }
+    let mut n = 0u32;
+    for id in new_id.iter_mut().filter(|id| **id == 0) {
+        *id = n;
+        n += 1;
+    }
+    (new_id, n as usize)
+}
+
+fn max_abs(b: &Cell) -> f64 {
+    (0..3)
+        .map(|k| f64::from(b.min[k].abs().max(b.max[k].abs())))
+        .fold(0.0, f64::max)
+}
+
+fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {
+    (0..3)
+        .map(|k| (f64::from(a[k]) - f64::from(b[k])).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}

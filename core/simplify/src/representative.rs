@@ -1,0 +1,155 @@
+//! Where each cluster's vertices merge to (Belblidia & Perrin, section 2, "fusion des
+//! sommets"): the weighted barycentre or the heaviest vertex, as in the paper, or — beyond it —
+//! the quadric minimiser of the cluster's face planes (Lindstrom 2000).
+
+use crate::options::Representative;
+use crate::partition::{Partition, UNUSED};
+use crate::quadric::Quadric;
+use tessd_mesh::Mesh;
+
+/// The position of every cluster.
+///
+/// With [`Representative::Quadric`] the minimiser is kept only when it stays inside the
+/// cluster's box of vertices (grown by a quarter of its diagonal) and, when `tolerance` is set
+/// (quality goal), only when every vertex of the cluster stays within `tolerance` of it;
+/// otherwise the cluster falls back to its weighted barycentre, which the quality partition
+/// already guarantees.
+pub(crate) fn place(
+    mesh: &Mesh,
+    weights: &[f32],
+    partition: &Partition,
+    rep: Representative,
+    tolerance: Option<f64>,
+) -> Vec<[f32; 3]> {
+    let n = partition.clusters;
+    let cluster_of = &partition.cluster_of;
+    let mut sum = vec![[0f64; 4]; n];
+    let mut heaviest = vec![(f32::NEG_INFINITY, u32::MAX); n];
+    for (v, (&c, p)) in cluster_of.iter().zip(&mesh.positions).enumerate() {
+        if c == UNUSED {
+            continue;
+        }
+        let w = f64::from(weights[v]);
+        let s = &mut sum[c as usize];
+        for k in 0..3 {
+            s[k] += w * f64::from(p[k]);
+        }
+        s[3] += w;
+        let h = &mut heaviest[c as usize];
+        if weights[v] > h.0 {
+            *h = (weights[v], v as u32);
+        }
+    }
+    let barycentre = |c: usize| -> [f64; 3] {
+        let s = sum[c];
+        [s[0] / s[3], s[1] / s[3], s[2] / s[3]]
+    };
+    match rep {
+        Representative::Barycenter => (0..n).map(|c| barycentre(c).map(|x| x as f32)).collect(),
+        Representative::Heaviest => heaviest
+            .iter()
+            .map(|&(_, v)| mesh.positions[v as usize])
+            .collect(),
+        Representative::Quadric => {
+            let quadrics = cluster_quadrics(mesh, cluster_of, n);
+            let mut lo = vec![[f32::INFINITY; 3]; n];
+            let mut hi = vec![[f32::NEG_INFINITY; 3]; n];
+            for (&c, p) in cluster_of.iter().zip(&mesh.positions) {
+                if c != UNUSED {
+                    for k in 0..3 {
+                        lo[c as usize][k] = lo[c as usize][k].min(p[k]);
+                        hi[c as usize][k] = hi[c as usize][k].max(p[k]);
+                    }
+                }
+            }
+            let mut reps: Vec<[f32; 3]> = (0..n)
+                .map(|c| {
+                    let x0 = barycentre(c);
+                    let x = quadrics[c].minimizer(x0);
+                    let diag = (0..3)
+                        .map(|k| f64::from(hi[c][k] - lo[c][k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    let margin = 0.25 * diag;
+                    let inside = (0..3).all(|k| {
+                        x[k] >= f64::from(lo[c][k]) - margin && x[k] <= f64::from(hi[c][k]) + margin
+                    });
+                    if inside && x.iter().all(|v| v.is_finite()) {
+                        x
+                    } else {
+                        x0
+                    }
+                    .map(|v| v as f32)
+                })
+                .collect();
+            if let Some(tol) = tolerance {
+                let mut worst = vec![0f64; n];
+                for (&c, p) in cluster_of.iter().zip(&mesh.positions) {
+                    if c != UNUSED {
+                        let d = dist(reps[c as usize], *p);
+                        worst[c as usize] = worst[c as usize].max(d);
+                    }
+                }
+                for c in 0..n {
+                    if worst[c] > tol {
+                        reps[c] = barycentre(c).map(|x| x as f32);
+                    }
+                }
+            }
+            reps
+        }
+    }
+}
+
+/// Sums, per cluster, the area-weighted plane quadrics of the faces touching it (each face once
+/// per distinct cluster among its corners).
+fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
+    let mut q = vec![Quadric::default(); n];
+    let mut seen: Vec<u32> = Vec::with_capacity(8);
+    for face in mesh.faces() {
+        let (normal, area, centroid) = plane_of(mesh, face);
+        if area <= 0.0 {
+            continue;
+        }
+        let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
+        let fq = Quadric::plane(normal, d, area);
+        seen.clear();
+        for &v in face {
+            let c = cluster_of[v as usize];
+            if !seen.contains(&c) {
+                seen.push(c);
+                q[c as usize].add(&fq);
+            }
+        }
+    }
+    q
+}
+
+/// Unit normal (Newell), area and centroid of a polygon.
+fn plane_of(mesh: &Mesh, face: &[u32]) -> ([f64; 3], f64, [f64; 3]) {
+    let mut n = [0f64; 3];
+    let mut c = [0f64; 3];
+    for i in 0..face.len() {
+        let p = mesh.positions[face[i] as usize].map(f64::from);
+        let q = mesh.positions[face[(i + 1) % face.len()] as usize].map(f64::from);
+        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
+        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
+        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+        for k in 0..3 {
+            c[k] += p[k];
+        }
+    }
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let m = face.len() as f64;
+    if len == 0.0 {
+        return ([0.0; 3], 0.0, c);
+    }
+    (n.map(|x| x / len), 0.5 * len, c.map(|x| x / m))
+}
+
+fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {
+    (0..3)
+        .map(|k| (f64::from(a[k]) - f64::from(b[k])).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
