@@ -109,42 +109,35 @@ impl<'a> Adaptive<'a> {
 
     /// Representative, largest displacement and inner box of a non-empty set of vertices.
     fn evaluate(&self, verts: &[Point]) -> Eval {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        let mut sum = [0f64; 3];
-        let mut wsum = 0f64;
-        let mut best = (f32::NEG_INFINITY, u32::MAX);
-        for &Point { p, w, id: v } in verts {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-                sum[k] += f64::from(w) * f64::from(p[k]);
-            }
-            wsum += f64::from(w);
-            // Ties go to the lowest vertex index, so results do not depend on order.
-            if w > best.0 || (w == best.0 && v < best.1) {
-                best = (w, v);
-            }
-        }
-        let rep = if self.heaviest {
-            self.positions[best.1 as usize].map(f64::from)
+        let mut acc = Acc::default();
+        verts.iter().for_each(|q| acc.add(q));
+        self.finish_eval(&acc, verts)
+    }
+
+    /// Completes an evaluation from a cell's accumulated sums: one more pass over its vertices
+    /// for the largest displacement (in f32: the rounding is far below any tolerance, see the
+    /// margin in `Prepared::run`).
+    fn finish_eval(&self, acc: &Acc, verts: &[Point]) -> Eval {
+        let rep: [f32; 3] = if self.heaviest {
+            self.positions[acc.best.1 as usize]
         } else {
-            sum.map(|s| s / wsum)
+            acc.sum.map(|s| (s / acc.wsum) as f32)
         };
-        let mut err2 = 0f64;
-        for &Point { p, .. } in verts {
-            let d2: f64 = (0..3).map(|k| (f64::from(p[k]) - rep[k]).powi(2)).sum();
-            err2 = err2.max(d2);
+        let mut err2 = 0f32;
+        for q in verts {
+            let d = [q.p[0] - rep[0], q.p[1] - rep[1], q.p[2] - rep[2]];
+            err2 = err2.max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         }
         Eval {
-            err: err2.sqrt(),
-            lo,
-            hi,
+            err: f64::from(err2).sqrt(),
+            lo: acc.lo,
+            hi: acc.hi,
         }
     }
 
     /// Splits `node` across the largest side of its inner box: partitions its vertices in place
-    /// and returns the two children (both non-empty), or `None` when its vertices coincide.
+    /// and returns the two children (both non-empty), or `None` when its vertices coincide. The
+    /// partition pass also accumulates both children's sums, so each child costs one more pass.
     fn split(&self, order: &mut [Point], node: &Node) -> Option<(Node, Node)> {
         let Eval { lo, hi, .. } = node.eval;
         let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))?;
@@ -153,19 +146,26 @@ impl<'a> Adaptive<'a> {
         }
         let verts = &mut order[node.start..node.end];
         let mut at = 0.5 * (lo[axis] + hi[axis]);
-        let mut mid = partition_in_place(verts, |q| q.p[axis] < at);
+        let (mut left_acc, mut right_acc) = (Acc::default(), Acc::default());
+        let mut mid = partition_in_place(verts, |q| q.p[axis] < at, &mut left_acc, &mut right_acc);
         if mid == 0 || mid == verts.len() {
             // The midpoint rounded onto an end of the box: split at the median instead.
             mid = verts.len() / 2;
             verts.select_nth_unstable_by(mid, |a, b| a.p[axis].total_cmp(&b.p[axis]));
             at = verts[mid].p[axis];
+            (left_acc, right_acc) = (Acc::default(), Acc::default());
+            verts[..mid].iter().for_each(|q| left_acc.add(q));
+            verts[mid..].iter().for_each(|q| right_acc.add(q));
         }
         let (left, right) = verts.split_at(mid);
         let mut lcell = node.cell;
         let mut rcell = node.cell;
         lcell.max[axis] = at;
         rcell.min[axis] = at;
-        let (le, re) = (self.evaluate(left), self.evaluate(right));
+        let (le, re) = (
+            self.finish_eval(&left_acc, left),
+            self.finish_eval(&right_acc, right),
+        );
         Some((
             Node {
                 start: node.start,
@@ -192,39 +192,93 @@ impl<'a> Adaptive<'a> {
         keep_cells: bool,
     ) -> Result<Partition, Stop> {
         let (mut order, roots) = self.roots(classes, bounds);
-        let mut leaves = Vec::new();
-        let mut rest = &mut order[..];
-        let mut consumed = 0;
-        for root in roots {
-            let (mine, tail) = rest.split_at_mut(root.end - consumed);
-            consumed = root.end;
-            rest = tail;
-            let local = Node {
-                start: 0,
-                end: root.end - root.start,
-                ..root
-            };
-            let mut found = self.refine(mine, local, tolerance)?;
-            for leaf in &mut found {
-                leaf.start += root.start;
-                leaf.end += root.start;
-            }
-            leaves.extend(found);
-        }
+        let leaves = self.refine_all(&mut order, &roots, tolerance)?;
         Ok(self.finish(&order, &leaves, keep_cells))
     }
 
+    /// Refines each of `cells` (disjoint ranges of `order`, sorted by start) until every
+    /// resulting cell's displacement is at most `tolerance`; returns the leaves sorted by start.
+    ///
+    /// Refining is *tentative-safe*: splitting a cell only permutes its own range and always
+    /// yields the same children, so the input cells stay valid whatever is done with the result.
+    fn refine_all(
+        &self,
+        order: &mut [Point],
+        cells: &[Node],
+        tolerance: f64,
+    ) -> Result<Vec<Node>, Stop> {
+        let mut jobs: Vec<(Node, &mut [Point])> = Vec::with_capacity(cells.len());
+        let mut rest = order;
+        let mut consumed = 0;
+        for c in cells {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(c.start - consumed);
+            let (mine, tail) = tail.split_at_mut(c.end - c.start);
+            rest = tail;
+            consumed = c.end;
+            jobs.push((*c, mine));
+        }
+        let parts: Vec<Result<Vec<Node>, Stop>> = if jobs.len() > 1 {
+            use rayon::prelude::*;
+            jobs.into_par_iter()
+                .with_min_len(64)
+                .map(|(c, slice)| self.refine_one(slice, c, tolerance))
+                .collect()
+        } else {
+            jobs.into_iter()
+                .map(|(c, slice)| self.refine_one(slice, c, tolerance))
+                .collect()
+        };
+        let mut out = Vec::with_capacity(cells.len());
+        for p in parts {
+            out.extend(p?);
+        }
+        Ok(out)
+    }
+
+    /// Refines one cell whose vertices are exactly `slice`; leaves are numbered globally.
+    fn refine_one(
+        &self,
+        slice: &mut [Point],
+        cell: Node,
+        tolerance: f64,
+    ) -> Result<Vec<Node>, Stop> {
+        if cell.eval.err <= tolerance {
+            return Ok(vec![cell]);
+        }
+        let mut out = Vec::new();
+        let local = Node {
+            start: 0,
+            end: cell.end - cell.start,
+            ..cell
+        };
+        self.refine(slice, local, tolerance, &mut out)?;
+        for n in &mut out {
+            n.start += cell.start;
+            n.end += cell.start;
+        }
+        Ok(out)
+    }
+
     /// Depth-first refinement of one cell. `order` holds exactly the cell's vertices and
-    /// `node` is numbered locally (`node.start == 0`); so are the leaves returned.
-    fn refine(&self, order: &mut [Point], node: Node, tolerance: f64) -> Result<Vec<Node>, Stop> {
+    /// `node` is numbered locally (`node.start == 0`); leaves are appended to `out` in order,
+    /// numbered locally too.
+    fn refine(
+        &self,
+        order: &mut [Point],
+        node: Node,
+        tolerance: f64,
+        out: &mut Vec<Node>,
+    ) -> Result<(), Stop> {
+        if node.eval.err <= tolerance {
+            out.push(node);
+            return Ok(());
+        }
         if self.cancelled() {
             return Err(Stop::Cancelled);
         }
-        if node.eval.err <= tolerance {
-            return Ok(vec![node]);
-        }
         let Some((l, r)) = self.split(order, &node) else {
-            return Ok(vec![node]);
+            out.push(node);
+            return Ok(());
         };
         let mid = l.end;
         let (lo, hi) = order.split_at_mut(mid);
@@ -233,30 +287,36 @@ impl<'a> Adaptive<'a> {
             end: r.end - mid,
             ..r
         };
-        let (left, right) = if order_len(&node) > PARALLEL_CELL {
-            rayon::join(
-                || self.refine(lo, l, tolerance),
-                || self.refine(hi, r_local, tolerance),
-            )
+        if node.end - node.start > PARALLEL_CELL {
+            let mut right = Vec::new();
+            let (a, b) = rayon::join(
+                || self.refine(lo, l, tolerance, out),
+                || self.refine(hi, r_local, tolerance, &mut right),
+            );
+            a?;
+            b?;
+            out.extend(right.into_iter().map(|n| Node {
+                start: n.start + mid,
+                end: n.end + mid,
+                ..n
+            }));
         } else {
-            (
-                self.refine(lo, l, tolerance),
-                self.refine(hi, r_local, tolerance),
-            )
-        };
-        let mut out = left?;
-        out.extend(right?.into_iter().map(|n| Node {
-            start: n.start + mid,
-            end: n.end + mid,
-            ..n
-        }));
-        Ok(out)
+            self.refine(lo, l, tolerance, out)?;
+            let from = out.len();
+            self.refine(hi, r_local, tolerance, out)?;
+            for n in &mut out[from..] {
+                n.start += mid;
+                n.end += mid;
+            }
+        }
+        Ok(())
     }
 
-    /// Complexity goal: splits the cell with the largest displacement until there are
-    /// `target` cells, then lets `more` ask for further splits (the caller counts the output
-    /// vertices after elimination, which can be fewer than the cells). Stops early when no cell
-    /// can be split (all remaining cells hold coincident vertices).
+    /// Complexity goal (section 4): splits, one at a time, the cell with the largest
+    /// displacement until there are `target` cells. `more` then counts the output vertices
+    /// after elimination (cells whose faces all collapse are lost) and asks for that many
+    /// further splits. Stops early when no cell can be split (all remaining cells hold
+    /// coincident vertices).
     pub(crate) fn complexity(
         &self,
         classes: Option<&[u8]>,
@@ -265,54 +325,69 @@ impl<'a> Adaptive<'a> {
         keep_cells: bool,
         mut more: impl FnMut(&Partition) -> u64,
     ) -> Result<Partition, Stop> {
-        let (mut order, roots) = self.roots(classes, bounds);
-        // Nodes live in an arena; the heap orders small (error, index) keys, so its sifting
-        // moves 16 bytes, not whole nodes.
-        let mut nodes: Vec<Node> = roots;
-        let mut heap: BinaryHeap<ByError> = nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| ByError(n.eval.err, i as u32))
-            .collect();
-        let mut done: Vec<u32> = Vec::new();
-        let mut goal = target;
+        let (mut order, mut leaves) = self.roots(classes, bounds);
+        let mut goal = target as usize;
         loop {
-            while (heap.len() + done.len()) < goal as usize {
-                if self.cancelled() {
-                    return Err(Stop::Cancelled);
-                }
-                let Some(ByError(err, i)) = heap.pop() else {
-                    break;
-                };
-                let node = nodes[i as usize];
-                let children = if err > 0.0 {
-                    self.split(&mut order, &node)
-                } else {
-                    None
-                };
-                match children {
-                    Some((l, r)) => {
-                        for child in [l, r] {
-                            heap.push(ByError(child.eval.err, nodes.len() as u32));
-                            nodes.push(child);
-                        }
-                    }
-                    None => done.push(i),
-                }
-            }
-            let mut leaves: Vec<Node> = done
-                .iter()
-                .chain(heap.iter().map(|k| &k.1))
-                .map(|&i| nodes[i as usize])
-                .collect();
-            leaves.sort_unstable_by_key(|n| n.start);
+            self.approach(&mut order, &mut leaves, goal)?;
             let partition = self.finish(&order, &leaves, keep_cells);
-            let extra = more(&partition);
-            if extra == 0 || heap.iter().all(|k| k.0 <= 0.0) {
+            let extra = more(&partition) as usize;
+            if extra == 0 || leaves.iter().all(|n| n.eval.err <= 0.0) {
                 return Ok(partition);
             }
-            goal = (heap.len() + done.len()) as u64 + extra;
+            goal = leaves.len() + extra;
         }
+    }
+
+    /// Greedy splitting of `leaves` (sorted by start) up to `goal` cells: a heap holds the
+    /// cells that can still be split (displacement above zero), keyed by displacement; nodes
+    /// live in an arena whose slot a split cell hands to its left child.
+    fn approach(
+        &self,
+        order: &mut [Point],
+        leaves: &mut Vec<Node>,
+        goal: usize,
+    ) -> Result<(), Stop> {
+        let lo_t = 0.0;
+        let mut heap: BinaryHeap<ByError> = BinaryHeap::new();
+        let mut kept: Vec<Node> = Vec::with_capacity(goal);
+        let mut live: Vec<Node> = Vec::new();
+        for n in leaves.drain(..) {
+            if n.eval.err > lo_t {
+                heap.push(ByError(n.eval.err, live.len() as u32));
+                live.push(n);
+            } else {
+                kept.push(n);
+            }
+        }
+        while kept.len() + heap.len() < goal {
+            if self.cancelled() {
+                return Err(Stop::Cancelled);
+            }
+            let Some(ByError(_, i)) = heap.pop() else {
+                break;
+            };
+            let node = live[i as usize];
+            match self.split(order, &node) {
+                Some((l, r)) => {
+                    live[i as usize] = l;
+                    for (child, slot) in [(l, i), (r, live.len() as u32)] {
+                        if slot as usize == live.len() {
+                            live.push(child);
+                        }
+                        if child.eval.err > lo_t {
+                            heap.push(ByError(child.eval.err, slot));
+                        } else {
+                            kept.push(child);
+                        }
+                    }
+                }
+                None => kept.push(node),
+            }
+        }
+        kept.extend(heap.into_iter().map(|k| live[k.1 as usize]));
+        kept.sort_unstable_by_key(|n| n.start);
+        *leaves = kept;
+        Ok(())
     }
 
     /// Numbers the leaves in order of their ranges and labels every vertex with its cluster.
@@ -358,10 +433,6 @@ impl Ord for ByError {
     }
 }
 
-fn order_len(n: &Node) -> usize {
-    n.end - n.start
-}
-
 /// A referenced vertex as the partition handles it: position, weight and vertex index.
 #[derive(Clone, Copy, Debug)]
 struct Point {
@@ -370,21 +441,69 @@ struct Point {
     id: u32,
 }
 
+/// Running sums of a cell: inner box, weighted position sum, heaviest vertex.
+#[derive(Clone, Copy, Debug)]
+struct Acc {
+    lo: [f32; 3],
+    hi: [f32; 3],
+    sum: [f64; 3],
+    wsum: f64,
+    best: (f32, u32),
+}
+
+impl Default for Acc {
+    fn default() -> Self {
+        Acc {
+            lo: [f32::INFINITY; 3],
+            hi: [f32::NEG_INFINITY; 3],
+            sum: [0.0; 3],
+            wsum: 0.0,
+            best: (f32::NEG_INFINITY, u32::MAX),
+        }
+    }
+}
+
+impl Acc {
+    #[inline]
+    fn add(&mut self, q: &Point) {
+        for k in 0..3 {
+            self.lo[k] = self.lo[k].min(q.p[k]);
+            self.hi[k] = self.hi[k].max(q.p[k]);
+            self.sum[k] += f64::from(q.w) * f64::from(q.p[k]);
+        }
+        self.wsum += f64::from(q.w);
+        // Ties go to the lowest vertex index, so results do not depend on order.
+        if q.w > self.best.0 || (q.w == self.best.0 && q.id < self.best.1) {
+            self.best = (q.w, q.id);
+        }
+    }
+}
+
 /// Moves the elements satisfying `pred` to the front (Hoare's two-pointer scheme: each element
-/// moves at most once); returns how many there are.
-fn partition_in_place(v: &mut [Point], pred: impl Fn(&Point) -> bool) -> usize {
+/// is visited once) and adds each to the accumulator of the side it ends on; returns how many
+/// satisfy `pred`.
+fn partition_in_place(
+    v: &mut [Point],
+    pred: impl Fn(&Point) -> bool,
+    left: &mut Acc,
+    right: &mut Acc,
+) -> usize {
     let (mut i, mut j) = (0, v.len());
     loop {
         while i < j && pred(&v[i]) {
+            left.add(&v[i]);
             i += 1;
         }
         while i < j && !pred(&v[j - 1]) {
+            right.add(&v[j - 1]);
             j -= 1;
         }
         if i >= j {
             return i;
         }
         v.swap(i, j - 1);
+        left.add(&v[i]);
+        right.add(&v[j - 1]);
         i += 1;
         j -= 1;
     }
@@ -417,10 +536,39 @@ mod tests {
             let rep = sum[c as usize][0] / sum[c as usize][1];
             assert!((p[v][0] as f64 - rep).abs() <= 2.0);
         }
-        // 100 points 1 apart, clusters at most 5 wide: at least 20 clusters, and the split
-        // never makes clusters smaller than needed by more than a factor of 2.
+        // 100 points 1 apart in clusters at most 5 wide: at least 20 clusters, and halving
+        // never makes them more than twice as many as needed.
         assert!((20..=50).contains(&part.clusters), "{}", part.clusters);
         assert_eq!(part.cells.len(), part.clusters);
+    }
+
+    #[test]
+    fn quality_in_parallel_matches_the_definition() {
+        // Enough points to take the parallel path; every cluster must still meet the bound.
+        let n = 3 * PARALLEL_CELL;
+        let p: Vec<[f32; 3]> = (0..n)
+            .map(|i| [(i % 1000) as f32, (i / 1000) as f32, 0.0])
+            .collect();
+        let w = vec![1.0; n];
+        let b = Cell {
+            min: [0.0; 3],
+            max: [999.0, (n / 1000) as f32, 0.0],
+        };
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
+        let part = a.quality(None, &b, 3.0, false).unwrap();
+        let mut sum = vec![[0f64; 3]; part.clusters];
+        for (v, &c) in part.cluster_of.iter().enumerate() {
+            sum[c as usize][0] += p[v][0] as f64;
+            sum[c as usize][1] += p[v][1] as f64;
+            sum[c as usize][2] += 1.0;
+        }
+        for (v, &c) in part.cluster_of.iter().enumerate() {
+            let s = sum[c as usize];
+            let d = ((p[v][0] as f64 - s[0] / s[2]).powi(2)
+                + (p[v][1] as f64 - s[1] / s[2]).powi(2))
+            .sqrt();
+            assert!(d <= 3.0 + 1e-4, "vertex {v} moves {d}");
+        }
     }
 
     #[test]
@@ -442,5 +590,22 @@ mod tests {
         let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
         assert_eq!(a.quality(None, &b, 1e-9, false).unwrap().clusters, 1);
         assert_eq!(a.complexity(None, &b, 5, false, |_| 1).unwrap().clusters, 1);
+    }
+
+    #[test]
+    fn hoare_partition_accumulates_each_point_once() {
+        let mut v: Vec<Point> = (0..10)
+            .map(|i| Point {
+                p: [(9 - i) as f32, 0.0, 0.0],
+                w: 1.0,
+                id: i,
+            })
+            .collect();
+        let (mut l, mut r) = (Acc::default(), Acc::default());
+        let mid = partition_in_place(&mut v, |q| q.p[0] < 4.0, &mut l, &mut r);
+        assert_eq!(mid, 4);
+        assert!(v[..4].iter().all(|q| q.p[0] < 4.0) && v[4..].iter().all(|q| q.p[0] >= 4.0));
+        assert_eq!((l.wsum, r.wsum), (4.0, 6.0));
+        assert_eq!((l.sum[0], r.sum[0]), (6.0, 39.0));
     }
 }
