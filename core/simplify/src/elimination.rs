@@ -5,7 +5,6 @@
 
 use crate::cell_table::mix;
 use crate::partition::UNUSED;
-use std::collections::HashSet;
 use tessd_mesh::Mesh;
 
 /// Faces over cluster ids, with where each came from.
@@ -25,67 +24,165 @@ pub(crate) struct Eliminated {
     pub duplicates: u64,
 }
 
+/// Faces per parallel chunk of the first phase.
+const CHUNK: usize = 1 << 16;
+
 /// Maps every face of `mesh` through `cluster_of` and removes collapsed and duplicate faces.
 /// The first of several duplicates is kept, so the result is deterministic.
+///
+/// Two phases: faces are mapped and collapsed in parallel chunks (concatenated in order), then
+/// duplicates are found by sorting the survivors' canonical-key hashes (sequential memory
+/// traffic, unlike a hash set of millions of faces) and comparing equal-hash runs exactly.
 pub(crate) fn eliminate(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Eliminated {
+    use rayon::prelude::*;
+    let faces = mesh.face_count();
+    let chunks: Vec<Eliminated> = (0..faces.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            collapse_faces(
+                mesh,
+                cluster_of,
+                reps,
+                c * CHUNK..((c + 1) * CHUNK).min(faces),
+            )
+        })
+        .collect();
+    let mut all = Eliminated::default();
+    all.face_offsets.push(0);
+    for c in chunks {
+        let base = all.face_indices.len() as u32;
+        all.face_indices.extend_from_slice(&c.face_indices);
+        all.source_corner.extend_from_slice(&c.source_corner);
+        all.source_face.extend_from_slice(&c.source_face);
+        all.face_offsets
+            .extend(c.face_offsets[1..].iter().map(|o| o + base));
+        all.degenerate += c.degenerate;
+    }
+    let duplicate = find_duplicates(&all);
+    if duplicate.iter().all(|d| !d) {
+        return all;
+    }
     let mut out = Eliminated {
-        face_offsets: Vec::with_capacity(mesh.face_count() / 2 + 1),
-        face_indices: Vec::with_capacity(mesh.face_indices.len() / 2),
+        degenerate: all.degenerate,
         ..Eliminated::default()
     };
     out.face_offsets.push(0);
+    for (f, w) in all.face_offsets.windows(2).enumerate() {
+        if duplicate[f] {
+            out.duplicates += 1;
+            continue;
+        }
+        let r = w[0] as usize..w[1] as usize;
+        out.face_indices
+            .extend_from_slice(&all.face_indices[r.clone()]);
+        out.source_corner.extend_from_slice(&all.source_corner[r]);
+        out.face_offsets.push(out.face_indices.len() as u32);
+        out.source_face.push(all.source_face[f]);
+    }
+    out
+}
+
+/// Maps the faces in `range` to clusters and drops those that collapse (no duplicate check).
+fn collapse_faces(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    reps: &[[f32; 3]],
+    range: std::ops::Range<usize>,
+) -> Eliminated {
+    let mut out = Eliminated::default();
+    out.face_offsets.push(0);
     let mut ring: Vec<(u32, u32)> = Vec::with_capacity(16);
-    let mut tris = TriangleSet::with_capacity(1 << 12);
-    let mut polys: HashSet<Vec<u32>> = HashSet::new();
-    for (f, w) in mesh.face_offsets.windows(2).enumerate() {
-        if w[1] - w[0] == 3 {
+    for f in range {
+        let (s, e) = (mesh.face_offsets[f], mesh.face_offsets[f + 1]);
+        if e - s == 3 {
             // Triangles, the common case: no ring to collapse, only three ids to compare.
-            let s = w[0] as usize;
-            let v = [0, 1, 2].map(|k| cluster_of[mesh.face_indices[s + k] as usize]);
+            let v = [0, 1, 2].map(|k| cluster_of[mesh.face_indices[s as usize + k] as usize]);
             if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] || zero_area_triangle(v, reps) {
                 out.degenerate += 1;
                 continue;
             }
-            let mut key = v;
-            key.sort_unstable();
-            if !tris.insert(key) {
-                out.duplicates += 1;
+            out.face_indices.extend_from_slice(&v);
+            out.source_corner.extend([s, s + 1, s + 2]);
+        } else {
+            ring.clear();
+            for corner in s..e {
+                let c = cluster_of[mesh.face_indices[corner as usize] as usize];
+                debug_assert_ne!(c, UNUSED);
+                ring.push((c, corner));
+            }
+            collapse_ring(&mut ring);
+            if ring.len() < 3 || zero_area(&ring, reps) {
+                out.degenerate += 1;
                 continue;
             }
-            out.face_indices.extend_from_slice(&v);
-            out.source_corner.extend([w[0], w[0] + 1, w[0] + 2]);
-            out.face_offsets.push(out.face_indices.len() as u32);
-            out.source_face.push(f as u32);
-            continue;
+            out.face_indices.extend(ring.iter().map(|r| r.0));
+            out.source_corner.extend(ring.iter().map(|r| r.1));
         }
-        ring.clear();
-        for corner in w[0]..w[1] {
-            let c = cluster_of[mesh.face_indices[corner as usize] as usize];
-            debug_assert_ne!(c, UNUSED);
-            ring.push((c, corner));
-        }
-        collapse_ring(&mut ring);
-        if ring.len() < 3 || zero_area(&ring, reps) {
-            out.degenerate += 1;
-            continue;
-        }
-        let fresh = if ring.len() == 3 {
-            let mut key = [ring[0].0, ring[1].0, ring[2].0];
-            key.sort_unstable();
-            tris.insert(key)
-        } else {
-            polys.insert(canonical_polygon(&ring))
-        };
-        if !fresh {
-            out.duplicates += 1;
-            continue;
-        }
-        out.face_indices.extend(ring.iter().map(|r| r.0));
-        out.source_corner.extend(ring.iter().map(|r| r.1));
         out.face_offsets.push(out.face_indices.len() as u32);
         out.source_face.push(f as u32);
     }
     out
+}
+
+/// Marks every face that repeats an earlier one (same cluster cycle up to rotation and
+/// reversal).
+fn find_duplicates(faces: &Eliminated) -> Vec<bool> {
+    use rayon::prelude::*;
+    let n = faces.face_offsets.len() - 1;
+    let face = |f: usize| {
+        &faces.face_indices[faces.face_offsets[f] as usize..faces.face_offsets[f + 1] as usize]
+    };
+    let canonical = |f: usize| -> Vec<u32> {
+        let ring: Vec<(u32, u32)> = face(f).iter().map(|&c| (c, 0)).collect();
+        if ring.len() == 3 {
+            let mut k = [ring[0].0, ring[1].0, ring[2].0];
+            k.sort_unstable();
+            k.to_vec()
+        } else {
+            canonical_polygon(&ring)
+        }
+    };
+    let mut keys: Vec<(u64, u32)> = (0..n)
+        .into_par_iter()
+        .map(|f| {
+            let fc = face(f);
+            let h = if fc.len() == 3 {
+                let mut k = [fc[0], fc[1], fc[2]];
+                k.sort_unstable();
+                mix(u64::from(k[0]) << 32 | u64::from(k[1])) ^ mix(u64::from(k[2]) ^ 0x9e37_79b9)
+            } else {
+                canonical(f)
+                    .iter()
+                    .fold(0xcbf2_9ce4_8422_2325u64, |h, &c| mix(h ^ u64::from(c)))
+            };
+            (h, f as u32)
+        })
+        .collect();
+    keys.par_sort_unstable();
+    let mut dup = vec![false; n];
+    let mut i = 0;
+    while i < keys.len() {
+        let j = i + keys[i..].iter().take_while(|k| k.0 == keys[i].0).count();
+        if j - i == 1 {
+            i = j;
+            continue;
+        }
+        // Within a run of equal hashes (in face order), a face is a duplicate if an earlier
+        // face of the run has the same canonical cycle.
+        for a in i..j {
+            if dup[keys[a].1 as usize] {
+                continue;
+            }
+            let ca = canonical(keys[a].1 as usize);
+            for b in a + 1..j {
+                if !dup[keys[b].1 as usize] && canonical(keys[b].1 as usize) == ca {
+                    dup[keys[b].1 as usize] = true;
+                }
+            }
+        }
+        i = j;
+    }
+    dup
 }
 
 /// Removes zero-length edges (equal neighbours, cyclically) and zero-angle corners (`a b a`)
@@ -154,49 +251,6 @@ fn canonical_polygon(ring: &[(u32, u32)]) -> Vec<u32> {
         (0..n).map(|k| ring[(start + k) % n].0).collect()
     } else {
         (0..n).map(|k| ring[(start + n - k) % n].0).collect()
-    }
-}
-
-/// A set of sorted triangles (open addressing; the first insert of a key wins).
-struct TriangleSet {
-    slots: Vec<[u32; 3]>,
-    mask: usize,
-    len: usize,
-}
-
-impl TriangleSet {
-    fn with_capacity(n: usize) -> TriangleSet {
-        let size = (n.max(8) * 2).next_power_of_two();
-        TriangleSet {
-            slots: vec![[u32::MAX; 3]; size],
-            mask: size - 1,
-            len: 0,
-        }
-    }
-
-    /// Inserts `key`; false when it was already there.
-    fn insert(&mut self, key: [u32; 3]) -> bool {
-        if (self.len + 1) * 2 > self.slots.len() {
-            let old = std::mem::take(&mut self.slots);
-            *self = TriangleSet::with_capacity(old.len());
-            for k in old.into_iter().filter(|k| k[0] != u32::MAX) {
-                self.insert(k);
-            }
-        }
-        let h = mix(u64::from(key[0]) << 32 | u64::from(key[1])) ^ mix(u64::from(key[2]));
-        let mut slot = h as usize & self.mask;
-        loop {
-            let s = self.slots[slot];
-            if s == key {
-                return false;
-            }
-            if s[0] == u32::MAX {
-                self.slots[slot] = key;
-                self.len += 1;
-                return true;
-            }
-            slot = (slot + 1) & self.mask;
-        }
     }
 }
 

@@ -14,16 +14,28 @@ use tessd_mesh::Mesh;
 ///   average normal), times the longest incident edge: sharp corners win.
 /// - [`Weighting::Uniform`]: 1 for every referenced vertex.
 pub fn vertex_weights(mesh: &Mesh, weighting: Weighting) -> Vec<f32> {
+    // Squared lengths first (one square root per vertex at the end, not one per edge).
     let mut longest = vec![0f32; mesh.vertex_count()];
-    for face in mesh.faces() {
-        let n = face.len();
-        for i in 0..n {
-            let (a, b) = (face[i] as usize, face[(i + 1) % n] as usize);
-            let l = dist(mesh.positions[a], mesh.positions[b]);
-            longest[a] = longest[a].max(l);
-            longest[b] = longest[b].max(l);
+    let p = &mesh.positions;
+    let mut edge = |a: u32, b: u32| {
+        let (a, b) = (a as usize, b as usize);
+        let l = dist2(p[a], p[b]);
+        longest[a] = longest[a].max(l);
+        longest[b] = longest[b].max(l);
+    };
+    for w in mesh.face_offsets.windows(2) {
+        let face = &mesh.face_indices[w[0] as usize..w[1] as usize];
+        if let [a, b, c] = *face {
+            edge(a, b);
+            edge(b, c);
+            edge(c, a);
+        } else {
+            for (i, &a) in face.iter().enumerate() {
+                edge(a, face[(i + 1) % face.len()]);
+            }
         }
     }
+    longest.iter_mut().for_each(|l| *l = l.sqrt());
     match weighting {
         Weighting::LongestEdge => {
             // A vertex used only by faces of zero size still counts: give it a tiny weight so
@@ -86,8 +98,9 @@ pub(crate) fn face_normal(mesh: &Mesh, face: &[u32]) -> [f32; 3] {
     normalize(n)
 }
 
-fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
+    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
 fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
