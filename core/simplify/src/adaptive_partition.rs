@@ -334,7 +334,9 @@ impl<'a> Adaptive<'a> {
             if extra == 0 || leaves.iter().all(|n| n.eval.err <= 0.0) {
                 return Ok(partition);
             }
-            goal = leaves.len() + extra;
+            // Ask for half the shortfall at a time: a split can revive clusters whose faces had
+            // all collapsed, so the output may grow by more than the splits added.
+            goal = leaves.len() + extra.div_ceil(2);
         }
     }
 

@@ -209,8 +209,17 @@ impl<'a> Prepared<'a> {
             Method::Quality(length) => {
                 let tol = length.resolve(self.size);
                 if !(tol.is_finite() && tol > 0.0) {
+                    let why = match length {
+                        Length::Relative(f) => format!(
+                            "{}% of the object's largest dimension ({}) is {tol}{}",
+                            f * 100.0,
+                            self.size,
+                            if self.size == 0.0 { "; give an absolute distance" } else { "" }
+                        ),
+                        Length::Absolute(d) => format!("got {d}"),
+                    };
                     return Err(SimplifyError::InvalidOption(format!(
-                        "the tolerance must be positive; {length:?} gives {tol}"
+                        "the tolerance must be positive: {why}"
                     )));
                 }
                 report.tolerance = Some(tol);

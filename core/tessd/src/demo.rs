@@ -1,8 +1,9 @@
 //! `tessd demo`: the main job on bundled sample data, end to end through a real daemon.
 //!
 //! It starts `tessd serve` as a child process on a private socket, sends the bundled Spot mesh
-//! as arrays over the socket, asks for its statistics and a USD file, and writes both to the
-//! output folder. Later stages (LODs, subdivision, B-Rep) extend this list.
+//! as arrays over the socket, asks for its statistics, a USD file and an LOD chain (50 %, 20 %
+//! and 5 % of its vertices, as a USD variant set `LOD`), and writes them to the output folder.
+//! Later stages (subdivision, B-Rep) extend this list.
 
 use anyhow::{Context, Result, bail};
 use serde_json::json;
@@ -115,6 +116,27 @@ pub fn run(out: &Path) -> Result<()> {
         converted["vertices"],
         converted["faces"],
         usd_path.display()
+    );
+
+    let lods_path = out.join("spot_lods.usda");
+    let (lods, _) = client.call(
+        "lod",
+        json!({"output": lods_path, "levels": ["50%", "20%", "5%"], "name": "spot"}),
+        &arrays,
+        |_| {},
+    )?;
+    let counts: Vec<String> = lods["levels"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|l| l["output_vertices"].to_string())
+        .collect();
+    println!(
+        "  lod: LOD0 {} vertices, LOD1..{} {} vertices -> {}",
+        lods["input_vertices"],
+        counts.len(),
+        counts.join(" / "),
+        lods_path.display()
     );
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);

@@ -1,8 +1,11 @@
 //! The `tessd` command line: a thin layer that parses arguments and calls the crates.
 
+mod report;
+
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use report::{print_compare, print_lod, print_simplify, print_stats};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use tessd_ipc::job::{CancelToken, JobContext, Progress};
@@ -51,12 +54,137 @@ enum Command {
         /// Output mesh.
         output: PathBuf,
     },
+    /// Simplify a mesh by vertex clustering (regular grid, quality goal or complexity goal).
+    Simplify {
+        /// Input mesh (OBJ, PLY, STL, OFF).
+        input: PathBuf,
+        /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
+        output: PathBuf,
+        /// Partition: a regular grid, a quality goal (--max-error) or a complexity goal
+        /// (--target-vertices).
+        #[arg(long, value_parser = ["grid", "quality", "complexity"])]
+        method: String,
+        /// Grid: cells along each axis of the bounding box.
+        #[arg(long, conflicts_with = "cell_size")]
+        cells: Option<u64>,
+        /// Grid: side of the cubic cells, in model units.
+        #[arg(long, allow_negative_numbers = true)]
+        cell_size: Option<f64>,
+        /// Quality: largest vertex displacement, in model units or as a percentage of the
+        /// largest side of the bounding box ("0.5%").
+        #[arg(long, value_name = "X|X%", allow_hyphen_values = true)]
+        max_error: Option<String>,
+        /// Complexity: vertices to keep, a count or a percentage of the input's ("20%").
+        #[arg(long, value_name = "N|N%", allow_hyphen_values = true)]
+        target_vertices: Option<String>,
+        #[command(flatten)]
+        cluster: ClusterArgs,
+        /// Also write the partition's cells: wire boxes for .obj, a box mesh otherwise.
+        #[arg(long, value_name = "BOXES.obj")]
+        partition: Option<PathBuf>,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Build a chain of levels of detail and write them as one USD stage (and optionally one
+    /// mesh file per level).
+    Lod {
+        /// Input mesh (OBJ, PLY, STL, OFF): LOD0.
+        input: PathBuf,
+        /// Goals of LOD1, LOD2..., comma-separated: vertex counts or percentages for
+        /// complexity ("50%,20%,5%"), tolerances for quality ("0.5%,2%"), cells per axis for
+        /// grid.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            required = true,
+            allow_hyphen_values = true
+        )]
+        levels: Vec<String>,
+        /// The USD stage to write (.usda).
+        #[arg(long, value_name = "LODS.usda")]
+        out: Option<PathBuf>,
+        /// How the levels' goals are read.
+        #[arg(long, default_value = "complexity", value_parser = ["grid", "quality", "complexity"])]
+        method: String,
+        /// Layout of the stage: a variant set `LOD` (what DCC tools read today) or the native
+        /// UsdLod schema of usd-core 26.8+.
+        #[arg(long, default_value = "variants", value_parser = ["variants", "usdlod"])]
+        lod_schema: String,
+        /// Also write one mesh file per level (<stem>_LOD<i>.<format>) into this folder.
+        #[arg(long, value_name = "DIR")]
+        per_level_dir: Option<PathBuf>,
+        /// Format of the per-level files.
+        #[arg(long, default_value = "obj", value_parser = ["obj", "ply", "stl", "off", "usda"])]
+        per_level_format: String,
+        #[command(flatten)]
+        cluster: ClusterArgs,
+        /// The stage's up axis.
+        #[arg(long, value_parser = ["Y", "Z"])]
+        up_axis: Option<String>,
+        /// The stage's metres per model unit (FreeCAD's millimetres: 0.001).
+        #[arg(long)]
+        meters_per_unit: Option<f64>,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Measure the surface distance between two meshes: both one-sided distances, the
+    /// symmetric Hausdorff distance and RMS (Metro-style sampling).
+    Compare {
+        /// First mesh.
+        a: PathBuf,
+        /// Second mesh.
+        b: PathBuf,
+        /// Face samples per direction (default: 10 per triangle of the larger mesh, 1 M to 20 M).
+        #[arg(long)]
+        samples: Option<u64>,
+        /// Seed of the sample placement.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Also sample the edges.
+        #[arg(long)]
+        edges: bool,
+        /// Only measure A → B.
+        #[arg(long)]
+        one_sided: bool,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Run the main job on built-in sample data, through a real daemon, into ./tessd-demo/.
     Demo {
         /// Output folder.
         #[arg(long, default_value = "tessd-demo")]
         out: PathBuf,
     },
+}
+
+/// Settings `simplify` and `lod` share.
+#[derive(clap::Args)]
+struct ClusterArgs {
+    /// Where a cell's vertices merge to.
+    #[arg(long, value_parser = ["barycenter", "heaviest", "quadric"])]
+    representative: Option<String>,
+    /// Vertex weights.
+    #[arg(long, value_parser = ["longest_edge", "curvature", "uniform"])]
+    weighting: Option<String>,
+    /// Fan-triangulate polygons first.
+    #[arg(long)]
+    triangulate: bool,
+    /// Never merge boundary or feature-edge vertices with other vertices.
+    #[arg(long)]
+    preserve_boundaries: bool,
+}
+
+impl ClusterArgs {
+    /// Adds these settings to a request's parameters.
+    fn add_to(&self, params: &mut serde_json::Value) {
+        params["representative"] = serde_json::json!(self.representative);
+        params["weighting"] = serde_json::json!(self.weighting);
+        params["triangulate"] = serde_json::json!(self.triangulate);
+        params["preserve_boundaries"] = serde_json::json!(self.preserve_boundaries);
+    }
 }
 
 #[derive(Subcommand)]
@@ -116,6 +244,98 @@ fn run(cli: Cli) -> Result<()> {
                 response.result["vertices"],
                 response.result["faces"]
             );
+            Ok(())
+        }
+        Command::Simplify {
+            input,
+            output,
+            method,
+            cells,
+            cell_size,
+            max_error,
+            target_vertices,
+            cluster,
+            partition,
+            json,
+        } => {
+            let mut params = serde_json::json!({
+                "input": input,
+                "output": output,
+                "method": method,
+                "cells": cells,
+                "cell_size": cell_size,
+                "max_error": max_error,
+                "target_vertices": target_vertices,
+                "partition_output": partition,
+            });
+            cluster.add_to(&mut params);
+            let response = run_local("simplify", params)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&response.result)?);
+            } else {
+                print_simplify(&output, &response.result);
+            }
+            Ok(())
+        }
+        Command::Lod {
+            input,
+            levels,
+            out,
+            method,
+            lod_schema,
+            per_level_dir,
+            per_level_format,
+            cluster,
+            up_axis,
+            meters_per_unit,
+            json,
+        } => {
+            if out.is_none() && per_level_dir.is_none() {
+                bail!("give --out LODS.usda and/or --per-level-dir DIR");
+            }
+            let mut params = serde_json::json!({
+                "input": input,
+                "levels": levels,
+                "output": out,
+                "method": method,
+                "lod_schema": lod_schema,
+                "per_level": per_level_dir,
+                "per_level_format": per_level_format,
+                "up_axis": up_axis,
+                "meters_per_unit": meters_per_unit,
+            });
+            cluster.add_to(&mut params);
+            let response = run_local("lod", params)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&response.result)?);
+            } else {
+                print_lod(&response);
+            }
+            Ok(())
+        }
+        Command::Compare {
+            a,
+            b,
+            samples,
+            seed,
+            edges,
+            one_sided,
+            json,
+        } => {
+            let params = serde_json::json!({
+                "a": a,
+                "b": b,
+                "samples": samples,
+                "seed": seed,
+                "edges": edges,
+                "direction": if one_sided { "a_to_b" } else { "both" },
+            });
+            let response = run_local("compare", params)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&response.result)?);
+            } else {
+                print_compare(&response.result);
+            }
             Ok(())
         }
         Command::Demo { out } => tessd::demo::run(&out),
@@ -223,24 +443,4 @@ fn job_run(file: &Path) -> Result<()> {
         bail!("{failed} job(s) failed");
     }
     Ok(())
-}
-
-fn print_stats(file: &Path, s: &serde_json::Value) {
-    println!("{}", file.display());
-    for key in [
-        "vertices",
-        "stored_vertices",
-        "unreferenced_vertices",
-        "faces",
-        "triangles",
-        "edges",
-        "boundary_edges",
-        "boundary_loops",
-        "non_manifold_edges",
-        "components",
-    ] {
-        println!("  {key:22} {}", s[key]);
-    }
-    println!("  {:22} {}", "face sizes", s["face_sizes"]);
-    println!("  {:22} {}", "bounds", s["bounds"]);
 }

@@ -1,72 +1,12 @@
 //! End-to-end tests of the `tessd` binary: CLI verbs, job files versus the socket, the
 //! daemon's lifecycle (live-socket refusal, stale sockets, signals, permissions).
 
+mod support;
+
+use support::{Daemon, run_ok, shared_mesh, tessd};
+
 use serde_json::{Value, json};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output};
-use std::time::{Duration, Instant};
 use tessd_ipc::client::Client;
-
-fn tessd() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_tessd"))
-}
-
-fn shared_mesh(name: &str) -> PathBuf {
-    let root = std::env::var_os("TESSD_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    root.join("mesh").join(name)
-}
-
-fn run_ok(cmd: &mut Command) -> Output {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-struct Daemon(Child);
-
-impl Daemon {
-    fn start(socket: &Path) -> Daemon {
-        let child = tessd()
-            .arg("serve")
-            .arg("--socket")
-            .arg(socket)
-            .spawn()
-            .unwrap();
-        let t = Instant::now();
-        while tessd_ipc::socket::connect(socket).is_err() {
-            assert!(
-                t.elapsed() < Duration::from_secs(10),
-                "daemon did not start"
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        Daemon(child)
-    }
-
-    fn wait_exit(&mut self) -> std::process::ExitStatus {
-        let t = Instant::now();
-        loop {
-            if let Some(s) = self.0.try_wait().unwrap() {
-                return s;
-            }
-            assert!(t.elapsed() < Duration::from_secs(10), "daemon did not exit");
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-}
-
-impl Drop for Daemon {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 #[test]
 fn stats_json_matches_manifest_counts() {

@@ -9,7 +9,10 @@
 //!
 //! - one `Mesh` prim ([`write_mesh_stage`]), or several with their transforms
 //!   ([`write_stage`], e.g. several Blender objects), or
-//! - a variant set `LOD` with one variant per level of detail ([`write_lod_variants`]).
+//! - a variant set `LOD` with one variant per level of detail ([`write_lod_variants`]), or
+//! - the levels of detail as the ordered children of a prim with the native `UsdLod` schema's
+//!   `LODRootAPI` (usd-core 26.8+), with a `LODScreenSizeHeuristic` beside it and only the
+//!   default level visible ([`write_lod_schema`]).
 //!
 //! A `Mesh` prim gets `points`, `faceVertexCounts`, `faceVertexIndices`, its `extent`,
 //! `orientation = "rightHanded"`, `subdivisionScheme` (`"none"` unless the mesh is a
@@ -52,8 +55,10 @@ mod writer;
 pub use error::UsdError;
 pub use file::write_usda_file;
 pub use names::sanitize_identifier;
-pub use options::{MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme, UpAxis};
-pub use writer::{write_lod_variants, write_mesh_stage, write_stage};
+pub use options::{
+    LodSchemaOptions, MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme, UpAxis,
+};
+pub use writer::{write_lod_schema, write_lod_variants, write_mesh_stage, write_stage};
 
 #[cfg(test)]
 mod tests;

@@ -229,3 +229,40 @@ impl<'a> MeshPrim<'a> {
         self
     }
 }
+
+/// Options of a stage written with the native `UsdLod` schema (see [`crate::write_lod_schema`]).
+///
+/// ```
+/// use tessd_usd::LodSchemaOptions;
+/// let lod = LodSchemaOptions::default().with_screen_size_thresholds(vec![0.25, 0.1]);
+/// assert_eq!(lod.default_index, 0);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct LodSchemaOptions {
+    /// `lod:default:index`: the level a renderer uses when it understands no heuristic, and the
+    /// only level left visible (`visibility = "inherited"`; the others are `"invisible"`) so
+    /// that renderers which do not know `UsdLod` show just that one. Default `0`.
+    pub default_index: usize,
+    /// `thresholds` of the `LODScreenSizeHeuristic`: one fewer than the levels, descending
+    /// fractions of the viewport (level `k + 1` is used once the root covers at most
+    /// `thresholds[k]`). `None` (default) derives them from the vertex counts:
+    /// `thresholds[k] = 0.5 × vertices(level k + 1) / vertices(level 0)`, so that the vertices
+    /// per covered pixel never exceed what level 0 has at half the viewport (for levels of
+    /// 50 %, 20 % and 5 % this is `[0.25, 0.1, 0.025]`).
+    pub screen_size_thresholds: Option<Vec<f32>>,
+}
+
+impl LodSchemaOptions {
+    /// Sets [`LodSchemaOptions::default_index`].
+    pub fn with_default_index(mut self, index: usize) -> Self {
+        self.default_index = index;
+        self
+    }
+
+    /// Sets [`LodSchemaOptions::screen_size_thresholds`].
+    pub fn with_screen_size_thresholds(mut self, thresholds: Vec<f32>) -> Self {
+        self.screen_size_thresholds = Some(thresholds);
+        self
+    }
+}

@@ -449,3 +449,98 @@ fn file_round_trip() {
     assert_eq!(e.code(), "invalid_mesh");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
+
+#[test]
+fn lod_schema_structure() {
+    let mut tri = Mesh {
+        positions: vec![[0.0; 3], [2.0, 0.0, 0.0], [0.0, 1.0, -1.0]],
+        ..Mesh::default()
+    };
+    tri.push_face(&[0, 1, 2]);
+    let q = quad();
+    let prim = MeshPrimOptions::default().with_name("Body");
+    let mut v = Vec::new();
+    write_lod_schema(
+        &mut v,
+        &StageOptions::default(),
+        &[&q, &tri],
+        &prim,
+        &LodSchemaOptions::default(),
+    )
+    .unwrap();
+    let s = String::from_utf8(v).unwrap();
+    let head = r#"def Xform "Root" (
+    kind = "component"
+)
+{
+    def Xform "Body" (
+        prepend apiSchemas = ["LODRootAPI"]
+    )
+    {
+        int lod:default:index = 0
+        rel lod:heuristics = </Root/Body_lodHeuristic>
+
+        def Mesh "LOD0"
+        {
+"#;
+    assert!(s.contains(head), "{s}");
+    assert!(s.contains("\n\n        def Mesh \"LOD1\"\n"), "{s}");
+    let tail = r#"    }
+
+    def LODScreenSizeHeuristic "Body_lodHeuristic"
+    {
+        float3[] extent = [(0, 0, -1), (2, 1, 0)]
+        uniform token lod:domain = "imaging"
+        uniform float[] thresholds = [0.375]
+    }
+}
+"#;
+    assert!(s.ends_with(tail), "{s}");
+    // Only the default level is visible, and the level order is the child order.
+    let lod0 = s.find("def Mesh \"LOD0\"").unwrap();
+    let lod1 = s.find("def Mesh \"LOD1\"").unwrap();
+    assert!(lod0 < lod1);
+    assert!(s[lod0..lod1].contains("token visibility = \"inherited\""));
+    assert!(s[lod1..].contains("token visibility = \"invisible\""));
+    assert_eq!(s.matches("token visibility").count(), 2);
+
+    // The second level as the default, with explicit thresholds.
+    let lod = LodSchemaOptions::default()
+        .with_default_index(1)
+        .with_screen_size_thresholds(vec![0.2]);
+    let mut v = Vec::new();
+    write_lod_schema(&mut v, &StageOptions::default(), &[&q, &tri], &prim, &lod).unwrap();
+    let s = String::from_utf8(v).unwrap();
+    assert!(s.contains("int lod:default:index = 1\n"));
+    assert!(s.contains("uniform float[] thresholds = [0.2]\n"));
+    let lod1 = s.find("def Mesh \"LOD1\"").unwrap();
+    assert!(s[lod1..].contains("token visibility = \"inherited\""));
+
+    // Checked before anything is written.
+    let bad = [
+        LodSchemaOptions::default().with_default_index(2),
+        LodSchemaOptions::default().with_screen_size_thresholds(vec![]),
+        LodSchemaOptions::default().with_screen_size_thresholds(vec![f32::NAN]),
+        LodSchemaOptions::default().with_screen_size_thresholds(vec![0.0]),
+    ];
+    for lod in bad {
+        let mut v = Vec::new();
+        let e = write_lod_schema(&mut v, &StageOptions::default(), &[&q, &tri], &prim, &lod);
+        assert_eq!(e.unwrap_err().code(), "invalid_request", "{lod:?}");
+        assert!(v.is_empty());
+    }
+    let mut v = Vec::new();
+    let three = [&q, &tri, &tri];
+    let lod = LodSchemaOptions::default().with_screen_size_thresholds(vec![0.1, 0.2]);
+    let e = write_lod_schema(&mut v, &StageOptions::default(), &three, &prim, &lod);
+    assert!(e.unwrap_err().to_string().contains("must not increase"));
+    let e = write_lod_schema(
+        &mut v,
+        &StageOptions::default(),
+        &[],
+        &prim,
+        &LodSchemaOptions::default(),
+    );
+    assert_eq!(e.unwrap_err().code(), "invalid_request");
+    assert!(v.is_empty());
+}

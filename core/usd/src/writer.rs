@@ -7,7 +7,9 @@ use tessd_mesh::Mesh;
 
 use crate::UsdError;
 use crate::names::UniqueNames;
-use crate::options::{MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme};
+use crate::options::{
+    LodSchemaOptions, MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme,
+};
 
 /// Writes a stage holding one mesh: the root `Xform` (the `defaultPrim`) with one `Mesh` child.
 ///
@@ -86,12 +88,75 @@ pub fn write_lod_variants(
     )
 }
 
+/// Writes a stage with the native `UsdLod` schema (usd-core 26.8+): under the root `Xform`
+/// (the `defaultPrim`, kind `component`), an `Xform` named by `prim.name` with `LODRootAPI`
+/// applied whose children, in order, are the levels as `Mesh` prims `LOD0` (= `levels[0]`,
+/// the finest) to `LOD{n-1}`, and beside it (outside the LOD root, whose children are all LOD
+/// items, but inside the `defaultPrim`, so that the relationship survives a reference to the
+/// asset) the `LODScreenSizeHeuristic` that `lod:heuristics` targets:
+///
+/// ```text
+/// def Xform "Root" (
+///     kind = "component"
+/// )
+/// {
+///     def Xform "mesh" (
+///         prepend apiSchemas = ["LODRootAPI"]
+///     )
+///     {
+///         int lod:default:index = 0
+///         rel lod:heuristics = </Root/mesh_lodHeuristic>
+///
+///         def Mesh "LOD0" { ... token visibility = "inherited" }
+///         def Mesh "LOD1" { ... token visibility = "invisible" }
+///     }
+///
+///     def LODScreenSizeHeuristic "mesh_lodHeuristic"
+///     {
+///         float3[] extent = [...]
+///         uniform token lod:domain = "imaging"
+///         uniform float[] thresholds = [0.25]
+///     }
+/// }
+/// ```
+///
+/// Only the default level is visible, as the schema recommends for renderers that do not
+/// understand it; the heuristic's `extent` is the box of all levels, in the LOD root's
+/// coordinates. See [`LodSchemaOptions`] for the default index and the thresholds.
+///
+/// # Errors
+/// As [`write_mesh_stage`]; [`UsdError::InvalidOption`] when `levels` is empty, the default
+/// index is out of range, or the thresholds are not `levels.len() - 1` finite, positive,
+/// non-increasing numbers.
+pub fn write_lod_schema(
+    w: &mut dyn Write,
+    stage: &StageOptions,
+    levels: &[&Mesh],
+    prim: &MeshPrimOptions,
+    lod: &LodSchemaOptions,
+) -> Result<(), UsdError> {
+    write_root(
+        w,
+        stage,
+        Body::LodSchema {
+            levels,
+            options: prim,
+            lod,
+        },
+    )
+}
+
 /// What goes under the root prim.
 enum Body<'a> {
     Prims(&'a [MeshPrim<'a>]),
     Lod {
         levels: &'a [&'a Mesh],
         options: &'a MeshPrimOptions,
+    },
+    LodSchema {
+        levels: &'a [&'a Mesh],
+        options: &'a MeshPrimOptions,
+        lod: &'a LodSchemaOptions,
     },
 }
 
@@ -118,7 +183,10 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                 }
             }
         }
-        Body::Lod { levels, options } => {
+        Body::Lod { levels, options }
+        | Body::LodSchema {
+            levels, options, ..
+        } => {
             if levels.is_empty() {
                 return Err(UsdError::InvalidOption("no LOD levels to write".into()));
             }
@@ -127,6 +195,10 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
             }
         }
     }
+    let thresholds = match &body {
+        Body::LodSchema { levels, lod, .. } => Some(lod_thresholds(levels, lod)?),
+        _ => None,
+    };
 
     let mut out = Out::new(w);
     let root = crate::sanitize_identifier(&stage.default_prim);
@@ -162,7 +234,11 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                     out.push("\n");
                 }
                 let name = names.claim(&p.options.name, "mesh");
-                write_mesh(&mut out, 1, p.mesh, &p.options, &name, p.transform.as_ref())?;
+                let extras = PrimExtras {
+                    transform: p.transform.as_ref(),
+                    visibility: None,
+                };
+                write_mesh(&mut out, 1, p.mesh, &p.options, &name, &extras)?;
             }
         }
         Body::Lod { levels, options } => {
@@ -170,9 +246,56 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
             out.push_fmt(format_args!("    variantSet \"{LOD_SET}\" = {{\n"));
             for (i, m) in levels.iter().enumerate() {
                 out.push_fmt(format_args!("        \"LOD{i}\" {{\n"));
-                write_mesh(&mut out, 3, m, options, &name, None)?;
+                write_mesh(&mut out, 3, m, options, &name, &PrimExtras::default())?;
                 out.push("        }\n");
             }
+            out.push("    }\n");
+        }
+        Body::LodSchema {
+            levels,
+            options,
+            lod,
+        } => {
+            let mut names = UniqueNames::default();
+            let lod_root = names.claim(&options.name, "mesh");
+            let heuristic = names.claim(&format!("{lod_root}_lodHeuristic"), "lodHeuristic");
+            out.push_fmt(format_args!(
+                "    def Xform \"{lod_root}\" (\n        prepend apiSchemas = [\"LODRootAPI\"]\n    )\n    \
+                 {{\n        int lod:default:index = {}\n        \
+                 rel lod:heuristics = </{root}/{heuristic}>\n",
+                lod.default_index
+            ));
+            for (i, m) in levels.iter().enumerate() {
+                out.push("\n");
+                let extras = PrimExtras {
+                    transform: None,
+                    visibility: Some(if i == lod.default_index {
+                        "inherited"
+                    } else {
+                        "invisible"
+                    }),
+                };
+                write_mesh(&mut out, 2, m, options, &format!("LOD{i}"), &extras)?;
+            }
+            out.push_fmt(format_args!(
+                "    }}\n\n    def LODScreenSizeHeuristic \"{heuristic}\"\n    {{\n"
+            ));
+            let all = levels.iter().filter_map(|m| extent(&m.positions));
+            if let Some((lo, hi)) = all.reduce(|(a, b), (c, d)| {
+                (
+                    std::array::from_fn(|k| a[k].min(c[k])),
+                    std::array::from_fn(|k| b[k].max(d[k])),
+                )
+            }) {
+                out.push("        float3[] extent = [");
+                out.push_tuple(&lo);
+                out.push(", ");
+                out.push_tuple(&hi);
+                out.push("]\n");
+            }
+            out.push("        uniform token lod:domain = \"imaging\"\n");
+            out.push("        uniform float[] thresholds = ");
+            out.push_float_array(thresholds.unwrap_or_default().into_iter())?;
             out.push("    }\n");
         }
     }
@@ -250,6 +373,60 @@ fn check_prim(mesh: &Mesh, options: &MeshPrimOptions, label: &str) -> Result<(),
     Ok(())
 }
 
+/// What a mesh prim may carry besides the mesh and its options.
+#[derive(Default)]
+struct PrimExtras<'a> {
+    /// `xformOp:transform`.
+    transform: Option<&'a [[f64; 4]; 4]>,
+    /// The `visibility` token (`"inherited"` / `"invisible"`), when authored.
+    visibility: Option<&'static str>,
+}
+
+/// The screen-size thresholds of a `UsdLod` stage: checked when given, else derived from the
+/// levels' vertex counts (see [`LodSchemaOptions::screen_size_thresholds`]).
+fn lod_thresholds(levels: &[&Mesh], lod: &LodSchemaOptions) -> Result<Vec<f32>, UsdError> {
+    let n = levels.len();
+    if lod.default_index >= n {
+        return Err(UsdError::InvalidOption(format!(
+            "the default LOD index {} is out of range for {n} levels",
+            lod.default_index
+        )));
+    }
+    match &lod.screen_size_thresholds {
+        Some(t) => {
+            if t.len() != n - 1 {
+                return Err(UsdError::InvalidOption(format!(
+                    "{} screen-size thresholds given for {n} LOD levels; {} expected",
+                    t.len(),
+                    n - 1
+                )));
+            }
+            if let Some(bad) = t.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+                return Err(UsdError::InvalidOption(format!(
+                    "screen-size thresholds must be finite and > 0, got {bad}"
+                )));
+            }
+            if t.windows(2).any(|w| w[1] > w[0]) {
+                return Err(UsdError::InvalidOption(format!(
+                    "screen-size thresholds must not increase, got {t:?}"
+                )));
+            }
+            Ok(t.clone())
+        }
+        None => {
+            let v0 = levels[0].positions.len().max(1) as f64;
+            let mut last = f32::INFINITY;
+            Ok(levels[1..]
+                .iter()
+                .map(|m| {
+                    last = last.min((0.5 * m.positions.len() as f64 / v0) as f32);
+                    last
+                })
+                .collect())
+        }
+    }
+}
+
 /// Writes `def Mesh "name" { ... }` at indentation level `ind`.
 fn write_mesh(
     out: &mut Out<'_>,
@@ -257,7 +434,7 @@ fn write_mesh(
     mesh: &Mesh,
     options: &MeshPrimOptions,
     name: &str,
-    transform: Option<&[[f64; 4]; 4]>,
+    extras: &PrimExtras<'_>,
 ) -> Result<(), UsdError> {
     let pad = "    ".repeat(ind);
     let pad1 = "    ".repeat(ind + 1);
@@ -322,7 +499,10 @@ fn write_mesh(
             "{pad1}uniform token subsetFamily:materialBind:familyType = \"partition\"\n"
         ));
     }
-    if let Some(m) = transform {
+    if let Some(v) = extras.visibility {
+        out.push_fmt(format_args!("{pad1}token visibility = \"{v}\"\n"));
+    }
+    if let Some(m) = extras.transform {
         out.push_fmt(format_args!("{pad1}matrix4d xformOp:transform = ( "));
         for (r, row) in m.iter().enumerate() {
             if r > 0 {

@@ -219,45 +219,52 @@ fn face_varying<const N: usize>(
 
 /// The mesh as protocol arrays (1-D `face_indices` with `face_sizes`), moving its buffers.
 pub fn mesh_to_arrays(mesh: Mesh) -> Vec<OwnedArray> {
+    mesh_to_prefixed_arrays(mesh, "")
+}
+
+/// [`mesh_to_arrays`] with every array name prefixed (`"lod1."` gives `lod1.positions`...),
+/// for results that hold several meshes.
+pub fn mesh_to_prefixed_arrays(mesh: Mesh, prefix: &str) -> Vec<OwnedArray> {
+    let named = |name: &str| format!("{prefix}{name}");
     let sizes: Vec<u32> = mesh.face_offsets.windows(2).map(|w| w[1] - w[0]).collect();
     let mut out = vec![
-        OwnedArray::rows("positions", mesh.positions),
+        OwnedArray::rows(&named("positions"), mesh.positions),
         OwnedArray::new(
-            "face_indices",
+            &named("face_indices"),
             vec![mesh.face_indices.len() as u64],
             mesh.face_indices,
         ),
-        OwnedArray::new("face_sizes", vec![sizes.len() as u64], sizes),
+        OwnedArray::new(&named("face_sizes"), vec![sizes.len() as u64], sizes),
     ];
     if let Some(n) = mesh.normals {
         out.push(OwnedArray::new(
-            "normal_indices",
+            &named("normal_indices"),
             vec![n.indices.len() as u64],
             n.indices,
         ));
-        out.push(OwnedArray::rows("normals", n.values));
+        out.push(OwnedArray::rows(&named("normals"), n.values));
     }
     if let Some(t) = mesh.uvs {
         out.push(OwnedArray::new(
-            "uv_indices",
+            &named("uv_indices"),
             vec![t.indices.len() as u64],
             t.indices,
         ));
-        out.push(OwnedArray::rows("uvs", t.values));
+        out.push(OwnedArray::rows(&named("uvs"), t.values));
     }
     if !mesh.creases.is_empty() {
         let edges: Vec<[u32; 2]> = mesh.creases.iter().map(|c| [c.a, c.b]).collect();
         let values: Vec<f32> = mesh.creases.iter().map(|c| c.value).collect();
-        out.push(OwnedArray::rows("crease_edges", edges));
+        out.push(OwnedArray::rows(&named("crease_edges"), edges));
         out.push(OwnedArray::new(
-            "crease_values",
+            &named("crease_values"),
             vec![values.len() as u64],
             values,
         ));
     }
     if !mesh.face_groups.is_empty() {
         out.push(OwnedArray::new(
-            "face_groups",
+            &named("face_groups"),
             vec![mesh.face_groups.len() as u64],
             mesh.face_groups,
         ));

@@ -1,10 +1,14 @@
 //! The daemon's operations: thin adapters (parse, validate, call the library, encode) filled
 //! into the [`Registry`] that the server and job files share.
 
+pub mod common;
+pub mod compare;
 pub mod debug_sleep;
+pub mod lod;
 pub mod mesh_arrays;
 pub mod mesh_convert;
 pub mod mesh_stats;
+pub mod simplify;
 
 use tessd_ipc::registry::Registry;
 
@@ -13,6 +17,9 @@ pub fn registry() -> Registry {
     let mut r = Registry::new();
     r.register("mesh.stats", mesh_stats::run)
         .register("mesh.convert", mesh_convert::run)
+        .register("simplify", simplify::run)
+        .register("lod", lod::run)
+        .register("compare", compare::run)
         .register("debug.sleep", debug_sleep::run);
     for cap in [
         "mesh.read.obj",
@@ -23,6 +30,9 @@ pub fn registry() -> Registry {
         "mesh.write.ply",
         "mesh.write.stl",
         "mesh.write.off",
+        "usd.write.usda",
+        "usd.lod.variants",
+        "usd.lod.usdlod",
         "progress",
         "cancel",
     ] {

@@ -1,0 +1,419 @@
+#!/usr/bin/env python3
+"""Report of the simplification benchmark.
+
+    report.py [--jsonl bench/results/simplify_raw.jsonl]
+              [--manifest bench/results/simplify_inputs.json] [--out bench/results]
+              [--wall-s SECONDS]
+
+Reads the JSON lines written by `bench-simplify run` and `meshlab.py run`, writes
+`simplify.md` (tables per mesh and the goals table with their ratios), `simplify_summary.json`
+(the goal ratios, machine-readable) and two plots: `simplify_error_vs_size.png` (RMS error vs
+output vertex count) and `simplify_time_vs_input.png` (time vs input triangles at the scaling
+fraction). Run with /work/main/.venv-bench/bin/python (needs matplotlib).
+"""
+
+import argparse
+import datetime
+import json
+import math
+from collections import defaultdict
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+METHODS = [
+    "tessd-grid-bary",
+    "tessd-grid-quadric",
+    "tessd-quality-bary",
+    "tessd-quality-quadric",
+    "tessd-complexity-bary",
+    "tessd-complexity-quadric",
+    "meshopt-sloppy",
+    "meshopt-simplify",
+    "meshlab-clustering",
+]
+STYLE = {
+    "tessd-grid-bary": ("tab:blue", "o", "-"),
+    "tessd-grid-quadric": ("tab:blue", "s", "--"),
+    "tessd-quality-bary": ("tab:green", "o", "-"),
+    "tessd-quality-quadric": ("tab:green", "s", "--"),
+    "tessd-complexity-bary": ("tab:red", "o", "-"),
+    "tessd-complexity-quadric": ("tab:red", "s", "--"),
+    "meshopt-sloppy": ("tab:gray", "^", "-"),
+    "meshopt-simplify": ("black", "v", "-"),
+    "meshlab-clustering": ("tab:purple", "D", ":"),
+}
+# Inputs at least this large count in the throughput goals (below, runs take well under a
+# millisecond and timer/process noise dominates).
+THROUGHPUT_MIN_TRIANGLES = 50_000
+
+
+def gmean(xs):
+    xs = [x for x in xs if x and x > 0 and math.isfinite(x)]
+    return math.exp(sum(map(math.log, xs)) / len(xs)) if xs else float("nan")
+
+
+def fmt(x, digits=3):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "–"
+    if x == 0:
+        return "0"
+    if abs(x) >= 1000 or abs(x) < 0.01:
+        return f"{x:.{digits - 1}e}"
+    return f"{x:.{digits}g}"
+
+
+def pct(f):
+    return f"{f * 100:g} %"
+
+
+def ok(flag):
+    return "yes" if flag else "**no**"
+
+
+def load(jsonl):
+    recs = [json.loads(line) for line in open(jsonl) if line.strip()]
+    # The last line of a (mesh, method, fraction) wins (re-runs append).
+    by = {}
+    for r in recs:
+        by[(r["mesh"], r["method"], r["fraction"])] = r
+    return by
+
+
+def good(r):
+    return r is not None and "skipped" not in r and "error" not in r and "time_s" in r
+
+
+def mesh_table(lines, mesh, recs, fractions):
+    lines.append(
+        "| method | target | output vertices (dev.) | time ms (runs) | M tri/s | extra peak / input | "
+        "process peak MB | Hausdorff (% diag) | RMS (% diag) | out→in max | parameter |"
+    )
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    for f in fractions:
+        for m in METHODS:
+            r = recs.get((mesh, m, f))
+            if r is None:
+                continue
+            tgt = f"{pct(f)} = {r['target_vertices']}"
+            if "skipped" in r:
+                lines.append(f"| {m} | {tgt} | skipped: {r['skipped']} |||||||||")
+                continue
+            if "error" in r:
+                lines.append(f"| {m} | {tgt} | failed: {r['error'][:200]} |||||||||")
+                continue
+            dev = f"{r['deviation'] * 100:+.1f} %"
+            ov = f"{r['out_vertices']} ({dev}{'' if r['hit'] else ', **miss**'})"
+            t = f"{r['time_s'] * 1e3:.3g} ({r['repeats']})"
+            diag = r.get("bbox_diagonal") or 0
+            if "hausdorff" in r:
+                h = f"{fmt(r['hausdorff'])} ({r['hausdorff_rel'] * 100:.3g})"
+                rms = f"{fmt(r['rms'])} ({r['rms_rel'] * 100:.3g})"
+                o2i = fmt(r["out_to_in_max"])
+            else:
+                h = rms = o2i = f"– ({r.get('compare_error', 'not measured')[:60]})"
+            param = f"{r['param_name']} = {fmt(r['param'], 4)}"
+            if "cells_per_axis" in r:
+                param += f" (≈ {r['cells_per_axis']:.0f} cells/axis)"
+            _ = diag
+            lines.append(
+                f"| {m} | {tgt} | {ov} | {t} | {r['mtris_per_s']:.3g} | {r['mem_ratio']:.2f} | "
+                f"{r['process_hwm_kib'] / 1024:.0f} | {h} | {rms} | {o2i} | {param} |"
+            )
+    lines.append("")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--jsonl", default="bench/results/simplify_raw.jsonl")
+    ap.add_argument("--manifest", default="bench/results/simplify_inputs.json")
+    ap.add_argument("--out", default="bench/results")
+    ap.add_argument("--wall-s", type=float, default=None)
+    args = ap.parse_args()
+    out = Path(args.out)
+    recs = load(args.jsonl)
+    manifest = json.loads(Path(args.manifest).read_text())
+    meta = manifest["meta"]
+    meshes = [e for e in manifest["meshes"] if any(k[0] == e["mesh"] for k in recs)]
+    info = {e["mesh"]: e for e in meshes}
+    fractions_all = sorted({k[2] for k in recs}, reverse=True)
+    big = [e["mesh"] for e in meshes if e["input_triangles"] >= THROUGHPUT_MIN_TRIANGLES]
+    generated = sorted((e for e in meshes if e["generated"]), key=lambda e: e["input_triangles"])
+    scaling_fraction = 0.1 if 0.1 in fractions_all else fractions_all[0]
+
+    def get(mesh, m, f):
+        r = recs.get((mesh, m, f))
+        return r if good(r) else None
+
+    summary = {"machine": {"nproc": meta.get("nproc"), "cpu_model": meta.get("cpu_model")},
+               "date_utc": datetime.datetime.fromtimestamp(meta.get("unix_time", 0), datetime.UTC).strftime(
+                   "%Y-%m-%d %H:%M"),
+               "wall_s": args.wall_s, "goals": {}}
+
+    L = []
+    L.append("# Simplification benchmark: tessd vs meshoptimizer vs MeshLab")
+    L.append("")
+    L.append(
+        f"Machine: {meta.get('nproc')} cores, {meta.get('cpu_model')}; shared with other jobs during the run "
+        f"(noisy: timings are medians and the ratios below can move by ±30 %). Run {summary['date_utc']} UTC"
+        + (f", whole run {args.wall_s / 60:.1f} min" if args.wall_s else "")
+        + ". Command: `bash bench/run_simplify.sh`."
+    )
+    L.append("")
+    L.append("## Method")
+    L.append("")
+    L.append(
+        "* **Inputs**: every mesh of the shared data folder (`$TESSD_SHARED_DATA/mesh`) and generated bumpy tori "
+        "(closed, genus 1, 3 bump frequencies plus a 10 %-of-an-edge radial jitter, row-ordered vertices) of "
+        + ", ".join(f"{e['input_triangles'] / 1e6:g} M" for e in generated)
+        + " triangles; the tori only used for size scaling run at the scaling fraction "
+        f"({pct(scaling_fraction)}) only."
+    )
+    L.append(
+        "* **Targets**: 50 %, 10 %, 1 % of the input's referenced vertices. tessd complexity takes the count "
+        "directly; tessd grid (cubic cells, `GridSize::CellSize`), tessd quality (absolute tolerance), meshoptimizer "
+        "(`target_index_count`, `target_error = FLT_MAX`, no options) and MeshLab (`meshing_decimation_clustering`, "
+        "absolute `threshold`) get the parameter found by an untimed log-log secant/bisection search, then the "
+        "timed run uses it. Output vertices = distinct vertices referenced by the output faces. "
+        "A target counts as met within 1 % (exact below 50 vertices); misses are flagged."
+    )
+    L.append(
+        f"* **Time**: each method in its own child process, the call only (mesh loaded, meshoptimizer's fan-"
+        f"triangulated index buffer built beforehand; MeshLab: the filter call only), single-threaded "
+        f"(`RAYON_NUM_THREADS={meta.get('timing_threads')}`), median of {meta.get('repeat')} runs (fewer when one "
+        f"run exceeds the {meta.get('budget_s')} s budget: see the run counts). M tri/s = input triangles / "
+        f"median time. MeshLab: one fresh process per run."
+    )
+    L.append(
+        "* **Memory**: in the child, after loading, freed heap is trimmed and the peak RSS reset "
+        "(`/proc/self/clear_refs` = 5); *extra peak / input* = (VmHWM after the runs − VmRSS before them) / "
+        "(12 B × positions + 12 B × triangles, the indexed-triangle input), i.e. the simplification's working "
+        "memory plus its output, relative to the input mesh. *Process peak* is the child's whole VmHWM (loading "
+        "included)."
+    )
+    L.append(
+        "* **Error**: tessd-compare (Metro-style) of every output against its input with the same options for all "
+        "methods of one input: 10 face samples per input triangle clamped to 0.1–2 M per direction, plus every "
+        "vertex for inputs ≤ 2 M triangles (face samples only above, to keep the run short). Hausdorff = symmetric "
+        "max, RMS = pooled RMS of both directions, out→in max = one-sided max from the output to the input; "
+        "% of the bounding-box diagonal. MeshLab's outputs are measured by the same binary "
+        "(`bench-simplify compare`)."
+    )
+    L.append("")
+
+    # ---------------- goals
+    G = summary["goals"]
+    L.append("## Goals")
+    L.append("")
+    L.append(
+        f"Throughput ratios are over inputs ≥ {THROUGHPUT_MIN_TRIANGLES // 1000} k triangles "
+        f"({', '.join(big)}), per (mesh, target) at equal output vertex count; *gmean* = geometric mean "
+        "over those pairs. Error ratios are over every (mesh, target) where both methods have a result."
+    )
+    L.append("")
+    L.append("| goal | measured ratio (gmean) | on the 10 M torus (50 / 10 / 1 %) | range | met |")
+    L.append("|---|---|---|---|---|")
+    ten = [e["mesh"] for e in generated if e["input_triangles"] >= 9e6]
+    ten = ten[-1] if ten else None
+    fr3 = [f for f in fractions_all if f in (0.5, 0.1, 0.01)]
+
+    def thr_ratio(m, ref="meshopt-sloppy", meshes_=None):
+        pairs = {}
+        for mesh in meshes_ or big:
+            for f in fractions_all:
+                a, b = get(mesh, m, f), get(mesh, ref, f)
+                if a and b:
+                    pairs[(mesh, f)] = a["mtris_per_s"] / b["mtris_per_s"]
+        return pairs
+
+    def row(name, pairs, goal_fn, ten_key_fmt=lambda v: f"{v:.2f}"):
+        vals = list(pairs.values())
+        g = gmean(vals)
+        tens = " / ".join(ten_key_fmt(pairs[(ten, f)]) if (ten, f) in pairs else "–" for f in fr3) if ten else "–"
+        rng = f"{min(vals):.2f}–{max(vals):.2f}" if vals else "–"
+        met = goal_fn(g) if vals else False
+        L.append(f"| {name} | {g:.2f} | {tens} | {rng} | {ok(met)} |")
+        G[name] = {"gmean": g, "pairs": {f"{k[0]}@{k[1]}": v for k, v in pairs.items()}, "met": met}
+
+    row("grid-bary throughput ÷ simplifySloppy's ≥ 2", thr_ratio("tessd-grid-bary"), lambda g: g >= 2)
+    row("grid-quadric throughput ÷ simplifySloppy's ≥ 2", thr_ratio("tessd-grid-quadric"), lambda g: g >= 2)
+    for m in ["tessd-quality-bary", "tessd-quality-quadric", "tessd-complexity-bary", "tessd-complexity-quadric"]:
+        row(f"{m[6:]} throughput ÷ simplifySloppy's ≥ 1", thr_ratio(m), lambda g: g >= 1)
+
+    def err_ratio(m, ref, key):
+        pairs = {}
+        for e in meshes:
+            for f in fractions_all:
+                a, b = get(e["mesh"], m, f), get(e["mesh"], ref, f)
+                if a and b and a.get(key) and b.get(key):
+                    pairs[(e["mesh"], f)] = a[key] / b[key]
+        return pairs
+
+    row("complexity-quadric RMS ÷ MeshLab clustering's < 1", err_ratio("tessd-complexity-quadric", "meshlab-clustering", "rms"),
+        lambda g: g < 1)
+    row("complexity-quadric Hausdorff ÷ MeshLab clustering's < 1",
+        err_ratio("tessd-complexity-quadric", "meshlab-clustering", "hausdorff"), lambda g: g < 1)
+    row("complexity-quadric RMS ÷ meshopt simplify's ≤ 1.5", err_ratio("tessd-complexity-quadric", "meshopt-simplify", "rms"),
+        lambda g: g <= 1.5)
+    row("complexity-quadric Hausdorff ÷ meshopt simplify's ≤ 1.5",
+        err_ratio("tessd-complexity-quadric", "meshopt-simplify", "hausdorff"), lambda g: g <= 1.5)
+
+    # Linearity: slope of log time vs log triangles at the scaling fraction over the tori.
+    slopes = {}
+    for m in METHODS:
+        pts = [(e["input_triangles"], get(e["mesh"], m, scaling_fraction)) for e in generated]
+        pts = [(t, r["time_s"]) for t, r in pts if r]
+        if len(pts) >= 3:
+            xs = [math.log(t) for t, _ in pts]
+            ys = [math.log(s) for _, s in pts]
+            mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+            k = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+            slopes[m] = {"slope": k, "ns_per_triangle": {f"{t / 1e6:g}M": s / t * 1e9 for t, s in pts}}
+    for m in [m for m in METHODS if m.startswith("tessd")]:
+        if m in slopes:
+            k = slopes[m]["slope"]
+            met = k <= 1.15
+            L.append(f"| {m[6:]}: cost linear in input size (slope of log time vs log triangles at "
+                     f"{pct(scaling_fraction)}, tori) | {k:.2f} | – | ns/tri " +
+                     ", ".join(f"{v:.0f}" for v in slopes[m]["ns_per_triangle"].values()) + f" | {ok(met)} |")
+            G[f"{m} linear"] = {"slope": k, **slopes[m], "met": met}
+    # Memory: extra peak / input ≤ 2 (all tessd runs on inputs ≥ 1 M triangles).
+    for m in [m for m in METHODS if m.startswith("tessd")]:
+        vals = {}
+        for e in meshes:
+            if e["input_triangles"] < 1e6:
+                continue
+            for f in fractions_all:
+                r = get(e["mesh"], m, f)
+                if r:
+                    vals[(e["mesh"], f)] = r["mem_ratio"]
+        if vals:
+            worst = max(vals, key=vals.get)
+            tens = " / ".join(f"{vals[(ten, f)]:.2f}" if (ten, f) in vals else "–" for f in fr3) if ten else "–"
+            met = vals[worst] <= 2
+            L.append(f"| {m[6:]}: extra peak memory ≤ 2 × input (max over inputs ≥ 1 M triangles) | "
+                     f"{vals[worst]:.2f} (max, {worst[0]} @ {pct(worst[1])}) | {tens} | "
+                     f"{min(vals.values()):.2f}–{max(vals.values()):.2f} | {ok(met)} |")
+            G[f"{m} memory"] = {"max": vals[worst], "pairs": {f"{k[0]}@{k[1]}": v for k, v in vals.items()},
+                                "met": met}
+    L.append("")
+    # Reference throughputs.
+    L.append("Reference throughputs on this machine (median M triangles/s, single thread):")
+    L.append("")
+    L.append("| input | target | " + " | ".join(m.replace("tessd-", "") for m in METHODS) + " |")
+    L.append("|---|---|" + "---|" * len(METHODS))
+    for mesh in big:
+        for f in fractions_all:
+            rs = [get(mesh, m, f) for m in METHODS]
+            if not any(rs):
+                continue
+            L.append(f"| {mesh} | {pct(f)} | " + " | ".join(f"{r['mtris_per_s']:.3g}" if r else "–" for r in rs) + " |")
+    L.append("")
+    # Linearity details.
+    if slopes:
+        L.append(f"Time per input triangle at {pct(scaling_fraction)} across the tori (ns/triangle) and the slope of "
+                 "log time vs log size (1 = linear):")
+        L.append("")
+        L.append("| method | " + " | ".join(f"{e['input_triangles'] / 1e6:g} M" for e in generated) + " | slope |")
+        L.append("|---|" + "---|" * (len(generated) + 1))
+        for m in METHODS:
+            if m in slopes:
+                cells = []
+                for e in generated:
+                    r = get(e["mesh"], m, scaling_fraction)
+                    cells.append(f"{r['time_s'] / e['input_triangles'] * 1e9:.0f}" if r else "–")
+                L.append(f"| {m} | " + " | ".join(cells) + f" | {slopes[m]['slope']:.2f} |")
+        L.append("")
+    # Error ratio details.
+    L.append("Error of complexity + quadric relative to MeshLab clustering and meshopt simplify per input "
+             "(RMS ratio / Hausdorff ratio; < 1 = tessd better):")
+    L.append("")
+    L.append("| input | " + " | ".join(f"vs MeshLab {pct(f)}" for f in fractions_all) + " | " +
+             " | ".join(f"vs meshopt simplify {pct(f)}" for f in fractions_all) + " |")
+    L.append("|---|" + "---|" * (2 * len(fractions_all)))
+    for e in meshes:
+        cells = []
+        for ref in ["meshlab-clustering", "meshopt-simplify"]:
+            for f in fractions_all:
+                a, b = get(e["mesh"], "tessd-complexity-quadric", f), get(e["mesh"], ref, f)
+                if a and b and a.get("rms") and b.get("rms") and a.get("hausdorff") and b.get("hausdorff"):
+                    cells.append(f"{a['rms'] / b['rms']:.2f} / {a['hausdorff'] / b['hausdorff']:.2f}")
+                else:
+                    cells.append("–")
+        if any(c != "–" for c in cells):
+            L.append(f"| {e['mesh']} | " + " | ".join(cells) + " |")
+    L.append("")
+
+    # ---------------- per-mesh tables
+    L.append("## Results per input")
+    L.append("")
+    for e in meshes:
+        L.append(f"### {e['mesh']}")
+        L.append("")
+        L.append(
+            f"{e['input_vertices']} referenced vertices, {e['input_faces']} faces ({e['input_triangles']} triangles), "
+            f"bbox diagonal {fmt(e['bbox_diagonal'], 4)}, input {e['input_bytes'] / 2**20:.1f} MiB; "
+            f"{e['face_samples']} face samples per direction{' + vertices' if e.get('vertex_samples', True) else ''}."
+        )
+        L.append("")
+        mesh_table(L, e["mesh"], recs, fractions_all)
+
+    (out / "simplify.md").write_text("\n".join(L) + "\n")
+    summary["slopes"] = slopes
+    (out / "simplify_summary.json").write_text(json.dumps(summary, indent=1, default=str) + "\n")
+
+    # ---------------- plots
+    plot_meshes = [m for m in ["bun_zipper", "torus_1M"] if m in info]
+    if plot_meshes:
+        fig, axes = plt.subplots(1, len(plot_meshes), figsize=(6.5 * len(plot_meshes), 5.2), squeeze=False)
+        for ax, mesh in zip(axes[0], plot_meshes):
+            for m in METHODS:
+                pts = sorted((r["out_vertices"], r["rms_rel"] * 100) for f in fractions_all
+                             if (r := get(mesh, m, f)) and r.get("rms_rel"))
+                if pts:
+                    c, mk, ls = STYLE[m]
+                    ax.plot(*zip(*pts), color=c, marker=mk, linestyle=ls, label=m, alpha=0.85)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("output vertices")
+            ax.set_ylabel("RMS error (% of bbox diagonal)")
+            e = info[mesh]
+            ax.set_title(f"{mesh} ({e['input_triangles'] / 1e3:.0f} k triangles)")
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0][0].legend(fontsize=8)
+        fig.suptitle("Error vs output size (targets 1 %, 10 %, 50 % of the input vertices)")
+        fig.tight_layout()
+        fig.savefig(out / "simplify_error_vs_size.png", dpi=110)
+        plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    for m in METHODS:
+        pts = [(e["input_triangles"], r["time_s"]) for e in generated if (r := get(e["mesh"], m, scaling_fraction))]
+        if pts:
+            c, mk, ls = STYLE[m]
+            ax.plot(*zip(*pts), color=c, marker=mk, linestyle=ls, label=m, alpha=0.85)
+    if generated:
+        xs = [generated[0]["input_triangles"], generated[-1]["input_triangles"]]
+        ax.plot(xs, [x / 200e6 for x in xs], color="k", linestyle=(0, (1, 3)), linewidth=1,
+                label="200 M tri/s (one pass over the triangles)")
+        ax.plot(xs, [x / 13.5e6 for x in xs], color="tab:gray", linestyle=(0, (1, 3)), linewidth=1,
+                label="13.5 M tri/s (quoted simplifySloppy rate)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("input triangles (bumpy torus)")
+    ax.set_ylabel("time (s), median, 1 thread")
+    ax.set_title(f"Time vs input size at {pct(scaling_fraction)} of the vertices")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "simplify_time_vs_input.png", dpi=110)
+    plt.close(fig)
+    print(f"wrote {out / 'simplify.md'}, {out / 'simplify_summary.json'}, simplify_error_vs_size.png, "
+          "simplify_time_vs_input.png")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,270 @@
+//! Helpers several operations share: typed parameters, USD stage options, writing a mesh to
+//! the format its path names, and the USD writer's errors.
+
+use super::mesh_arrays::mesh_error;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::job::JobContext;
+use tessd_ipc::registry::Request;
+use tessd_mesh::Mesh;
+use tessd_mesh::io::ReadOptions;
+use tessd_usd::{MeshPrimOptions, StageOptions, UpAxis};
+
+/// Maps a USD-writer error onto the protocol's codes.
+pub fn usd_error(e: tessd_usd::UsdError) -> OpError {
+    let code = match e.code() {
+        "invalid_mesh" => ErrorCode::InvalidMesh,
+        "too_large" => ErrorCode::TooLarge,
+        "io" => ErrorCode::Io,
+        _ => ErrorCode::InvalidRequest,
+    };
+    OpError::new(code, e.to_string())
+}
+
+/// Whether `path` names a USD stage (`.usda`, any case).
+pub fn is_usda(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("usda"))
+}
+
+/// Refuses an output path whose format tessd cannot write, before any work is done.
+///
+/// # Errors
+/// `unsupported` naming the extension.
+pub fn check_mesh_output(path: &Path) -> Result<(), OpError> {
+    if is_usda(path) {
+        Ok(())
+    } else {
+        tessd_mesh::io::Format::from_path(path)
+            .map(|_| ())
+            .map_err(mesh_error)
+    }
+}
+
+/// The stage options of a request: `params.up_axis` (`"Y"`/`"Z"`, default Z) and
+/// `params.meters_per_unit` (default 1), the host's conventions.
+///
+/// # Errors
+/// `invalid_request` for another axis or a mistyped value.
+pub fn stage_options(request: &Request) -> Result<StageOptions, OpError> {
+    let up = match request.str_param("up_axis")? {
+        None | Some("Z") | Some("z") => UpAxis::Z,
+        Some("Y") | Some("y") => UpAxis::Y,
+        Some(other) => {
+            return Err(OpError::request(format!(
+                "`up_axis` must be \"Y\" or \"Z\", got {other:?}"
+            )));
+        }
+    };
+    let mut stage = StageOptions::default().with_up_axis(up);
+    if let Some(m) = request.f64_param("meters_per_unit")? {
+        stage = stage.with_meters_per_unit(m);
+    }
+    Ok(stage)
+}
+
+/// The file stem of `path`, or `fallback`.
+pub fn stem(path: Option<&Path>, fallback: &str) -> String {
+    path.and_then(Path::file_stem)
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| fallback.to_string())
+}
+
+/// Writes `mesh` to `path` atomically: a USD stage for `.usda` (stage options from the
+/// request, the mesh prim named `name`), else the mesh format of the extension.
+///
+/// # Errors
+/// `unsupported`, `io`, `invalid_mesh`, `invalid_request` as the writers say.
+pub fn write_mesh_file(
+    request: &Request,
+    mesh: &Mesh,
+    path: &Path,
+    name: &str,
+) -> Result<(), OpError> {
+    if is_usda(path) {
+        let stage = stage_options(request)?;
+        let prim = MeshPrimOptions::default().with_name(name);
+        tessd_usd::write_usda_file(path, |w| {
+            tessd_usd::write_mesh_stage(w, mesh, &stage, &prim)
+        })
+        .map_err(usd_error)
+    } else {
+        tessd_mesh::io::write_path(mesh, path).map_err(mesh_error)
+    }
+}
+
+/// Reads the mesh file named by the string parameter `key` (resolved against the request's
+/// folder), stopping early when the job is cancelled.
+///
+/// # Errors
+/// `invalid_request` when the parameter is missing; as the reader says otherwise.
+pub fn read_mesh_param(
+    request: &Request,
+    key: &str,
+    ctx: &JobContext,
+) -> Result<(Mesh, PathBuf), OpError> {
+    let path = request
+        .str_param(key)?
+        .map(|p| request.resolve(p))
+        .ok_or_else(|| OpError::request(format!("`{key}` (a mesh file path) is required")))?;
+    let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
+    let mesh = tessd_mesh::io::read_path(&path, &options).map_err(mesh_error)?;
+    Ok((mesh, path))
+}
+
+/// An optional boolean parameter.
+///
+/// # Errors
+/// `invalid_request` when present with another type.
+pub fn bool_param(request: &Request, key: &str) -> Result<Option<bool>, OpError> {
+    match request.params.get(key) {
+        None | Some(Value::Null) => Ok(None),
+        Some(Value::Bool(b)) => Ok(Some(*b)),
+        Some(v) => Err(OpError::request(format!(
+            "parameter `{key}` must be true or false, got {v}"
+        ))),
+    }
+}
+
+/// An optional non-negative integer parameter (a JSON integer, or a number without a
+/// fractional part).
+///
+/// # Errors
+/// `invalid_request` when present and not such a number.
+pub fn u64_param(request: &Request, key: &str) -> Result<Option<u64>, OpError> {
+    match request.params.get(key) {
+        None | Some(Value::Null) => Ok(None),
+        Some(v) => as_u64(v).map(Some).ok_or_else(|| {
+            OpError::request(format!(
+                "parameter `{key}` must be a non-negative integer, got {v}"
+            ))
+        }),
+    }
+}
+
+/// `v` as a non-negative integer, when it is one (`8` or `8.0`).
+pub fn as_u64(v: &Value) -> Option<u64> {
+    v.as_u64().or_else(|| {
+        v.as_f64()
+            .filter(|f| f.is_finite() && *f >= 0.0 && f.fract() == 0.0 && *f < 2f64.powi(63))
+            .map(|f| f as u64)
+    })
+}
+
+/// A positive amount, absolute or a percentage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Amount {
+    /// A plain positive number.
+    Absolute(f64),
+    /// A positive percentage (`"0.5%"` is `Percent(0.5)`).
+    Percent(f64),
+}
+
+/// Parses a positive amount: a JSON number, or a string holding a number (`"0.2"`) or a
+/// percentage (`"0.5%"`). `what` names the parameter in messages.
+///
+/// # Errors
+/// `invalid_request` for anything else: other types, text that is not a number (`"abc%"`),
+/// zero, negative, NaN or infinite values.
+pub fn parse_amount(what: &str, v: &Value) -> Result<Amount, OpError> {
+    let bad = || {
+        OpError::request(format!(
+            "`{what}` must be a positive number or a percentage such as \"5%\", got {v}"
+        ))
+    };
+    let (x, percent) = match v {
+        Value::Number(n) => (n.as_f64().ok_or_else(bad)?, false),
+        Value::String(s) => {
+            let s = s.trim();
+            let (digits, percent) = match s.strip_suffix('%') {
+                Some(d) => (d.trim_end(), true),
+                None => (s, false),
+            };
+            // Rust also parses "inf" and "NaN": only plain decimal numbers are accepted.
+            let plain = !digits.is_empty()
+                && digits
+                    .chars()
+                    .all(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E'));
+            if !plain {
+                return Err(bad());
+            }
+            (digits.parse::<f64>().map_err(|_| bad())?, percent)
+        }
+        _ => return Err(bad()),
+    };
+    if !x.is_finite() {
+        return Err(bad());
+    }
+    if x <= 0.0 {
+        let shown = if percent {
+            format!("{x}%")
+        } else {
+            x.to_string()
+        };
+        return Err(OpError::request(format!(
+            "`{what}` must be positive, got {shown}"
+        )));
+    }
+    Ok(if percent {
+        Amount::Percent(x)
+    } else {
+        Amount::Absolute(x)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn amounts() {
+        let ok = |v: Value| parse_amount("x", &v).unwrap();
+        assert_eq!(ok(json!(0.5)), Amount::Absolute(0.5));
+        assert_eq!(ok(json!(20000)), Amount::Absolute(20000.0));
+        assert_eq!(ok(json!("0.2")), Amount::Absolute(0.2));
+        assert_eq!(ok(json!("0.5%")), Amount::Percent(0.5));
+        assert_eq!(ok(json!(" 50 % ")), Amount::Percent(50.0));
+        assert_eq!(ok(json!("1e-1%")), Amount::Percent(0.1));
+        for bad in [
+            json!("abc%"),
+            json!("%"),
+            json!(""),
+            json!("-5%"),
+            json!("0%"),
+            json!("NaN%"),
+            json!("inf%"),
+            json!("infinity"),
+            json!("1e400%"),
+            json!("5%%"),
+            json!(-1),
+            json!(0),
+            json!(true),
+            json!([1]),
+            json!(null),
+        ] {
+            let e = parse_amount("max_error", &bad).unwrap_err();
+            assert_eq!(e.code, ErrorCode::InvalidRequest, "{bad}");
+            assert!(e.message.contains("`max_error`"), "{}", e.message);
+        }
+        assert_eq!(
+            parse_amount("max_error", &json!(-1)).unwrap_err().message,
+            "`max_error` must be positive, got -1"
+        );
+        assert_eq!(
+            parse_amount("t", &json!("-5%")).unwrap_err().message,
+            "`t` must be positive, got -5%"
+        );
+    }
+
+    #[test]
+    fn integers() {
+        assert_eq!(as_u64(&json!(8)), Some(8));
+        assert_eq!(as_u64(&json!(8.0)), Some(8));
+        assert_eq!(as_u64(&json!(8.5)), None);
+        assert_eq!(as_u64(&json!(-1)), None);
+        assert_eq!(as_u64(&json!("8")), None);
+    }
+}

@@ -1,0 +1,257 @@
+//! `lod`: a chain of levels of detail from one mesh in one call (`tessd_simplify::lod::lod_chain`
+//! prepares the mesh once for all levels), written as one USD stage — a variant set `LOD` or
+//! the native `UsdLod` schema — and optionally one mesh file per level.
+//!
+//! The parameters are described in docs/protocol.md ("lod").
+
+use super::common::{as_u64, is_usda, stage_options, stem, usd_error, write_mesh_file};
+use super::mesh_arrays::{input_mesh, mesh_to_prefixed_arrays, output_path};
+use super::simplify::{MethodKind, base_options, remove_all, report_json, simplify_error};
+use serde_json::{Value, json};
+use std::path::PathBuf;
+use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::job::JobContext;
+use tessd_ipc::registry::{Request, Response};
+use tessd_mesh::Mesh;
+use tessd_usd::{LodSchemaOptions, MeshPrimOptions};
+
+/// Most levels one request may ask for.
+const MAX_LEVELS: usize = 32;
+
+/// How the levels are laid out in the USD stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Schema {
+    /// A variant set `LOD` (`LOD0`..), what DCC tools read today.
+    Variants,
+    /// The `UsdLod` schema of usd-core 26.8+.
+    UsdLod,
+}
+
+/// The `levels` parameter: a list, or a comma-separated string (`"50%,20%,5%"`).
+fn level_values(request: &Request) -> Result<Vec<Value>, OpError> {
+    let values = match request.params.get("levels") {
+        Some(Value::Array(items)) => items.clone(),
+        Some(Value::String(s)) => s
+            .split(',')
+            .map(|p| Value::String(p.trim().to_string()))
+            .collect(),
+        None | Some(Value::Null) => {
+            return Err(OpError::request(
+                "`levels` is required: the goals of LOD1, LOD2... (e.g. [\"50%\", \"20%\", \"5%\"])",
+            ));
+        }
+        Some(v) => {
+            return Err(OpError::request(format!(
+                "`levels` must be a list of goals, got {v}"
+            )));
+        }
+    };
+    if values.is_empty() || values.len() > MAX_LEVELS {
+        return Err(OpError::request(format!(
+            "`levels` must hold 1 to {MAX_LEVELS} goals, got {}",
+            values.len()
+        )));
+    }
+    Ok(values)
+}
+
+/// The folder for one file per level: `per_level` = `true` (the output's folder) or a folder.
+fn per_level_dir(request: &Request, output: Option<&PathBuf>) -> Result<Option<PathBuf>, OpError> {
+    match request.params.get("per_level") {
+        None | Some(Value::Null) | Some(Value::Bool(false)) => Ok(None),
+        Some(Value::Bool(true)) => match output {
+            Some(o) => Ok(Some(
+                o.parent()
+                    .filter(|p| !p.as_os_str().is_empty())
+                    .map_or_else(|| request.resolve("."), PathBuf::from),
+            )),
+            None => Err(OpError::request(
+                "`per_level: true` writes beside `output`, which is missing; give `per_level` a \
+                 folder instead",
+            )),
+        },
+        Some(Value::String(dir)) if !dir.is_empty() => Ok(Some(request.resolve(dir))),
+        Some(v) => Err(OpError::request(format!(
+            "`per_level` must be true, false or a folder path, got {v}"
+        ))),
+    }
+}
+
+/// The extension of the per-level files (`per_level_format`, default `obj`).
+fn per_level_format(request: &Request) -> Result<String, OpError> {
+    let ext = request
+        .str_param("per_level_format")?
+        .unwrap_or("obj")
+        .trim_start_matches('.')
+        .to_ascii_lowercase();
+    let probe = PathBuf::from(format!("level.{ext}"));
+    if !is_usda(&probe) && tessd_mesh::io::Format::from_path(&probe).is_err() {
+        return Err(OpError::new(
+            ErrorCode::Unsupported,
+            format!("`per_level_format` must be one of obj, ply, stl, off, usda; got {ext:?}"),
+        ));
+    }
+    Ok(ext)
+}
+
+/// The operation.
+///
+/// # Errors
+/// `invalid_request` for missing or invalid settings (naming the parameter and value),
+/// `unsupported` for an output that is not `.usda` or an unknown per-level format,
+/// `invalid_mesh`, `io`, `cancelled`.
+pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+    ctx.progress(0.0, "read", "")?;
+    let kind = match request.str_param("method")? {
+        Some(m) => MethodKind::parse(m)?,
+        None => MethodKind::Complexity,
+    };
+    for key in ["cells", "cell_size", "max_error", "target_vertices"] {
+        if request.params.get(key).is_some_and(|v| !v.is_null()) {
+            return Err(OpError::request(format!(
+                "`lod` takes its goals from `levels`, not `{key}`"
+            )));
+        }
+    }
+    let values = level_values(&request)?;
+    let methods = values
+        .iter()
+        .enumerate()
+        .map(|(i, v)| kind.goal(&format!("levels[{i}]"), v))
+        .collect::<Result<Vec<_>, _>>()?;
+    let options = base_options(&request, methods[0], ctx)?;
+    let schema = match request.str_param("lod_schema")? {
+        None | Some("variants") => Schema::Variants,
+        Some("usdlod") => Schema::UsdLod,
+        Some(other) => {
+            return Err(OpError::request(format!(
+                "`lod_schema` must be \"variants\" or \"usdlod\", got {other:?}"
+            )));
+        }
+    };
+    let default_index = match request.params.get("default_level") {
+        None | Some(Value::Null) => 0,
+        Some(v) => as_u64(v)
+            .filter(|&i| i as usize <= methods.len())
+            .ok_or_else(|| {
+                OpError::request(format!(
+                    "`default_level` must be an integer from 0 to {}, got {v}",
+                    methods.len()
+                ))
+            })? as usize,
+    };
+    if default_index != 0 && schema == Schema::Variants {
+        return Err(OpError::request(
+            "`default_level` applies to `lod_schema: \"usdlod\"`; the variant set always selects LOD0",
+        ));
+    }
+    let output = output_path(&request)?;
+    if let Some(o) = output.as_deref().filter(|o| !is_usda(o)) {
+        return Err(OpError::new(
+            ErrorCode::Unsupported,
+            format!(
+                "`output` of `lod` must be a .usda stage, got {}",
+                o.display()
+            ),
+        ));
+    }
+    let per_level = per_level_dir(&request, output.as_ref())?;
+    let format = per_level_format(&request)?;
+    let stage = stage_options(&request)?;
+    let input_path = request.str_param("input")?.map(|p| request.resolve(p));
+    let name = match request.str_param("name")? {
+        Some(n) => n.to_string(),
+        None => stem(input_path.as_deref(), "mesh"),
+    };
+
+    let mesh = input_mesh(&request, ctx)?;
+    ctx.progress(0.05, "simplify", "")?;
+    let mut progress = |f: f64, stage: &str| ctx.progress(0.05 + 0.8 * f, stage, "").is_ok();
+    let chain = tessd_simplify::lod::lod_chain(&mesh, &methods, &options, &mut progress)
+        .map_err(|e| simplify_error(e, "levels"))?;
+    ctx.progress(0.85, "write", "")?;
+
+    let levels: Vec<Value> = chain
+        .iter()
+        .zip(&values)
+        .enumerate()
+        .map(|(i, (s, goal))| {
+            let mut r = report_json(&s.report);
+            r["level"] = json!(i + 1);
+            r["goal"] = goal.clone();
+            r
+        })
+        .collect();
+    let mut result = json!({
+        "method": kind.name(),
+        "lod_schema": match schema {
+            Schema::Variants => "variants",
+            Schema::UsdLod => "usdlod",
+        },
+        "input_vertices": chain[0].report.input_vertices,
+        "input_faces": chain[0].report.input_faces,
+        "lod0": {"points": mesh.positions.len(), "faces": mesh.face_count()},
+        "levels": levels,
+    });
+
+    let meshes: Vec<&Mesh> = std::iter::once(&mesh)
+        .chain(chain.iter().map(|s| &s.mesh))
+        .collect();
+    let mut files: Vec<PathBuf> = Vec::new();
+    if let Some(path) = &output {
+        let prim = MeshPrimOptions::default().with_name(name.clone());
+        let lod = LodSchemaOptions::default().with_default_index(default_index);
+        tessd_usd::write_usda_file(path, |w| match schema {
+            Schema::Variants => tessd_usd::write_lod_variants(w, &stage, &meshes, &prim),
+            Schema::UsdLod => tessd_usd::write_lod_schema(w, &stage, &meshes, &prim, &lod),
+        })
+        .map_err(usd_error)?;
+        result["output"] = json!(path.display().to_string());
+        files.push(path.clone());
+    }
+    if let Some(dir) = &per_level {
+        let base = stem(output.as_deref(), &name);
+        let written = std::fs::create_dir_all(dir)
+            .map_err(|e| OpError::new(ErrorCode::Io, format!("{}: {e}", dir.display())))
+            .and_then(|()| {
+                let mut paths = Vec::new();
+                for (i, m) in meshes.iter().enumerate() {
+                    let path = dir.join(format!("{base}_LOD{i}.{format}"));
+                    if let Err(e) = write_mesh_file(&request, m, &path, &format!("{name}_LOD{i}")) {
+                        remove_all(&paths);
+                        return Err(e);
+                    }
+                    paths.push(path);
+                }
+                Ok(paths)
+            });
+        match written {
+            Ok(paths) => {
+                result["per_level_files"] = json!(
+                    paths
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                );
+                files.extend(paths);
+            }
+            Err(e) => {
+                remove_all(&files);
+                return Err(e);
+            }
+        }
+    }
+    let mut arrays = Vec::new();
+    if output.is_none() && per_level.is_none() {
+        for (i, s) in chain.into_iter().enumerate() {
+            arrays.extend(mesh_to_prefixed_arrays(s.mesh, &format!("lod{}.", i + 1)));
+        }
+    }
+    // The files are written: a cancel arriving now is too late to undo them.
+    let _ = ctx.progress(1.0, "done", "");
+    Ok(Response {
+        result,
+        arrays,
+        files,
+    })
+}

@@ -1,0 +1,34 @@
+"""Fixtures for the simplification tests: a real daemon (helpers are in simplify_util.py).
+
+The binary and the shared data are found by `tests/locate.py`; a missing binary or data
+folder fails the tests (it is never a reason to skip).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "python"))
+sys.path.insert(0, str(REPO / "tests" / "daemon"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import locate  # noqa: E402
+from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def daemon():
+    """One `tessd serve --socket <tmp>/t.sock` for the whole module, checked alive at the end."""
+    with short_tmpdir() as d:
+        proc = DaemonProcess(str(locate.tessd_bin()), os.path.join(d, "t.sock"))
+        proc.start()
+        try:
+            yield proc
+            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
+        finally:
+            proc.stop()
