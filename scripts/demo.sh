@@ -3,5 +3,5 @@
 # writing its results to ./tessd-demo/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --demo
 exec "${CARGO_TARGET_DIR:-target}/release/tessd" demo "$@"

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Sets up a fresh machine for tessd: system packages, the Rust build, and the Python test venv
-# (.venv) with pinned versions. Safe to run again; it only does what is missing.
+# Sets up a fresh machine for tessd: system packages, the Rust build, and the Python venvs with
+# pinned versions. Safe to run again; it only does what is missing. `--demo`: only what
+# `tessd demo` needs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,16 +19,26 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}"
 fi
 
-# Python test venv, pinned (requirements live in python/requirements-test.txt).
-if [ ! -x .venv/bin/python ]; then
-  echo "setup: creating .venv with $PY"
-  "$PY" -m venv .venv
-fi
-if ! cmp -s python/requirements-test.txt .venv/.requirements-installed 2>/dev/null; then
-  .venv/bin/python -m pip install -q --upgrade pip
-  .venv/bin/python -m pip install -q -r python/requirements-test.txt
-  cp python/requirements-test.txt .venv/.requirements-installed
-fi
+# Python venvs, pinned; each is rebuilt only when its requirements file changes.
+#   .venv        tests: usd-core, numpy, pytest            (python/requirements-test.txt)
+#   .venv-bench  peer tools for cross-checks and benchmarks: pymeshlab, matplotlib
+#                                                          (bench/requirements-bench.txt)
+make_venv() {
+  local dir=$1 reqs=$2
+  if [ ! -x "$dir/bin/python" ]; then
+    echo "setup: creating $dir with $PY"
+    "$PY" -m venv "$dir"
+  fi
+  if ! cmp -s "$reqs" "$dir/.requirements-installed" 2>/dev/null; then
+    echo "setup: installing $reqs into $dir"
+    "$dir/bin/python" -m pip install -q --upgrade pip
+    "$dir/bin/python" -m pip install -q -r "$reqs"
+    cp "$reqs" "$dir/.requirements-installed"
+  fi
+}
+make_venv .venv python/requirements-test.txt
+# `setup.sh --demo` skips the peer tools (the demo needs none of them).
+[ "${1:-}" = "--demo" ] || make_venv .venv-bench bench/requirements-bench.txt
 
 echo "setup: building tessd (release)"
 cargo build --release -p tessd --quiet

@@ -8,5 +8,7 @@ export TESSD_BIN="${CARGO_TARGET_DIR:-$PWD/target}/release/tessd"
 export TESSD_SHARED_DATA="${TESSD_SHARED_DATA:-$PWD/../shared/data}"
 echo "== cargo test"
 cargo test --workspace --release
-echo "== pytest"
-.venv/bin/python -m pytest tests -q -p no:cacheprovider
+echo "== pytest (daemon, USD, demo, simplification)"
+.venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare
+echo "== pytest (cross-checks against peer tools)"
+.venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider

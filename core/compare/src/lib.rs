@@ -70,9 +70,10 @@ use thiserror::Error;
 
 /// Smallest number of face samples [`SampleCount::Auto`] chooses.
 pub const AUTO_MIN_SAMPLES: u64 = 1_000_000;
-/// Largest number of face samples [`SampleCount::Auto`] chooses: at about 2–4 M samples/s
-/// per core this keeps one direction on a 10 M-triangle mesh to seconds, and vertex samples
-/// (one per vertex) still cover every triangle corner.
+/// Largest number of face samples [`SampleCount::Auto`] chooses: at the 1–2 M samples/s
+/// measured on two cores (`bench/compare/README.md`) this keeps one direction on a
+/// 10 M-triangle mesh to tens of seconds, and vertex samples (every vertex) still cover
+/// every triangle corner.
 pub const AUTO_MAX_SAMPLES: u64 = 20_000_000;
 /// Face samples per triangle for [`SampleCount::Auto`] (Metro's default).
 pub const AUTO_SAMPLES_PER_TRIANGLE: u64 = 10;
@@ -519,7 +520,7 @@ impl Plan {
         });
         let tris: Vec<[u32; 3]> = order.par_iter().map(|&i| t.tris[i as usize]).collect();
         let areas: Vec<f64> = order.par_iter().map(|&i| t.areas[i as usize]).collect();
-        drop(order);
+        drop((order, t));
         let area_cum = sample::cumulative(&areas);
         drop(areas);
         let area = *area_cum.last().unwrap_or(&0.0);

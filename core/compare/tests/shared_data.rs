@@ -27,7 +27,11 @@ fn bunny_ply_and_obj_are_the_same_surface_up_to_obj_rounding() {
     };
     let c = compare(&ply, &obj, &CompareOptions::default().with_samples(50_000)).unwrap();
     assert!(c.hausdorff > 0.0 && c.hausdorff <= 8.7e-7, "{c:?}");
-    assert!((c.bbox_diagonal - 0.2502467).abs() < 1e-6, "{}", c.bbox_diagonal);
+    assert!(
+        (c.bbox_diagonal - 0.2502467).abs() < 1e-6,
+        "{}",
+        c.bbox_diagonal
+    );
     // 1113 unreferenced vertices are not samples.
     assert_eq!(c.a_to_b.samples, 50_000 + 35_947 - 1_113);
 }
