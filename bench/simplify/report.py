@@ -177,8 +177,9 @@ def main():
         "* **Inputs**: every mesh of the shared data folder (`$TESSD_SHARED_DATA/mesh`) and generated bumpy tori "
         "(closed, genus 1, 3 bump frequencies plus a 10 %-of-an-edge radial jitter, row-ordered vertices) of "
         + ", ".join(f"{e['input_triangles'] / 1e6:.3g} M" for e in generated)
-        + " triangles; the tori only used for size scaling run at the scaling fraction "
-        f"({pct(scaling_fraction)}) only."
+        + " triangles; "
+        + ", ".join(e["mesh"] for e in generated if len(e["targets"]) == 1)
+        + f" serve the size scaling only and run at {pct(scaling_fraction)} only."
     )
     L.append(
         "* **Targets**: 50 %, 10 %, 1 % of the input's referenced vertices. tessd complexity takes the count "
@@ -311,6 +312,23 @@ def main():
             G[f"{m} memory"] = {"max": vals[worst], "pairs": {f"{k[0]}@{k[1]}": v for k, v in vals.items()},
                                 "met": met}
     L.append("")
+    few = [(k, r) for k, r in sorted(recs.items()) if good(r) and r["repeats"] < (meta.get("repeat") or 3)]
+    if few:
+        L.append(f"Timed fewer than {meta.get('repeat')} times (one run took longer than the "
+                 f"{meta.get('budget_s')} s budget allows): "
+                 + "; ".join(f"{k[1]} on {k[0]} @ {pct(k[2])} ({r['repeats']} run{'s' if r['repeats'] > 1 else ''}, "
+                             f"{r['time_s']:.1f} s)" for k, r in few) + ".")
+        L.append("")
+    misses = [(k, r) for k, r in sorted(recs.items()) if good(r) and not r["hit"]]
+    if misses:
+        L.append(f"Target counts missed by more than 1 % ({len(misses)} of "
+                 f"{sum(1 for r in recs.values() if good(r))} results; clustering and simplifySloppy counts move "
+                 "in steps with the cell size, so on small meshes some counts are unreachable — the closest "
+                 "count found is used and flagged in the tables): "
+                 + ", ".join(f"{n} {k[1]}" for n, k in sorted(
+                     ((sum(1 for kk, _ in misses if kk[1] == m), (None, m)) for m in {kk[1] for kk, _ in misses}),
+                     reverse=True)) + ".")
+        L.append("")
     # Reference throughputs.
     L.append("Reference throughputs on this machine (median M triangles/s, single thread):")
     L.append("")

@@ -339,6 +339,40 @@ impl<T: Pod + Send + Sync> AsBytes for Vec<T> {
     }
 }
 
+/// A slice of a shared received payload, so received arrays can be sent back without a copy.
+struct PayloadSlice {
+    payload: std::sync::Arc<Arrays>,
+    start: usize,
+    end: usize,
+}
+
+impl AsBytes for PayloadSlice {
+    fn as_bytes(&self) -> &[u8] {
+        &bytemuck::cast_slice::<u64, u8>(&self.payload.words)[self.start..self.end]
+    }
+}
+
+impl Arrays {
+    /// Turns the received arrays into arrays to send, sharing the payload buffer (no copy).
+    pub fn into_owned(self) -> Vec<OwnedArray> {
+        let descs = self.descs.clone();
+        let payload = std::sync::Arc::new(self);
+        descs
+            .into_iter()
+            .map(|d| OwnedArray {
+                name: d.name,
+                dtype: d.dtype,
+                shape: d.shape,
+                data: Box::new(PayloadSlice {
+                    payload: payload.clone(),
+                    start: d.offset as usize,
+                    end: (d.offset + d.length) as usize,
+                }),
+            })
+            .collect()
+    }
+}
+
 impl OwnedArray {
     /// Wraps a vector of elements `E` with the given shape.
     ///

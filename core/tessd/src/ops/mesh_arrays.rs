@@ -68,10 +68,8 @@ fn rows<const N: usize>(name: &str, data: &[f32], shape: &[u64]) -> Result<Vec<[
             "array {name:?} must have shape [n, {N}], got {shape:?}"
         )));
     }
-    Ok(data
-        .chunks_exact(N)
-        .map(|c| std::array::from_fn(|k| c[k]))
-        .collect())
+    // A straight copy: [f32; N] rows have the layout of N consecutive f32 (shape checked above).
+    Ok(bytemuck::cast_slice::<f32, [f32; N]>(data).to_vec())
 }
 
 /// Builds a mesh from the protocol's arrays (not yet validated).

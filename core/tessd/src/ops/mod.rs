@@ -3,6 +3,7 @@
 
 pub mod common;
 pub mod compare;
+pub mod debug_echo;
 pub mod debug_sleep;
 pub mod lod;
 pub mod mesh_arrays;
@@ -20,7 +21,8 @@ pub fn registry() -> Registry {
         .register("simplify", simplify::run)
         .register("lod", lod::run)
         .register("compare", compare::run)
-        .register("debug.sleep", debug_sleep::run);
+        .register("debug.sleep", debug_sleep::run)
+        .register("debug.echo", debug_echo::run);
     for cap in [
         "mesh.read.obj",
         "mesh.read.ply",
