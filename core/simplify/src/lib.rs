@@ -214,7 +214,11 @@ impl<'a> Prepared<'a> {
                             "{}% of the object's largest dimension ({}) is {tol}{}",
                             f * 100.0,
                             self.size,
-                            if self.size == 0.0 { "; give an absolute distance" } else { "" }
+                            if self.size == 0.0 {
+                                "; give an absolute distance"
+                            } else {
+                                ""
+                            }
                         ),
                         Length::Absolute(d) => format!("got {d}"),
                     };
