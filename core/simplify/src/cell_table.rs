@@ -4,8 +4,8 @@
 
 /// Maps cell keys to cluster ids `0..len` in order of first insertion.
 pub(crate) struct CellTable {
-    keys: Vec<u64>,
-    ids: Vec<u32>,
+    /// (key, id) slots side by side: a probe touches one cache line, not two.
+    slots: Vec<(u64, u32)>,
     mask: usize,
     len: u32,
 }
@@ -18,8 +18,7 @@ impl CellTable {
     pub(crate) fn with_capacity(capacity: usize) -> CellTable {
         let size = (capacity.max(8) * 2).next_power_of_two();
         CellTable {
-            keys: vec![EMPTY; size],
-            ids: vec![0; size],
+            slots: vec![(EMPTY, 0); size],
             mask: size - 1,
             len: 0,
         }
@@ -28,18 +27,17 @@ impl CellTable {
     /// The id of `key`, assigning the next id when it is new. `key` must not be `u64::MAX`.
     #[inline]
     pub(crate) fn id(&mut self, key: u64) -> u32 {
-        if (self.len as usize + 1) * 2 > self.keys.len() {
+        if (self.len as usize + 1) * 2 > self.slots.len() {
             self.grow();
         }
         let mut slot = (mix(key) as usize) & self.mask;
         loop {
-            let k = self.keys[slot];
+            let (k, id) = self.slots[slot];
             if k == key {
-                return self.ids[slot];
+                return id;
             }
             if k == EMPTY {
-                self.keys[slot] = key;
-                self.ids[slot] = self.len;
+                self.slots[slot] = (key, self.len);
                 self.len += 1;
                 return self.len - 1;
             }
@@ -50,17 +48,15 @@ impl CellTable {
     /// Doubles the table, keeping every key's id.
     #[cold]
     fn grow(&mut self) {
-        let size = self.keys.len() * 2;
-        let keys = std::mem::replace(&mut self.keys, vec![EMPTY; size]);
-        let ids = std::mem::replace(&mut self.ids, vec![0; size]);
+        let size = self.slots.len() * 2;
+        let old = std::mem::replace(&mut self.slots, vec![(EMPTY, 0); size]);
         self.mask = size - 1;
-        for (k, id) in keys.into_iter().zip(ids).filter(|(k, _)| *k != EMPTY) {
+        for (k, id) in old.into_iter().filter(|(k, _)| *k != EMPTY) {
             let mut slot = (mix(k) as usize) & self.mask;
-            while self.keys[slot] != EMPTY {
+            while self.slots[slot].0 != EMPTY {
                 slot = (slot + 1) & self.mask;
             }
-            self.keys[slot] = k;
-            self.ids[slot] = id;
+            self.slots[slot] = (k, id);
         }
     }
 

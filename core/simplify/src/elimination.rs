@@ -3,7 +3,6 @@
 //! duplicate faces (also reversed ones, as stacked CAD solids produce) — so that the
 //! simplification actually lowers the complexity.
 
-use crate::cell_table::mix;
 use crate::partition::UNUSED;
 use tessd_mesh::Mesh;
 
@@ -24,61 +23,48 @@ pub(crate) struct Eliminated {
     pub duplicates: u64,
 }
 
-/// Faces per parallel chunk of the first phase.
-const CHUNK: usize = 1 << 16;
-
 /// Maps every face of `mesh` through `cluster_of` and removes collapsed and duplicate faces.
-/// The first of several duplicates is kept, so the result is deterministic.
+/// The first of several duplicates is kept, so the result is deterministic. `corners`: also
+/// record each output corner's input corner (needed only to carry face-varying attributes).
 ///
-/// Two phases: faces are mapped and collapsed in parallel chunks (concatenated in order), then
-/// duplicates are found by sorting the survivors' canonical-key hashes (sequential memory
-/// traffic, unlike a hash set of millions of faces) and comparing equal-hash runs exactly.
-pub(crate) fn eliminate(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Eliminated {
-    use rayon::prelude::*;
-    let faces = mesh.face_count();
-    let chunks: Vec<Eliminated> = (0..faces.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            collapse_faces(
-                mesh,
-                cluster_of,
-                reps,
-                c * CHUNK..((c + 1) * CHUNK).min(faces),
-            )
-        })
-        .collect();
-    let mut all = Eliminated::default();
-    all.face_offsets.push(0);
-    for c in chunks {
-        let base = all.face_indices.len() as u32;
-        all.face_indices.extend_from_slice(&c.face_indices);
-        all.source_corner.extend_from_slice(&c.source_corner);
-        all.source_face.extend_from_slice(&c.source_face);
-        all.face_offsets
-            .extend(c.face_offsets[1..].iter().map(|o| o + base));
-        all.degenerate += c.degenerate;
+/// One pass writes the surviving faces straight into the output; duplicates are then found by
+/// bucketing faces by their smallest cluster ([`find_duplicates`]) and squeezed out in place.
+pub(crate) fn eliminate(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    reps: &[[f32; 3]],
+    corners: bool,
+) -> Eliminated {
+    let mut out = collapse_faces(mesh, cluster_of, reps, 0..mesh.face_count(), corners);
+    let duplicate = find_duplicates(&out, reps.len());
+    out.duplicates = duplicate.iter().filter(|&&d| d).count() as u64;
+    if out.duplicates == 0 {
+        return out;
     }
-    let duplicate = find_duplicates(&all);
-    if duplicate.iter().all(|d| !d) {
-        return all;
-    }
-    let mut out = Eliminated {
-        degenerate: all.degenerate,
-        ..Eliminated::default()
-    };
-    out.face_offsets.push(0);
-    for (f, w) in all.face_offsets.windows(2).enumerate() {
+    // Squeeze the duplicates out in place: the write position never passes the read position.
+    let (mut corner_w, mut face_w) = (0usize, 0usize);
+    for f in 0..duplicate.len() {
+        let (s, e) = (
+            out.face_offsets[f] as usize,
+            out.face_offsets[f + 1] as usize,
+        );
         if duplicate[f] {
-            out.duplicates += 1;
             continue;
         }
-        let r = w[0] as usize..w[1] as usize;
-        out.face_indices
-            .extend_from_slice(&all.face_indices[r.clone()]);
-        out.source_corner.extend_from_slice(&all.source_corner[r]);
-        out.face_offsets.push(out.face_indices.len() as u32);
-        out.source_face.push(all.source_face[f]);
+        out.face_indices.copy_within(s..e, corner_w);
+        if corners {
+            out.source_corner.copy_within(s..e, corner_w);
+        }
+        out.source_face[face_w] = out.source_face[f];
+        corner_w += e - s;
+        face_w += 1;
+        out.face_offsets[face_w] = corner_w as u32;
     }
+    out.face_indices.truncate(corner_w);
+    out.source_corner
+        .truncate(if corners { corner_w } else { 0 });
+    out.source_face.truncate(face_w);
+    out.face_offsets.truncate(face_w + 1);
     out
 }
 
@@ -88,8 +74,14 @@ fn collapse_faces(
     cluster_of: &[u32],
     reps: &[[f32; 3]],
     range: std::ops::Range<usize>,
+    corners: bool,
 ) -> Eliminated {
-    let mut out = Eliminated::default();
+    let mut out = Eliminated {
+        face_offsets: Vec::with_capacity(range.len() + 1),
+        face_indices: Vec::with_capacity(mesh.face_indices.len()),
+        source_face: Vec::with_capacity(range.len()),
+        ..Eliminated::default()
+    };
     out.face_offsets.push(0);
     let mut ring: Vec<(u32, u32)> = Vec::with_capacity(16);
     for f in range {
@@ -102,7 +94,9 @@ fn collapse_faces(
                 continue;
             }
             out.face_indices.extend_from_slice(&v);
-            out.source_corner.extend([s, s + 1, s + 2]);
+            if corners {
+                out.source_corner.extend([s, s + 1, s + 2]);
+            }
         } else {
             ring.clear();
             for corner in s..e {
@@ -116,7 +110,9 @@ fn collapse_faces(
                 continue;
             }
             out.face_indices.extend(ring.iter().map(|r| r.0));
-            out.source_corner.extend(ring.iter().map(|r| r.1));
+            if corners {
+                out.source_corner.extend(ring.iter().map(|r| r.1));
+            }
         }
         out.face_offsets.push(out.face_indices.len() as u32);
         out.source_face.push(f as u32);
@@ -126,61 +122,82 @@ fn collapse_faces(
 
 /// Marks every face that repeats an earlier one (same cluster cycle up to rotation and
 /// reversal).
-fn find_duplicates(faces: &Eliminated) -> Vec<bool> {
-    use rayon::prelude::*;
+///
+/// Duplicates share their smallest cluster, so faces are bucketed by it (a counting sort: two
+/// linear passes) and only faces within a bucket are compared; a bucket is the fan of faces
+/// around one output vertex, a handful of faces, and the few large ones are sorted instead of
+/// compared pairwise.
+fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<bool> {
     let n = faces.face_offsets.len() - 1;
     let face = |f: usize| {
         &faces.face_indices[faces.face_offsets[f] as usize..faces.face_offsets[f + 1] as usize]
     };
-    let canonical = |f: usize| -> Vec<u32> {
-        let ring: Vec<(u32, u32)> = face(f).iter().map(|&c| (c, 0)).collect();
-        if ring.len() == 3 {
-            let mut k = [ring[0].0, ring[1].0, ring[2].0];
+    let smallest = |f: usize| *face(f).iter().min().expect("faces have corners") as usize;
+    let mut start = vec![0u32; clusters + 1];
+    for f in 0..n {
+        start[smallest(f) + 1] += 1;
+    }
+    for c in 0..clusters {
+        start[c + 1] += start[c];
+    }
+    let mut bucketed = vec![0u32; n];
+    let mut cursor = start.clone();
+    for f in 0..n {
+        let c = smallest(f);
+        bucketed[cursor[c] as usize] = f as u32;
+        cursor[c] += 1;
+    }
+    drop(cursor);
+    let canonical = |f: u32| -> Vec<u32> {
+        let fc = face(f as usize);
+        if fc.len() == 3 {
+            let mut k = [fc[0], fc[1], fc[2]];
             k.sort_unstable();
             k.to_vec()
         } else {
+            let ring: Vec<(u32, u32)> = fc.iter().map(|&c| (c, 0)).collect();
             canonical_polygon(&ring)
         }
     };
-    let mut keys: Vec<(u64, u32)> = (0..n)
-        .into_par_iter()
-        .map(|f| {
-            let fc = face(f);
-            let h = if fc.len() == 3 {
-                let mut k = [fc[0], fc[1], fc[2]];
-                k.sort_unstable();
-                mix(u64::from(k[0]) << 32 | u64::from(k[1])) ^ mix(u64::from(k[2]) ^ 0x9e37_79b9)
-            } else {
-                canonical(f)
-                    .iter()
-                    .fold(0xcbf2_9ce4_8422_2325u64, |h, &c| mix(h ^ u64::from(c)))
-            };
-            (h, f as u32)
-        })
-        .collect();
-    keys.par_sort_unstable();
     let mut dup = vec![false; n];
-    let mut i = 0;
-    while i < keys.len() {
-        let j = i + keys[i..].iter().take_while(|k| k.0 == keys[i].0).count();
-        if j - i == 1 {
-            i = j;
+    for c in 0..clusters {
+        let bucket = &bucketed[start[c] as usize..start[c + 1] as usize];
+        if bucket.len() < 2 {
             continue;
         }
-        // Within a run of equal hashes (in face order), a face is a duplicate if an earlier
-        // face of the run has the same canonical cycle.
-        for a in i..j {
-            if dup[keys[a].1 as usize] {
-                continue;
+        // Faces were bucketed in increasing order, so the first of equal faces comes first.
+        if bucket.len() <= 32 {
+            let sorted3 = |f: u32| {
+                let fc = face(f as usize);
+                let mut k = [fc[0], fc[1], fc[2]];
+                k.sort_unstable();
+                k
+            };
+            for (i, &a) in bucket.iter().enumerate() {
+                let len = face(a as usize).len();
+                if dup[a as usize] {
+                    continue;
+                }
+                let same = |b: u32| match len {
+                    3 => sorted3(a) == sorted3(b),
+                    _ => canonical(a) == canonical(b),
+                };
+                for &b in &bucket[i + 1..] {
+                    if !dup[b as usize] && face(b as usize).len() == len && same(b) {
+                        dup[b as usize] = true;
+                    }
+                }
             }
-            let ca = canonical(keys[a].1 as usize);
-            for b in a + 1..j {
-                if !dup[keys[b].1 as usize] && canonical(keys[b].1 as usize) == ca {
-                    dup[keys[b].1 as usize] = true;
+        } else {
+            let mut keyed: Vec<(Vec<u32>, u32)> =
+                bucket.iter().map(|&f| (canonical(f), f)).collect();
+            keyed.sort_unstable();
+            for w in keyed.windows(2) {
+                if w[0].0 == w[1].0 {
+                    dup[w[1].1 as usize] = true;
                 }
             }
         }
-        i = j;
     }
     dup
 }
@@ -291,7 +308,7 @@ mod tests {
         m.push_face(&[1, 0, 2, 3]); // reversed + rotated quad
         m.push_face(&[0, 0, 1]); // collapsed
         let ids: Vec<u32> = (0..4).collect();
-        let e = eliminate(&m, &ids, &m.positions);
+        let e = eliminate(&m, &ids, &m.positions, true);
         assert_eq!(e.source_face, vec![0, 3]);
         assert_eq!((e.duplicates, e.degenerate), (3, 1));
     }

@@ -250,7 +250,7 @@ impl<'a> Prepared<'a> {
                 let more = |p: &Partition| {
                     // The output loses clusters whose faces all collapsed: count what survives.
                     let reps = representative::place(work, weights, p, rep, None);
-                    let kept = elimination::eliminate(work, &p.cluster_of, &reps);
+                    let kept = elimination::eliminate(work, &p.cluster_of, &reps, false);
                     target.saturating_sub(used_clusters(&kept, p.clusters).1 as u64)
                 };
                 let p = adaptive.complexity(classes, bounds, target, options.keep_partition, more);
@@ -261,41 +261,43 @@ impl<'a> Prepared<'a> {
         let reps =
             representative::place(work, weights, &partition, options.representative, tolerance);
         step(0.75, "eliminate")?;
-        let kept = elimination::eliminate(work, &partition.cluster_of, &reps);
+        let attributes = work.normals.is_some() || work.uvs.is_some();
+        let kept = elimination::eliminate(work, &partition.cluster_of, &reps, attributes);
         let (new_id, used) = used_clusters(&kept, partition.clusters);
         step(0.9, "attributes")?;
         let cluster_of = &partition.cluster_of;
-        let mut out = Mesh {
-            positions: Vec::with_capacity(used),
-            face_offsets: kept.face_offsets.clone(),
-            face_indices: kept
-                .face_indices
-                .iter()
-                .map(|&c| new_id[c as usize])
+        // Attributes read the elimination's bookkeeping; then its buffers become the mesh.
+        let normals = work
+            .normals
+            .as_ref()
+            .map(|n| attributes::carry_face_varying(work, n, cluster_of, &kept, true));
+        let uvs = work
+            .uvs
+            .as_ref()
+            .map(|t| attributes::carry_face_varying(work, t, cluster_of, &kept, false));
+        let face_groups = attributes::carry_groups(work, &kept);
+        let (degenerate, duplicates) = (kept.degenerate, kept.duplicates);
+        let mut face_indices = kept.face_indices;
+        face_indices
+            .iter_mut()
+            .for_each(|c| *c = new_id[*c as usize]);
+        let out = Mesh {
+            positions: (0..partition.clusters)
+                .filter(|&c| new_id[c] != UNUSED)
+                .map(|c| reps[c])
                 .collect(),
-            normals: None,
-            uvs: None,
+            face_offsets: kept.face_offsets,
+            face_indices,
+            normals,
+            uvs,
             creases: Vec::new(),
-            face_groups: attributes::carry_groups(work, &kept),
+            face_groups,
             group_names: if work.face_groups.is_empty() {
                 Vec::new()
             } else {
                 work.group_names.clone()
             },
         };
-        out.positions.extend(
-            (0..partition.clusters)
-                .filter(|&c| new_id[c] != UNUSED)
-                .map(|c| reps[c]),
-        );
-        out.normals = work
-            .normals
-            .as_ref()
-            .map(|n| attributes::carry_face_varying(work, n, cluster_of, &kept, true));
-        out.uvs = work
-            .uvs
-            .as_ref()
-            .map(|t| attributes::carry_face_varying(work, t, cluster_of, &kept, false));
         report.max_displacement = work
             .positions
             .iter()
@@ -306,8 +308,8 @@ impl<'a> Prepared<'a> {
         report.clusters = partition.clusters as u64;
         report.output_vertices = used as u64;
         report.output_faces = out.face_count() as u64;
-        report.degenerate_faces = kept.degenerate;
-        report.duplicate_faces = kept.duplicates;
+        report.degenerate_faces = degenerate;
+        report.duplicate_faces = duplicates;
         let cells = if options.keep_partition {
             partition.cells
         } else {
