@@ -127,6 +127,24 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
 
 /// Unit normal (Newell), area and centroid of a polygon.
 fn plane_of(mesh: &Mesh, face: &[u32]) -> ([f64; 3], f64, [f64; 3]) {
+    if let [a, b, c] = *face {
+        // Triangles: one cross product.
+        let [a, b, c] = [a, b, c].map(|v| mesh.positions[v as usize].map(f64::from));
+        let (u, w) = (
+            [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+            [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+        );
+        let n = [
+            u[1] * w[2] - u[2] * w[1],
+            u[2] * w[0] - u[0] * w[2],
+            u[0] * w[1] - u[1] * w[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if len == 0.0 {
+            return ([0.0; 3], 0.0, a);
+        }
+        return (n.map(|x| x / len), 0.5 * len, a);
+    }
     let mut n = [0f64; 3];
     let mut c = [0f64; 3];
     for i in 0..face.len() {
