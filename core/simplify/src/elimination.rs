@@ -43,12 +43,14 @@ pub(crate) fn eliminate(
     }
     // Squeeze the duplicates out in place: the write position never passes the read position.
     let (mut corner_w, mut face_w) = (0usize, 0usize);
-    for f in 0..duplicate.len() {
+    for (f, &dup) in duplicate.iter().enumerate() {
+        // Offsets f and f + 1 are still the originals here: writes go to `face_w` ≤ f, or to
+        // f + 1 with its own value when nothing was dropped yet.
         let (s, e) = (
             out.face_offsets[f] as usize,
             out.face_offsets[f + 1] as usize,
         );
-        if duplicate[f] {
+        if dup {
             continue;
         }
         out.face_indices.copy_within(s..e, corner_w);
