@@ -193,7 +193,7 @@ impl<'a> Adaptive<'a> {
     ) -> Result<Partition, Stop> {
         let (mut order, roots) = self.roots(classes, bounds);
         let leaves = self.refine_all(&mut order, &roots, tolerance)?;
-        Ok(self.finish(&order, &leaves, keep_cells))
+        Ok(self.finish(&order, leaves.iter(), keep_cells))
     }
 
     /// Refines each of `cells` (disjoint ranges of `order`, sorted by start) until every
@@ -325,40 +325,43 @@ impl<'a> Adaptive<'a> {
         keep_cells: bool,
         mut more: impl FnMut(&Partition) -> u64,
     ) -> Result<Partition, Stop> {
-        let (mut order, mut leaves) = self.roots(classes, bounds);
+        // The leaves live in an arena (`live`, a split cell hands its slot to its left child);
+        // `by_start` lists them in the order of their ranges.
+        let (mut order, mut live) = self.roots(classes, bounds);
+        let mut by_start: Vec<u32> = (0..live.len() as u32).collect();
         let mut goal = target as usize;
         loop {
-            self.approach(&mut order, &mut leaves, goal)?;
-            let partition = self.finish(&order, &leaves, keep_cells);
+            self.approach(&mut order, &mut live, &mut by_start, goal)?;
+            let leaves = by_start.iter().map(|&i| &live[i as usize]);
+            let partition = self.finish(&order, leaves, keep_cells);
             let extra = more(&partition) as usize;
-            if extra == 0 || leaves.iter().all(|n| n.eval.err <= 0.0) {
+            if extra == 0 || live.iter().all(|n| n.eval.err <= 0.0) {
                 return Ok(partition);
             }
             // Ask for half the shortfall at a time: a split can revive clusters whose faces had
             // all collapsed, so the output may grow by more than the splits added.
-            goal = leaves.len() + extra.div_ceil(2);
+            goal = live.len() + extra.div_ceil(2);
         }
     }
 
-    /// Greedy splitting of `leaves` (sorted by start) up to `goal` cells. A [`SplitQueue`]
-    /// holds the cells that can still be split (displacement above zero); nodes live in an
-    /// arena in which a split cell hands its slot to its left child.
+    /// Greedy splitting up to `goal` cells. A [`SplitQueue`] holds the cells that can still be
+    /// split (displacement above zero) by arena index; afterwards `by_start` lists every leaf
+    /// in the order of its range.
     fn approach(
         &self,
         order: &mut [Point],
-        leaves: &mut Vec<Node>,
+        live: &mut Vec<Node>,
+        by_start: &mut Vec<u32>,
         goal: usize,
     ) -> Result<(), Stop> {
-        let top = leaves.iter().map(|n| n.eval.err).fold(0.0, f64::max);
+        let top = live.iter().map(|n| n.eval.err).fold(0.0, f64::max);
         let mut queue = SplitQueue::new(top);
-        let mut kept: Vec<Node> = Vec::with_capacity(goal);
-        let mut live: Vec<Node> = Vec::new();
-        for n in leaves.drain(..) {
+        let mut kept: Vec<u32> = Vec::with_capacity(goal);
+        for (i, n) in live.iter().enumerate() {
             if n.eval.err > 0.0 {
-                queue.push(ByError(n.eval.err, live.len() as u32));
-                live.push(n);
+                queue.push(ByError(n.eval.err, i as u32));
             } else {
-                kept.push(n);
+                kept.push(i as u32);
             }
         }
         while kept.len() + queue.len() < goal {
@@ -372,42 +375,47 @@ impl<'a> Adaptive<'a> {
             match self.split(order, &node) {
                 Some((l, r)) => {
                     live[i as usize] = l;
-                    for (child, slot) in [(l, i), (r, live.len() as u32)] {
-                        if slot as usize == live.len() {
-                            live.push(child);
-                        }
+                    live.push(r);
+                    for (child, slot) in [(l, i), (r, live.len() as u32 - 1)] {
                         if child.eval.err > 0.0 {
                             queue.push(ByError(child.eval.err, slot));
                         } else {
-                            kept.push(child);
+                            kept.push(slot);
                         }
                     }
                 }
-                None => kept.push(node),
+                None => kept.push(i),
             }
         }
-        kept.extend(queue.drain().map(|k| live[k.1 as usize]));
-        kept.sort_unstable_by_key(|n| n.start);
-        *leaves = kept;
+        kept.extend(queue.drain().map(|k| k.1));
+        kept.sort_unstable_by_key(|&i| live[i as usize].start);
+        *by_start = kept;
         Ok(())
     }
 
     /// Numbers the leaves in order of their ranges and labels every vertex with its cluster.
-    fn finish(&self, order: &[Point], leaves: &[Node], keep_cells: bool) -> Partition {
+    fn finish<'n>(
+        &self,
+        order: &[Point],
+        leaves: impl Iterator<Item = &'n Node> + Clone,
+        keep_cells: bool,
+    ) -> Partition {
         let mut cluster_of = vec![UNUSED; self.positions.len()];
-        for (id, leaf) in leaves.iter().enumerate() {
+        let mut clusters = 0;
+        for (id, leaf) in leaves.clone().enumerate() {
+            clusters += 1;
             for q in &order[leaf.start..leaf.end] {
                 cluster_of[q.id as usize] = id as u32;
             }
         }
         let cells = if keep_cells {
-            leaves.iter().map(|l| l.cell).collect()
+            leaves.map(|l| l.cell).collect()
         } else {
             Vec::new()
         };
         Partition {
             cluster_of,
-            clusters: leaves.len(),
+            clusters,
             cells,
         }
     }
