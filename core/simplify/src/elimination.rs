@@ -3,6 +3,7 @@
 //! duplicate faces (also reversed ones, as stacked CAD solids produce) — so that the
 //! simplification actually lowers the complexity.
 
+use crate::area_vector;
 use crate::partition::UNUSED;
 use tessd_mesh::Mesh;
 
@@ -234,29 +235,12 @@ fn collapse_ring(ring: &mut Vec<(u32, u32)>) {
 /// Whether the triangle over the cluster positions has exactly zero area.
 fn zero_area_triangle(v: [u32; 3], reps: &[[f32; 3]]) -> bool {
     let [a, b, c] = v.map(|i| reps[i as usize].map(f64::from));
-    let (u, w) = (
-        [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
-        [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
-    );
-    let n = [
-        u[1] * w[2] - u[2] * w[1],
-        u[2] * w[0] - u[0] * w[2],
-        u[0] * w[1] - u[1] * w[0],
-    ];
-    n == [0.0; 3]
+    area_vector::triangle(a, b, c) == [0.0; 3]
 }
 
 /// Whether the polygon over the cluster positions has exactly zero area.
 fn zero_area(ring: &[(u32, u32)], reps: &[[f32; 3]]) -> bool {
-    let mut n = [0f64; 3];
-    for i in 0..ring.len() {
-        let p = reps[ring[i].0 as usize].map(f64::from);
-        let q = reps[ring[(i + 1) % ring.len()].0 as usize].map(f64::from);
-        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
-    }
-    n == [0.0; 3]
+    area_vector::polygon(ring.len(), |i| reps[ring[i].0 as usize].map(f64::from)) == [0.0; 3]
 }
 
 /// The polygon's cluster sequence, rotated to start at its smallest id and read in the

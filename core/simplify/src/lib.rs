@@ -37,6 +37,7 @@
 #![warn(missing_docs)]
 
 mod adaptive_partition;
+mod area_vector;
 mod attributes;
 mod cell_table;
 mod elimination;

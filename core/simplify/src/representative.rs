@@ -2,6 +2,7 @@
 //! sommets"): the weighted barycentre or the heaviest vertex, as in the paper, or — beyond it —
 //! the quadric minimiser of the cluster's face planes (Lindstrom 2000).
 
+use crate::area_vector;
 use crate::options::Representative;
 use crate::partition::{Partition, UNUSED};
 use crate::quadric::Quadric;
@@ -125,44 +126,27 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
     q
 }
 
-/// Unit normal (Newell), area and centroid of a polygon.
+/// Unit normal, area and a point of the plane of a face (the first corner of a triangle, the
+/// centroid of a polygon).
 fn plane_of(mesh: &Mesh, face: &[u32]) -> ([f64; 3], f64, [f64; 3]) {
-    if let [a, b, c] = *face {
-        // Triangles: one cross product.
-        let [a, b, c] = [a, b, c].map(|v| mesh.positions[v as usize].map(f64::from));
-        let (u, w) = (
-            [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
-            [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
-        );
-        let n = [
-            u[1] * w[2] - u[2] * w[1],
-            u[2] * w[0] - u[0] * w[2],
-            u[0] * w[1] - u[1] * w[0],
-        ];
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        if len == 0.0 {
-            return ([0.0; 3], 0.0, a);
+    let p = |i: usize| mesh.positions[face[i] as usize].map(f64::from);
+    let (n, at) = match face.len() {
+        3 => (area_vector::triangle(p(0), p(1), p(2)), p(0)),
+        m => {
+            let mut c = [0f64; 3];
+            for i in 0..m {
+                let q = p(i);
+                (0..3).for_each(|k| c[k] += q[k]);
+            }
+            let c = c.map(|x| x / m as f64);
+            (area_vector::polygon(m, p), c)
         }
-        return (n.map(|x| x / len), 0.5 * len, a);
-    }
-    let mut n = [0f64; 3];
-    let mut c = [0f64; 3];
-    for i in 0..face.len() {
-        let p = mesh.positions[face[i] as usize].map(f64::from);
-        let q = mesh.positions[face[(i + 1) % face.len()] as usize].map(f64::from);
-        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
-        for k in 0..3 {
-            c[k] += p[k];
-        }
-    }
+    };
     let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    let m = face.len() as f64;
     if len == 0.0 {
-        return ([0.0; 3], 0.0, c);
+        return ([0.0; 3], 0.0, at);
     }
-    (n.map(|x| x / len), 0.5 * len, c.map(|x| x / m))
+    (n.map(|x| x / len), 0.5 * len, at)
 }
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {
