@@ -715,30 +715,31 @@ impl<'w> Out<'w> {
     }
 }
 
-/// Shortest round-trip text of a finite `f32`. Plain decimal in `[1e-5, 1e15)` (Rust's `{}`),
+/// Shortest round-trip text of a finite float. Plain decimal in `[1e-5, 1e15)` (Rust's `{}`),
 /// exponent form outside it (`1e20`, `1.5e-7`) so that no number turns into a 40-digit integer
-/// literal; negative zero keeps its sign (`-0.0`).
-pub(crate) fn push_f32(buf: &mut String, v: f32) {
-    debug_assert!(v.is_finite());
-    let a = v.abs();
-    let _ = if v == 0.0 {
-        buf.write_str(if v.is_sign_negative() { "-0.0" } else { "0" })
-    } else if (1e-5..1e15).contains(&a) {
+/// literal; negative zero keeps its sign (`-0.0`). Generic so that `f32` prints with `f32`'s
+/// shortest digits, not those of its widening to `f64`.
+fn push_float<T>(buf: &mut String, v: T)
+where
+    T: Copy + Into<f64> + std::fmt::Display + std::fmt::LowerExp,
+{
+    let x: f64 = v.into();
+    debug_assert!(x.is_finite());
+    let _ = if x == 0.0 {
+        buf.write_str(if x.is_sign_negative() { "-0.0" } else { "0" })
+    } else if (1e-5..1e15).contains(&x.abs()) {
         write!(buf, "{v}")
     } else {
         write!(buf, "{v:e}")
     };
 }
 
-/// [`push_f32`] for `f64`.
+/// [`push_float`] for `f32`.
+pub(crate) fn push_f32(buf: &mut String, v: f32) {
+    push_float(buf, v);
+}
+
+/// [`push_float`] for `f64`.
 pub(crate) fn push_f64(buf: &mut String, v: f64) {
-    debug_assert!(v.is_finite());
-    let a = v.abs();
-    let _ = if v == 0.0 {
-        buf.write_str(if v.is_sign_negative() { "-0.0" } else { "0" })
-    } else if (1e-5..1e15).contains(&a) {
-        write!(buf, "{v}")
-    } else {
-        write!(buf, "{v:e}")
-    };
+    push_float(buf, v);
 }
