@@ -224,15 +224,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Job {
             action: JobAction::Run { file },
         } => job_run(&file),
-        Command::Stats { file, json } => {
-            let response = run_local("mesh.stats", serde_json::json!({"input": file}))?;
-            if json {
-                println!("{}", serde_json::to_string_pretty(&response.result)?);
-            } else {
-                print_stats(&file, &response.result);
-            }
-            Ok(())
-        }
+        Command::Stats { file, json } => report_or_json(
+            run_local("mesh.stats", serde_json::json!({"input": file}))?,
+            json,
+            |r| print_stats(&file, &r.result),
+        ),
         Command::Convert { input, output } => {
             let response = run_local(
                 "mesh.convert",
@@ -269,13 +265,9 @@ fn run(cli: Cli) -> Result<()> {
                 "partition_output": partition,
             });
             cluster.add_to(&mut params);
-            let response = run_local("simplify", params)?;
-            if json {
-                println!("{}", serde_json::to_string_pretty(&response.result)?);
-            } else {
-                print_simplify(&output, &response.result);
-            }
-            Ok(())
+            report_or_json(run_local("simplify", params)?, json, |r| {
+                print_simplify(&output, &r.result)
+            })
         }
         Command::Lod {
             input,
@@ -305,13 +297,7 @@ fn run(cli: Cli) -> Result<()> {
                 "meters_per_unit": meters_per_unit,
             });
             cluster.add_to(&mut params);
-            let response = run_local("lod", params)?;
-            if json {
-                println!("{}", serde_json::to_string_pretty(&response.result)?);
-            } else {
-                print_lod(&response);
-            }
-            Ok(())
+            report_or_json(run_local("lod", params)?, json, print_lod)
         }
         Command::Compare {
             a,
@@ -330,13 +316,9 @@ fn run(cli: Cli) -> Result<()> {
                 "edges": edges,
                 "direction": if one_sided { "a_to_b" } else { "both" },
             });
-            let response = run_local("compare", params)?;
-            if json {
-                println!("{}", serde_json::to_string_pretty(&response.result)?);
-            } else {
-                print_compare(&response.result);
-            }
-            Ok(())
+            report_or_json(run_local("compare", params)?, json, |r| {
+                print_compare(&r.result)
+            })
         }
         Command::Demo { out } => tessd::demo::run(&out),
     }
@@ -362,6 +344,16 @@ fn serve(socket: Option<&str>, log_file: Option<&Path>, max_payload: u64) -> Res
         }
     });
     server.serve()?;
+    Ok(())
+}
+
+/// Prints an operation's result: raw JSON with `--json`, else the verb's summary.
+fn report_or_json(response: Response, json: bool, summary: impl FnOnce(&Response)) -> Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(&response.result)?);
+    } else {
+        summary(&response);
+    }
     Ok(())
 }
 
