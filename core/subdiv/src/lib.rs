@@ -1,10 +1,197 @@
 //! Subdivision surfaces (paper 002: Catmull–Clark on the CPU by the factored scheme, section
-//! 5.4; the GPU part, section 6), split as OpenSubdiv splits it: a **topology phase** that
-//! builds each level's faces and a [`StencilTable`] once per cage topology, and an **apply
-//! phase** that evaluates the tables on vertex data (positions, primvars, animation frames).
+//! 5.4; the GPU part, section 6), split as OpenSubdiv splits it: a **topology phase**
+//! ([`Refiner::new`]) that builds each level's faces and a [`StencilTable`] once per cage
+//! topology, and an **apply phase** ([`Refiner::apply`]) that evaluates the tables on vertex
+//! data — positions, any primvar, every frame of an animation.
 
 #![warn(missing_docs)]
 
+pub mod catmull_clark;
+pub mod error;
 pub mod stencil;
+pub mod topology;
 
+pub use catmull_clark::Boundary;
+pub use error::SubdivError;
 pub use stencil::StencilTable;
+pub use topology::{Faces, Topology};
+
+use tessd_mesh::{Crease, Mesh};
+
+/// The refinement schemes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Scheme {
+    /// Catmull–Clark (quads out; any polygon in).
+    #[default]
+    CatmullClark,
+}
+
+impl Scheme {
+    /// The name used by the CLI and the protocol.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::CatmullClark => "catmull-clark",
+        }
+    }
+}
+
+/// What to refine and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SubdivOptions {
+    /// The scheme.
+    pub scheme: Scheme,
+    /// Refinement levels (1 or more).
+    pub levels: u32,
+    /// Boundary corner rule.
+    pub boundary: Boundary,
+    /// Refuse (before allocating) when tables and output are estimated above this many bytes.
+    pub memory_limit: u64,
+}
+
+impl Default for SubdivOptions {
+    fn default() -> Self {
+        SubdivOptions {
+            scheme: Scheme::CatmullClark,
+            levels: 1,
+            boundary: Boundary::EdgeOnly,
+            memory_limit: 8 << 30,
+        }
+    }
+}
+
+/// Estimated bytes per face of the last level: its quad (4 indices + offset + parent) and about
+/// one vertex with ~9 stencil terms (index + weight) and its position.
+const BYTES_PER_FACE: u64 = 24 + 12 + 9 * 8 + 4 + 12;
+
+/// The topology phase's result: one stencil table per level and the last level's faces.
+#[derive(Clone, Debug)]
+pub struct Refiner {
+    /// Level `i + 1` from level `i`.
+    pub tables: Vec<StencilTable>,
+    /// Faces of the last level.
+    pub faces: Faces,
+    /// Sharp edges of the last level ((a, b), sharpness).
+    pub creases: Vec<([u32; 2], f32)>,
+    /// The cage face each last-level face comes from.
+    pub face_origin: Vec<u32>,
+    /// Vertices of the cage.
+    pub cage_vertices: usize,
+}
+
+impl Refiner {
+    /// Topology phase: refines the faces and creases of `cage` `options.levels` times.
+    ///
+    /// # Errors
+    /// Bad cages (named element), zero levels, or an output estimated above the memory limit.
+    pub fn new(cage: &Mesh, options: &SubdivOptions) -> Result<Refiner, SubdivError> {
+        if options.levels == 0 {
+            return Err(SubdivError::InvalidOption(
+                "levels must be at least 1".to_string(),
+            ));
+        }
+        let corners = cage.face_indices.len() as u64;
+        let faces_out = (0..options.levels - 1).fold(corners, |f, _| f.saturating_mul(4));
+        let bytes = faces_out.saturating_mul(BYTES_PER_FACE);
+        if bytes > options.memory_limit {
+            return Err(SubdivError::TooLarge {
+                levels: options.levels,
+                faces: faces_out,
+                bytes,
+                limit: options.memory_limit,
+            });
+        }
+        let mut faces = Faces {
+            offsets: cage.face_offsets.clone(),
+            indices: cage.face_indices.clone(),
+            vertex_count: cage.positions.len() as u32,
+        };
+        let mut creases: Vec<([u32; 2], f32)> =
+            cage.creases.iter().map(|c| ([c.a, c.b], c.value)).collect();
+        let mut origin: Vec<u32> = (0..faces.len() as u32).collect();
+        let mut tables = Vec::with_capacity(options.levels as usize);
+        for _ in 0..options.levels {
+            let topo = Topology::build(&faces, &creases)?;
+            let level = match options.scheme {
+                Scheme::CatmullClark => catmull_clark::refine(&faces, &topo, options.boundary),
+            };
+            origin = level
+                .face_parent
+                .iter()
+                .map(|&p| origin[p as usize])
+                .collect();
+            tables.push(level.table);
+            faces = level.faces;
+            creases = level.creases;
+        }
+        Ok(Refiner {
+            tables,
+            faces,
+            creases,
+            face_origin: origin,
+            cage_vertices: cage.positions.len(),
+        })
+    }
+
+    /// Apply phase: evaluates every level on `data` (cage vertices × `stride` floats).
+    ///
+    /// # Errors
+    /// When `data` does not hold one row per cage vertex.
+    pub fn apply(&self, data: &[f32], stride: usize, what: &str) -> Result<Vec<f32>, SubdivError> {
+        if stride == 0 || data.len() != self.cage_vertices * stride {
+            return Err(SubdivError::VertexCount {
+                what: what.to_string(),
+                got: data.len().checked_div(stride).unwrap_or(0),
+                expected: self.cage_vertices,
+            });
+        }
+        Ok(StencilTable::apply_chain(&self.tables, data, stride))
+    }
+
+    /// Refined positions of `positions` (the cage's, or an animation frame's).
+    ///
+    /// # Errors
+    /// When the vertex count differs from the cage's.
+    pub fn apply_positions(
+        &self,
+        positions: &[[f32; 3]],
+        what: &str,
+    ) -> Result<Vec<[f32; 3]>, SubdivError> {
+        let flat = self.apply(positions.as_flattened(), 3, what)?;
+        Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// The refined mesh with `positions` (already refined): last level's faces, face groups
+    /// of the cage carried to its faces, creases still sharp.
+    pub fn mesh_with(&self, cage: &Mesh, positions: Vec<[f32; 3]>) -> Mesh {
+        let mut m = Mesh {
+            positions,
+            face_offsets: self.faces.offsets.clone(),
+            face_indices: self.faces.indices.clone(),
+            group_names: cage.group_names.clone(),
+            ..Mesh::default()
+        };
+        if !cage.face_groups.is_empty() {
+            m.face_groups = self
+                .face_origin
+                .iter()
+                .map(|&f| cage.face_groups[f as usize])
+                .collect();
+        }
+        m.creases = self
+            .creases
+            .iter()
+            .map(|&([a, b], value)| Crease { a, b, value })
+            .collect();
+        m
+    }
+}
+
+/// Refines `cage` (topology and apply in one call).
+///
+/// # Errors
+/// See [`Refiner::new`].
+pub fn subdivide(cage: &Mesh, options: &SubdivOptions) -> Result<Mesh, SubdivError> {
+    let refiner = Refiner::new(cage, options)?;
+    let positions = refiner.apply_positions(&cage.positions, "the cage")?;
+    Ok(refiner.mesh_with(cage, positions))
+}
