@@ -86,6 +86,29 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Subdivide a cage (uniform refinement; Catmull-Clark matches OpenSubdiv / Blender's
+    /// Subdivision Surface modifier with "limit surface" off).
+    Subdivide {
+        /// Cage mesh (OBJ, PLY, STL, OFF).
+        input: PathBuf,
+        /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
+        output: PathBuf,
+        /// Refinement scheme.
+        #[arg(long, default_value = "catmull-clark", value_parser = ["catmull-clark", "loop", "butterfly", "doo-sabin", "sqrt3"])]
+        scheme: String,
+        /// Refinement levels.
+        #[arg(long, default_value_t = 1)]
+        levels: u64,
+        /// Evaluate the stencils on the GPU.
+        #[arg(long)]
+        gpu: bool,
+        /// Boundary corners: smooth (edge-only) or kept in place (edge-and-corner).
+        #[arg(long, default_value = "edge-only", value_parser = ["edge-only", "edge-and-corner"])]
+        boundary: String,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Build a chain of levels of detail and write them as one USD stage (and optionally one
     /// mesh file per level).
     Lod {
@@ -267,6 +290,37 @@ fn run(cli: Cli) -> Result<()> {
             cluster.add_to(&mut params);
             report_or_json(run_local("simplify", params)?, json, |r| {
                 print_simplify(&output, &r.result)
+            })
+        }
+        Command::Subdivide {
+            input,
+            output,
+            scheme,
+            levels,
+            gpu,
+            boundary,
+            json,
+        } => {
+            let params = serde_json::json!({
+                "input": input,
+                "output": output,
+                "scheme": scheme,
+                "levels": levels,
+                "gpu": gpu,
+                "boundary": boundary,
+            });
+            report_or_json(run_local("subdivide", params)?, json, |r| {
+                let r = &r.result;
+                println!(
+                    "subdivide: {} level(s) of {}: {} vertices, {} faces -> {} (topology {:.1} ms, apply {:.1} ms)",
+                    r["levels"],
+                    r["scheme"],
+                    r["vertices"],
+                    r["faces"],
+                    output.display(),
+                    r["topology_ms"].as_f64().unwrap_or(0.0),
+                    r["apply_ms"].as_f64().unwrap_or(0.0)
+                );
             })
         }
         Command::Lod {

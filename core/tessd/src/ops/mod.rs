@@ -10,6 +10,7 @@ pub mod mesh_arrays;
 pub mod mesh_convert;
 pub mod mesh_stats;
 pub mod simplify;
+pub mod subdivide;
 
 use tessd_ipc::registry::Registry;
 
@@ -21,6 +22,7 @@ pub fn registry() -> Registry {
         .register("simplify", simplify::run)
         .register("lod", lod::run)
         .register("compare", compare::run)
+        .register("subdivide", subdivide::run)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [
