@@ -132,11 +132,11 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
         let c = faces.face(f);
         let base = faces.offsets[f] as usize;
         let n = c.len();
-        for k in 0..n {
+        for (k, &corner) in c.iter().enumerate() {
             let e_next = topo.corner_edge[base + k];
             let e_prev = topo.corner_edge[base + (k + n - 1) % n];
             out.indices
-                .extend_from_slice(&[vp + c[k], ep + e_next, fp + f as u32, ep + e_prev]);
+                .extend_from_slice(&[vp + corner, ep + e_next, fp + f as u32, ep + e_prev]);
             out.offsets.push(out.indices.len() as u32);
             face_parent.push(f as u32);
         }
@@ -222,7 +222,7 @@ fn vertex_point(faces: &Faces, topo: &Topology, v: usize, boundary: Boundary, ro
     // Edges going from sharp to smooth set how much of the sharper rule remains.
     let (sum, count) = edges
         .iter()
-        .map(|e| sharpness(e))
+        .map(sharpness)
         .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
         .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
     let w = if count == 0 {

@@ -107,7 +107,7 @@ mod tests {
         t.apply(&src, 2, &mut dst);
         assert_eq!(dst, [0.0, 10.0, 1.0, 15.0, 2.0, 20.0]);
         assert_eq!(
-            StencilTable::apply_chain(&[t.clone(),], &src, 2),
+            StencilTable::apply_chain(std::slice::from_ref(&t), &src, 2),
             dst.to_vec()
         );
     }

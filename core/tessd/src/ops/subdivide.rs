@@ -79,12 +79,7 @@ pub fn parse_options(request: &Request) -> Result<SubdivOptions, OpError> {
 pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
     let options = parse_options(&request)?;
-    if bool_param(&request, "gpu")?.unwrap_or(false) {
-        return Err(OpError::new(
-            ErrorCode::Unsupported,
-            "the GPU apply phase is not in this build yet; leave `gpu` false",
-        ));
-    }
+    let gpu = bool_param(&request, "gpu")?.unwrap_or(false);
     let output = output_path(&request)?;
     if let Some(path) = output.as_deref() {
         check_mesh_output(path)?;
@@ -96,9 +91,15 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     let topology_ms = t.elapsed().as_secs_f64() * 1e3;
     ctx.progress(0.6, "apply", "")?;
     let t = Instant::now();
-    let positions = refiner
-        .apply_positions(&cage.positions, "the cage")
-        .map_err(subdiv_error)?;
+    let (positions, device) = if gpu {
+        let (p, device) = gpu_apply(&refiner, &cage.positions)?;
+        (p, Some(device))
+    } else {
+        let p = refiner
+            .apply_positions(&cage.positions, "the cage")
+            .map_err(subdiv_error)?;
+        (p, None)
+    };
     let apply_ms = t.elapsed().as_secs_f64() * 1e3;
     let mesh = refiner.mesh_with(&cage, positions);
     let mut result = json!({
@@ -110,6 +111,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         "faces": mesh.face_count(),
         "topology_ms": topology_ms,
         "apply_ms": apply_ms,
+        "gpu": device,
     });
     match output {
         Some(path) => {
@@ -133,4 +135,22 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             files: Vec::new(),
         }),
     }
+}
+
+/// The apply phase on the GPU (wgpu compute, `shaders/stencil_apply.wgsl`): uploads the tables,
+/// evaluates every level on the device, reads the last back. Returns the positions and the
+/// adapter's description.
+fn gpu_apply(
+    refiner: &Refiner,
+    positions: &[[f32; 3]],
+) -> Result<(Vec<[f32; 3]>, String), OpError> {
+    let gpu_error =
+        |e: tessd_gpu::GpuError| OpError::new(ErrorCode::Unsupported, format!("GPU apply: {e}"));
+    let gpu = tessd_gpu::GpuStencils::new().map_err(gpu_error)?;
+    let tables = gpu.upload(&refiner.tables).map_err(gpu_error)?;
+    let flat = gpu
+        .apply(&tables, positions.as_flattened(), 3)
+        .map_err(gpu_error)?;
+    let out = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Ok((out, gpu.adapter_info()))
 }
