@@ -1,5 +1,6 @@
-"""Shared pytest setup: make `python/` (the tessd package), `tests/` (locate.py) and
-`tests/usd` (usd_checks) importable."""
+"""Shared pytest setup: make `python/` (the tessd package), `tests/` (locate.py), `tests/daemon`
+(daemon_util) and `tests/usd` (usd_checks) importable; the module-scoped `daemon` fixture that
+the simplification and subdivision tests share (tests/daemon has its own)."""
 
 from __future__ import annotations
 
@@ -7,5 +8,25 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
-for p in (REPO / "python", REPO / "tests", REPO / "tests" / "usd"):
+for p in (REPO / "python", REPO / "tests", REPO / "tests" / "daemon", REPO / "tests" / "usd"):
     sys.path.insert(0, str(p))
+
+import os  # noqa: E402
+
+import pytest  # noqa: E402
+
+import locate  # noqa: E402
+from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def daemon():
+    """One `tessd serve --socket <tmp>/t.sock` for the whole module, checked alive at the end."""
+    with short_tmpdir() as d:
+        proc = DaemonProcess(str(locate.tessd_bin()), os.path.join(d, "t.sock"))
+        proc.start()
+        try:
+            yield proc
+            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
+        finally:
+            proc.stop()

@@ -37,18 +37,6 @@ REL_TOL = 1e-5
 Creases = Optional[Sequence[Tuple[Tuple[int, int], float]]]
 
 
-@pytest.fixture(scope="module")
-def daemon():
-    """One `tessd serve --socket <tmp>/t.sock` for the whole module, checked alive at the end."""
-    with short_tmpdir() as d:
-        proc = DaemonProcess(str(locate.tessd_bin()), os.path.join(d, "t.sock"))
-        proc.start()
-        try:
-            yield proc
-            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
-        finally:
-            proc.stop()
-
 
 # ---------------------------------------------------------------------------------------------
 # Running both

@@ -18,17 +18,6 @@ import tessd  # noqa: E402
 from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
 
 
-@pytest.fixture(scope="module")
-def daemon():
-    with short_tmpdir() as d:
-        proc = DaemonProcess(str(locate.tessd_bin()), os.path.join(d, "t.sock"))
-        proc.start()
-        try:
-            yield proc
-            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
-        finally:
-            proc.stop()
-
 
 def run(daemon, path, levels, gpu, boundary="edge-only"):
     params = {"input": str(path), "levels": levels, "gpu": gpu, "boundary": boundary}
