@@ -6,11 +6,9 @@ folder fails the tests (it is never a reason to skip).
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
-import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "python"))
@@ -18,6 +16,5 @@ sys.path.insert(0, str(REPO / "tests" / "daemon"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import locate  # noqa: E402
-from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
 
 

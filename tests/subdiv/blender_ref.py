@@ -215,22 +215,10 @@ def subdivide_with_blender(positions: Any, faces: Sequence[Sequence[int]], level
 
 
 def read_obj(path: Any) -> Tuple[np.ndarray, List[List[int]]]:
-    """Positions [V, 3] f64 and faces (0-based vertex indices; negative indices resolved)."""
-    positions: List[List[float]] = []
-    faces: List[List[int]] = []
-    with open(Path(path), "r", encoding="utf-8", errors="replace") as f:
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            if parts[0] == "v":
-                positions.append([float(x) for x in parts[1:4]])
-            elif parts[0] == "f":
-                face = []
-                for token in parts[1:]:
-                    i = int(token.split("/")[0])
-                    face.append(i - 1 if i > 0 else len(positions) + i)
-                faces.append(face)
+    """Positions [V, 3] f64 and faces (0-based vertex indices), by the daemon tests' reader."""
+    from daemon_util import read_obj as read_positions_and_faces
+
+    positions, faces = read_positions_and_faces(Path(path))
     return np.asarray(positions, dtype=np.float64).reshape(-1, 3), faces
 
 

@@ -28,7 +28,6 @@ sys.path.insert(0, str(REPO / "tests" / "daemon"))
 import locate  # noqa: E402
 import tessd  # noqa: E402
 from blender_ref import assert_same_points, read_obj, subdivide_with_blender  # noqa: E402
-from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
 from tessd import TessdError  # noqa: E402
 
 LEVELS = (1, 2, 3)

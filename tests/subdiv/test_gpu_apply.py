@@ -3,7 +3,6 @@ gives the CPU's numbers within 1e-5 relative, with the same topology, and names 
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -15,7 +14,6 @@ sys.path.insert(0, str(REPO / "tests" / "daemon"))
 
 import locate  # noqa: E402
 import tessd  # noqa: E402
-from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
 
 
 
