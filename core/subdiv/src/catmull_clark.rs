@@ -15,7 +15,7 @@
 //! between a level and the next, the point blends the two masks by the fractional sharpness
 //! (semi-sharp creases, integer and fractional).
 
-use crate::stencil::StencilTable;
+use crate::level::{Level, RowBuilder, table_for};
 use crate::topology::{Faces, INFINITELY_SHARP, Topology};
 
 /// How boundary vertices of one face (valence 2) behave, as OpenSubdiv's
@@ -28,20 +28,6 @@ pub enum Boundary {
     EdgeOnly,
     /// Boundary vertices with a single face are corners: they keep their position.
     EdgeAndCorner,
-}
-
-/// One refined level.
-#[derive(Clone, Debug, Default)]
-pub struct Level {
-    /// The new faces (all quads).
-    pub faces: Faces,
-    /// New vertices from the old: face points, then edge points, then vertex points (the order
-    /// of OpenSubdiv's uniform refinement).
-    pub table: StencilTable,
-    /// Sharp edges of the new level ((a, b), sharpness), boundary edges not listed.
-    pub creases: Vec<([u32; 2], f32)>,
-    /// The old face each new face comes from.
-    pub face_parent: Vec<u32>,
 }
 
 /// Sharpness one level down (uniform creasing: minus one, infinite stays infinite).
@@ -61,39 +47,6 @@ enum Rule {
     Corner,
 }
 
-/// A stencil row under construction: (source, weight), duplicates merged at the end.
-#[derive(Default)]
-struct Row(Vec<(u32, f64)>);
-
-impl Row {
-    fn add(&mut self, v: u32, w: f64) {
-        self.0.push((v, w));
-    }
-
-    /// Adds the centroid of `face` with weight `w`.
-    fn add_face(&mut self, face: &[u32], w: f64) {
-        let each = w / face.len() as f64;
-        face.iter().for_each(|&v| self.add(v, each));
-    }
-
-    /// Appends the merged row to `t` and empties this one for the next.
-    fn push_to(&mut self, t: &mut StencilTable) {
-        self.0.sort_unstable_by_key(|e| e.0);
-        let mut last = u32::MAX;
-        for &(v, w) in &self.0 {
-            if v == last {
-                *t.weights.last_mut().expect("a term") += w as f32;
-            } else {
-                t.sources.push(v);
-                t.weights.push(w as f32);
-                last = v;
-            }
-        }
-        t.offsets.push(t.sources.len() as u32);
-        self.0.clear();
-    }
-}
-
 /// Refines `faces` (with adjacency `topo`) one level.
 pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
     let (nf, ne, nv) = (
@@ -101,13 +54,8 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
         topo.edge_vertices.len(),
         faces.vertex_count as usize,
     );
-    let mut table = StencilTable {
-        offsets: Vec::with_capacity(nf + ne + nv + 1),
-        source_count: faces.vertex_count,
-        ..StencilTable::default()
-    };
-    table.offsets.push(0);
-    let mut row = Row::default();
+    let mut table = table_for(faces.vertex_count, nf + ne + nv);
+    let mut row = RowBuilder::default();
     for f in 0..nf {
         row.add_face(faces.face(f), 1.0);
         row.push_to(&mut table);
@@ -159,7 +107,7 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
 }
 
 /// The smooth edge mask: `(a + b + F₀ + F₁) / 4`.
-fn smooth_edge(faces: &Faces, topo: &Topology, e: usize, row: &mut Row, w: f64) {
+fn smooth_edge(faces: &Faces, topo: &Topology, e: usize, row: &mut RowBuilder, w: f64) {
     let [a, b] = topo.edge_vertices[e];
     row.add(a, 0.25 * w);
     row.add(b, 0.25 * w);
@@ -168,7 +116,7 @@ fn smooth_edge(faces: &Faces, topo: &Topology, e: usize, row: &mut Row, w: f64) 
     }
 }
 
-fn edge_point(faces: &Faces, topo: &Topology, e: usize, row: &mut Row) {
+fn edge_point(faces: &Faces, topo: &Topology, e: usize, row: &mut RowBuilder) {
     let [a, b] = topo.edge_vertices[e];
     let s = topo.edge_sharpness[e];
     if s <= 0.0 {
@@ -187,7 +135,13 @@ fn edge_point(faces: &Faces, topo: &Topology, e: usize, row: &mut Row) {
     }
 }
 
-fn vertex_point(faces: &Faces, topo: &Topology, v: usize, boundary: Boundary, row: &mut Row) {
+fn vertex_point(
+    faces: &Faces,
+    topo: &Topology,
+    v: usize,
+    boundary: Boundary,
+    row: &mut RowBuilder,
+) {
     let vv = v as u32;
     let edges = topo.edges_of(v);
     let adjacent = topo.faces_of(v);
@@ -247,7 +201,7 @@ fn mask(
     v: usize,
     rule: Rule,
     sharp: &dyn Fn(&u32) -> bool,
-    row: &mut Row,
+    row: &mut RowBuilder,
     w: f64,
 ) {
     let vv = v as u32;

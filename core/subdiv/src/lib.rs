@@ -6,31 +6,100 @@
 
 #![warn(missing_docs)]
 
+pub mod bilinear;
+pub mod butterfly;
 pub mod catmull_clark;
+pub mod doo_sabin;
 pub mod error;
+pub mod level;
+pub mod loop_scheme;
+pub mod sqrt3;
 pub mod stencil;
 pub mod topology;
 
 pub use catmull_clark::Boundary;
 pub use error::SubdivError;
+pub use level::Level;
 pub use stencil::StencilTable;
 pub use topology::{Faces, Topology};
 
 use tessd_mesh::{Crease, Mesh};
 
-/// The refinement schemes.
+/// The refinement schemes (paper 002, section 1.4.7 surveys them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Scheme {
-    /// Catmull–Clark (quads out; any polygon in).
+    /// Catmull–Clark (quads out; any polygon in), as OpenSubdiv's `SCHEME_CATMARK`.
     #[default]
     CatmullClark,
+    /// Loop (triangles in and out), as OpenSubdiv's `SCHEME_LOOP`.
+    Loop,
+    /// Butterfly, interpolating (triangles).
+    Butterfly,
+    /// Doo–Sabin, dual (any polygon).
+    DooSabin,
+    /// Kobbelt's √3 (triangles; three faces per face per level).
+    Sqrt3,
+    /// Bilinear: Catmull–Clark's topology with linear interpolation (OpenSubdiv's
+    /// `SCHEME_BILINEAR`; linear face-varying data).
+    Bilinear,
 }
 
 impl Scheme {
+    /// Every scheme, in CLI order.
+    pub const ALL: [Scheme; 6] = [
+        Scheme::CatmullClark,
+        Scheme::Loop,
+        Scheme::Butterfly,
+        Scheme::DooSabin,
+        Scheme::Sqrt3,
+        Scheme::Bilinear,
+    ];
+
     /// The name used by the CLI and the protocol.
     pub fn name(self) -> &'static str {
         match self {
             Scheme::CatmullClark => "catmull-clark",
+            Scheme::Loop => "loop",
+            Scheme::Butterfly => "butterfly",
+            Scheme::DooSabin => "doo-sabin",
+            Scheme::Sqrt3 => "sqrt3",
+            Scheme::Bilinear => "bilinear",
+        }
+    }
+
+    /// The scheme called `name` (see [`Scheme::name`]).
+    pub fn from_name(name: &str) -> Option<Scheme> {
+        Scheme::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// True for the schemes defined on triangle meshes only.
+    pub fn needs_triangles(self) -> bool {
+        matches!(self, Scheme::Loop | Scheme::Butterfly | Scheme::Sqrt3)
+    }
+
+    /// Faces out per face in, per level (at most; the first Catmull–Clark or bilinear level
+    /// makes one quad per corner instead).
+    fn growth(self) -> u64 {
+        match self {
+            Scheme::Sqrt3 => 3,
+            _ => 4,
+        }
+    }
+
+    /// One level of this scheme.
+    fn refine(
+        self,
+        faces: &Faces,
+        topo: &Topology,
+        boundary: Boundary,
+    ) -> Result<Level, SubdivError> {
+        match self {
+            Scheme::CatmullClark => Ok(catmull_clark::refine(faces, topo, boundary)),
+            Scheme::Loop => loop_scheme::refine(faces, topo, boundary),
+            Scheme::Butterfly => butterfly::refine(faces, topo, boundary),
+            Scheme::DooSabin => doo_sabin::refine(faces, topo, boundary),
+            Scheme::Sqrt3 => sqrt3::refine(faces, topo, boundary),
+            Scheme::Bilinear => bilinear::refine(faces, topo, boundary),
         }
     }
 }
@@ -89,8 +158,21 @@ impl Refiner {
                 "levels must be at least 1".to_string(),
             ));
         }
-        let corners = cage.face_indices.len() as u64;
-        let faces_out = (0..options.levels - 1).fold(corners, |f, _| f.saturating_mul(4));
+        if options.scheme.needs_triangles()
+            && let Some(face) = (0..cage.face_count()).find(|&f| cage.face(f).len() != 3)
+        {
+            return Err(SubdivError::NotTriangles {
+                scheme: options.scheme.name(),
+                face,
+                corners: cage.face(face).len(),
+            });
+        }
+        let g = options.scheme.growth();
+        let first = match options.scheme {
+            Scheme::CatmullClark | Scheme::Bilinear => cage.face_indices.len() as u64,
+            _ => (cage.face_count() as u64).saturating_mul(g),
+        };
+        let faces_out = (1..options.levels).fold(first, |f, _| f.saturating_mul(g));
         let bytes = faces_out.saturating_mul(BYTES_PER_FACE);
         if bytes > options.memory_limit {
             return Err(SubdivError::TooLarge {
@@ -111,9 +193,7 @@ impl Refiner {
         let mut tables = Vec::with_capacity(options.levels as usize);
         for _ in 0..options.levels {
             let topo = Topology::build(&faces, &creases)?;
-            let level = match options.scheme {
-                Scheme::CatmullClark => catmull_clark::refine(&faces, &topo, options.boundary),
-            };
+            let level = options.scheme.refine(&faces, &topo, options.boundary)?;
             origin = level
                 .face_parent
                 .iter()

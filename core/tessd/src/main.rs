@@ -94,7 +94,7 @@ enum Command {
         /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
         output: PathBuf,
         /// Refinement scheme.
-        #[arg(long, default_value = "catmull-clark", value_parser = ["catmull-clark", "loop", "butterfly", "doo-sabin", "sqrt3"])]
+        #[arg(long, default_value = "catmull-clark", value_parser = ["catmull-clark", "loop", "butterfly", "doo-sabin", "sqrt3", "bilinear"])]
         scheme: String,
         /// Refinement levels.
         #[arg(long, default_value_t = 1)]

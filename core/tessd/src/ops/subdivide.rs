@@ -28,22 +28,16 @@ pub fn subdiv_error(e: SubdivError) -> OpError {
 /// Reads `scheme`, `levels` and `boundary`.
 ///
 /// # Errors
-/// `invalid_request` naming the parameter; `unsupported` for a scheme not built yet.
+/// `invalid_request` naming the parameter.
 pub fn parse_options(request: &Request) -> Result<SubdivOptions, OpError> {
-    let scheme = match request.str_param("scheme")?.unwrap_or("catmull-clark") {
-        "catmull-clark" => Scheme::CatmullClark,
-        s @ ("loop" | "butterfly" | "doo-sabin" | "sqrt3") => {
-            return Err(OpError::new(
-                ErrorCode::Unsupported,
-                format!("the {s} scheme is not implemented yet; use catmull-clark"),
-            ));
-        }
-        other => {
-            return Err(OpError::request(format!(
-                "`scheme` must be \"catmull-clark\", \"loop\", \"butterfly\", \"doo-sabin\" or \"sqrt3\", got {other:?}"
-            )));
-        }
-    };
+    let name = request.str_param("scheme")?.unwrap_or("catmull-clark");
+    let scheme = Scheme::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Scheme::ALL.iter().map(|s| s.name()).collect();
+        OpError::request(format!(
+            "`scheme` must be one of {}, got {name:?}",
+            names.join(", ")
+        ))
+    })?;
     let levels = match request.params.get("levels") {
         None => 1,
         Some(v) => as_u64(v)
