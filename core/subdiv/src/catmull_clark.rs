@@ -68,6 +68,26 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
         vertex_point(faces, topo, v, boundary, &mut row);
         row.push_to(&mut table);
     }
+    let (out, face_parent) = split_faces(faces, topo);
+    Level {
+        creases: split_creases(topo, nf),
+        faces: out,
+        table,
+        face_parent,
+    }
+}
+
+/// The faces of one Catmull–Clark (or bilinear) step: each corner of each face becomes the
+/// quad (vertex point, next edge point, face point, previous edge point), with new vertices
+/// numbered face points, then edge points, then vertex points. Child faces come in corner
+/// order, so meshes with the same face sizes (a mesh and its UV topology) refine to faces
+/// that correspond one to one. Returns the faces and each one's parent face.
+pub fn split_faces(faces: &Faces, topo: &Topology) -> (Faces, Vec<u32>) {
+    let (nf, ne, nv) = (
+        faces.len(),
+        topo.edge_vertices.len(),
+        faces.vertex_count as usize,
+    );
     let (fp, ep, vp) = (0u32, nf as u32, (nf + ne) as u32);
     let mut out = Faces {
         offsets: Vec::with_capacity(faces.indices.len() + 1),
@@ -89,21 +109,23 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
             face_parent.push(f as u32);
         }
     }
+    (out, face_parent)
+}
+
+/// The sharp edges after one split of `topo`'s edges at their midpoints (edge points numbered
+/// after `face_points`, vertex points after them): both halves keep the decremented sharpness.
+pub fn split_creases(topo: &Topology, face_points: usize) -> Vec<([u32; 2], f32)> {
+    let ep = face_points as u32;
+    let vp = ep + topo.edge_vertices.len() as u32;
     let mut creases = Vec::new();
-    for e in 0..ne {
+    for (e, &[a, b]) in topo.edge_vertices.iter().enumerate() {
         let s = decrement(topo.edge_sharpness[e]);
         if s > 0.0 && !topo.is_boundary(e as u32) {
-            let [a, b] = topo.edge_vertices[e];
             creases.push(([vp + a, ep + e as u32], s));
             creases.push(([ep + e as u32, vp + b], s));
         }
     }
-    Level {
-        faces: out,
-        table,
-        creases,
-        face_parent,
-    }
+    creases
 }
 
 /// The smooth edge mask: `(a + b + F₀ + F₁) / 4`.
