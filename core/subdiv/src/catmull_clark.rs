@@ -15,8 +15,11 @@
 //! between a level and the next, the point blends the two masks by the fractional sharpness
 //! (semi-sharp creases, integer and fractional).
 
-use crate::level::{Level, RowBuilder, table_for};
-use crate::topology::{Faces, INFINITELY_SHARP, Topology};
+use crate::halfedges::Halfedges;
+use crate::level::table_for;
+use crate::stencil::StencilTable;
+use crate::topology::{Faces, INFINITELY_SHARP, NONE, Topology};
+use rayon::prelude::*;
 
 /// How boundary vertices of one face (valence 2) behave, as OpenSubdiv's
 /// `VTX_BOUNDARY_EDGE_ONLY` / `VTX_BOUNDARY_EDGE_AND_CORNER` and Blender's "Smooth, keep
@@ -47,33 +50,273 @@ enum Rule {
     Corner,
 }
 
-/// Refines `faces` (with adjacency `topo`) one level.
-pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Level {
-    let (nf, ne, nv) = (
-        faces.len(),
-        topo.edge_vertices.len(),
-        faces.vertex_count as usize,
-    );
-    let mut table = table_for(faces.vertex_count, nf + ne + nv);
-    let mut row = RowBuilder::default();
-    for f in 0..nf {
-        row.add_face(faces.face(f), 1.0);
-        row.push_to(&mut table);
+/// The stencils of one Catmull–Clark step over `h`: face points, then edge points, then
+/// vertex points (the numbering of [`Halfedges::refine`] and of OpenSubdiv's uniform
+/// refinement). Each row is written directly in its final form — the composed mask's terms,
+/// each source once in the common cases — with no per-row sorting.
+pub fn stencils(h: &Halfedges, boundary: Boundary) -> StencilTable {
+    let (nf, ne, nv) = (h.faces.len(), h.edge_count(), h.faces.vertex_count as usize);
+    let rows = nf + ne + nv;
+    // Rows are independent: build chunks in parallel, then concatenate.
+    let parts: Vec<StencilTable> = (0..rows.div_ceil(ROWS_PER_TASK))
+        .into_par_iter()
+        .map(|task| {
+            let range = task * ROWS_PER_TASK..((task + 1) * ROWS_PER_TASK).min(rows);
+            let mut w = Writer {
+                table: table_for(h.faces.vertex_count, range.len()),
+                fan: Vec::new(),
+                blend: Vec::new(),
+            };
+            w.table.sources.reserve(9 * range.len());
+            w.table.weights.reserve(9 * range.len());
+            for row in range {
+                if row < nf {
+                    w.face_point(h, row as u32);
+                } else if row < nf + ne {
+                    w.edge_point(h, (row - nf) as u32);
+                } else {
+                    w.vertex_point(h, (row - nf - ne) as u32, boundary);
+                }
+            }
+            w.table
+        })
+        .collect();
+    let terms: usize = parts.iter().map(|p| p.sources.len()).sum();
+    let mut table = table_for(h.faces.vertex_count, rows);
+    table.sources.reserve_exact(terms);
+    table.weights.reserve_exact(terms);
+    for p in parts {
+        let base = table.sources.len() as u32;
+        table
+            .offsets
+            .extend(p.offsets[1..].iter().map(|&o| base + o));
+        table.sources.extend_from_slice(&p.sources);
+        table.weights.extend_from_slice(&p.weights);
     }
-    for e in 0..ne {
-        edge_point(faces, topo, e, &mut row);
-        row.push_to(&mut table);
+    table
+}
+
+/// Rows per parallel task of [`stencils`].
+const ROWS_PER_TASK: usize = 1 << 16;
+
+/// Builds one table row by row.
+struct Writer {
+    table: StencilTable,
+    /// Corners leaving the current vertex, in turning order.
+    fan: Vec<u32>,
+    /// Terms of a blended row before merging.
+    blend: Vec<(u32, f64)>,
+}
+
+impl Writer {
+    #[inline]
+    fn term(&mut self, v: u32, w: f64) {
+        self.table.sources.push(v);
+        self.table.weights.push(w as f32);
     }
-    for v in 0..nv {
-        vertex_point(faces, topo, v, boundary, &mut row);
-        row.push_to(&mut table);
+
+    #[inline]
+    fn end_row(&mut self) {
+        self.table.offsets.push(self.table.sources.len() as u32);
     }
-    let (out, face_parent) = split_faces(faces, topo);
-    Level {
-        creases: split_creases(topo, nf),
-        faces: out,
-        table,
-        face_parent,
+
+    /// The centroid of face `f`.
+    fn face_point(&mut self, h: &Halfedges, f: u32) {
+        let r = h.face_corners(f);
+        let each = 1.0 / r.len() as f64;
+        for c in r {
+            self.term(h.vert(c), each);
+        }
+        self.end_row();
+    }
+
+    /// `w_sharp` of the midpoint plus `1 − w_sharp` of the smooth mask `(a + b + F₀ + F₁)/4`.
+    fn edge_point(&mut self, h: &Halfedges, e: u32) {
+        let c = h.edge_corner[e as usize];
+        let (a, b) = (h.vert(c), h.vert(h.next(c)));
+        let s = h.edge_sharpness[e as usize];
+        let w_sharp = if s <= 0.0 {
+            0.0
+        } else if decrement(s) > 0.0 {
+            1.0
+        } else {
+            f64::from(s.min(1.0))
+        };
+        let ws = 1.0 - w_sharp;
+        if ws == 0.0 {
+            self.term(a, 0.5);
+            self.term(b, 0.5);
+            return self.end_row();
+        }
+        let t = h.twin[c as usize];
+        let (n0, n1) = (
+            h.face_corners(h.face(c)).len(),
+            h.face_corners(h.face(t)).len(),
+        );
+        let (q0, q1) = (0.25 * ws / n0 as f64, 0.25 * ws / n1 as f64);
+        let ends = 0.5 * w_sharp + 0.25 * ws + q0 + q1;
+        self.term(a, ends);
+        self.term(b, ends);
+        for (start, q) in [(c, q0), (t, q1)] {
+            let mut k = h.next(h.next(start));
+            while k != start {
+                self.term(h.vert(k), q);
+                k = h.next(k);
+            }
+        }
+        self.end_row();
+    }
+
+    fn vertex_point(&mut self, h: &Halfedges, v: u32, boundary: Boundary) {
+        // The fan of faces around v, in turning order.
+        let mut fan = std::mem::take(&mut self.fan);
+        fan.clear();
+        let start = h.vertex_corner[v as usize];
+        let mut c = start;
+        let open = loop {
+            fan.push(c);
+            c = h.turn(c);
+            if c == NONE {
+                break true;
+            }
+            if c == start {
+                break false;
+            }
+        };
+        let smooth = !open
+            && !h.vertex_pinned[v as usize]
+            && fan
+                .iter()
+                .all(|&c| h.edge_sharpness[h.edge[c as usize] as usize] <= 0.0);
+        if smooth {
+            // The common case: an interior vertex with no sharp edge.
+            self.smooth_vertex(h, v, &fan);
+            self.end_row();
+        } else {
+            self.vertex_row(h, v, boundary, &fan, open);
+        }
+        self.fan = fan;
+    }
+
+    /// The row of vertex `v` with the corners `fan` around it (`open` on a boundary).
+    fn vertex_row(&mut self, h: &Halfedges, v: u32, boundary: Boundary, fan: &[u32], open: bool) {
+        // Its edges: one per corner, plus the last incoming one on a boundary.
+        let last_in = if open {
+            Some(h.prev(*fan.last().expect("a corner")))
+        } else {
+            None
+        };
+        let edges = || {
+            fan.iter()
+                .map(|&c| (h.edge[c as usize], h.vert(h.next(c))))
+                .chain(last_in.map(|p| (h.edge[p as usize], h.vert(p))))
+        };
+        let corner = h.vertex_pinned[v as usize]
+            || (boundary == Boundary::EdgeAndCorner && open && fan.len() == 1);
+        let sharpness = |e: u32| h.edge_sharpness[e as usize];
+        let rule_of = |sharp: &dyn Fn(f32) -> bool| -> Rule {
+            if corner {
+                return Rule::Corner;
+            }
+            match edges().filter(|&(e, _)| sharp(sharpness(e))).count() {
+                0 | 1 => Rule::Smooth,
+                2 => Rule::Crease,
+                _ => Rule::Corner,
+            }
+        };
+        let parent_sharp = |s: f32| s > 0.0;
+        let child_sharp = |s: f32| decrement(s) > 0.0;
+        let parent = rule_of(&parent_sharp);
+        let child = rule_of(&child_sharp);
+        if parent == child {
+            match parent {
+                Rule::Corner => self.term(v, 1.0),
+                Rule::Crease => {
+                    self.term(v, 0.75);
+                    let sharp: Vec<u32> = edges()
+                        .filter(|&(e, _)| parent_sharp(sharpness(e)))
+                        .map(|(_, u)| u)
+                        .collect();
+                    sharp.into_iter().for_each(|u| self.term(u, 0.125));
+                }
+                Rule::Smooth => self.smooth_vertex(h, v, fan),
+            }
+            return self.end_row();
+        }
+        // Edges going from sharp to smooth set how much of the sharper rule remains.
+        let (sum, count) = edges()
+            .map(|(e, _)| sharpness(e))
+            .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
+            .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
+        let w = if count == 0 {
+            0.0
+        } else {
+            (sum / count as f64).min(1.0)
+        };
+        self.blend.clear();
+        for (rule, sharp, weight) in [
+            (parent, &parent_sharp as &dyn Fn(f32) -> bool, w),
+            (child, &child_sharp as &dyn Fn(f32) -> bool, 1.0 - w),
+        ] {
+            if weight <= 0.0 {
+                continue;
+            }
+            let row = self.table.sources.len();
+            match rule {
+                Rule::Corner => self.term(v, 1.0),
+                Rule::Crease => {
+                    self.term(v, 0.75);
+                    let ends: Vec<u32> = edges()
+                        .filter(|&(e, _)| sharp(sharpness(e)))
+                        .map(|(_, u)| u)
+                        .collect();
+                    ends.into_iter().for_each(|u| self.term(u, 0.125));
+                }
+                Rule::Smooth => self.smooth_vertex(h, v, fan),
+            }
+            let terms = self
+                .table
+                .sources
+                .drain(row..)
+                .zip(self.table.weights.drain(row..));
+            self.blend
+                .extend(terms.map(|(s, x)| (s, f64::from(x) * weight)));
+        }
+        self.blend.sort_unstable_by_key(|t| t.0);
+        let mut i = 0;
+        while i < self.blend.len() {
+            let (src, mut x) = self.blend[i];
+            i += 1;
+            while i < self.blend.len() && self.blend[i].0 == src {
+                x += self.blend[i].1;
+                i += 1;
+            }
+            self.term(src, x);
+        }
+        self.end_row();
+    }
+
+    /// The smooth mask of an interior vertex of valence `n` (its corners `fan`):
+    /// `((n − 2)/n)·v + (1/n²)·Σ edge neighbours + (1/n²)·Σ face points`, each source once:
+    /// an edge neighbour also collects its share of the two face points around it.
+    fn smooth_vertex(&mut self, h: &Halfedges, v: u32, fan: &[u32]) {
+        let n = fan.len();
+        let q = 1.0 / (n * n) as f64;
+        let size = |c: u32| h.face_corners(h.face(c)).len() as f64;
+        let centre = (n as f64 - 2.0) / n as f64 + fan.iter().map(|&c| q / size(c)).sum::<f64>();
+        self.term(v, centre);
+        for i in 0..n {
+            let (c, before) = (fan[i], fan[(i + n - 1) % n]);
+            let qf = q / size(c);
+            self.term(h.vert(h.next(c)), q + qf + q / size(before));
+            // The face's corners other than v and its two edge neighbours.
+            let mut k = h.next(h.next(c));
+            let last = h.prev(c);
+            while k != last {
+                self.term(h.vert(k), qf);
+                k = h.next(k);
+            }
+        }
     }
 }
 
@@ -126,125 +369,4 @@ pub fn split_creases(topo: &Topology, face_points: usize) -> Vec<([u32; 2], f32)
         }
     }
     creases
-}
-
-/// The smooth edge mask: `(a + b + F₀ + F₁) / 4`.
-fn smooth_edge(faces: &Faces, topo: &Topology, e: usize, row: &mut RowBuilder, w: f64) {
-    let [a, b] = topo.edge_vertices[e];
-    row.add(a, 0.25 * w);
-    row.add(b, 0.25 * w);
-    for f in topo.edge_faces[e] {
-        row.add_face(faces.face(f as usize), 0.25 * w);
-    }
-}
-
-fn edge_point(faces: &Faces, topo: &Topology, e: usize, row: &mut RowBuilder) {
-    let [a, b] = topo.edge_vertices[e];
-    let s = topo.edge_sharpness[e];
-    if s <= 0.0 {
-        return smooth_edge(faces, topo, e, row, 1.0);
-    }
-    // Sharp now; if it becomes smooth at the next level, blend by the fractional sharpness.
-    let w = if decrement(s) > 0.0 {
-        1.0
-    } else {
-        f64::from(s.min(1.0))
-    };
-    row.add(a, 0.5 * w);
-    row.add(b, 0.5 * w);
-    if w < 1.0 {
-        smooth_edge(faces, topo, e, row, 1.0 - w);
-    }
-}
-
-fn vertex_point(
-    faces: &Faces,
-    topo: &Topology,
-    v: usize,
-    boundary: Boundary,
-    row: &mut RowBuilder,
-) {
-    let vv = v as u32;
-    let edges = topo.edges_of(v);
-    let adjacent = topo.faces_of(v);
-    if edges.is_empty() {
-        // An unused vertex is carried through unchanged.
-        return row.add(vv, 1.0);
-    }
-    let boundary_edges = edges.iter().filter(|&&e| topo.is_boundary(e)).count();
-    let manifold = if boundary_edges == 0 {
-        adjacent.len() == edges.len()
-    } else {
-        boundary_edges == 2 && adjacent.len() + 1 == edges.len()
-    };
-    let corner = !manifold
-        || (boundary == Boundary::EdgeAndCorner && boundary_edges > 0 && adjacent.len() == 1);
-    let sharpness = |e: &u32| topo.edge_sharpness[*e as usize];
-    let rule_of = |sharp: &dyn Fn(&u32) -> bool| -> Rule {
-        if corner {
-            return Rule::Corner;
-        }
-        match edges.iter().filter(|e| sharp(e)).count() {
-            0 | 1 => Rule::Smooth,
-            2 => Rule::Crease,
-            _ => Rule::Corner,
-        }
-    };
-    let parent = rule_of(&|e| sharpness(e) > 0.0);
-    let child = rule_of(&|e| decrement(sharpness(e)) > 0.0);
-    if parent == child {
-        return mask(faces, topo, v, parent, &|e| sharpness(e) > 0.0, row, 1.0);
-    }
-    // Edges going from sharp to smooth set how much of the sharper rule remains.
-    let (sum, count) = edges
-        .iter()
-        .map(sharpness)
-        .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
-        .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
-    let w = if count == 0 {
-        0.0
-    } else {
-        (sum / count as f64).min(1.0)
-    };
-    if w > 0.0 {
-        mask(faces, topo, v, parent, &|e| sharpness(e) > 0.0, row, w);
-    }
-    if w < 1.0 {
-        let child_sharp = |e: &u32| decrement(sharpness(e)) > 0.0;
-        mask(faces, topo, v, child, &child_sharp, row, 1.0 - w);
-    }
-}
-
-/// Adds `w` times the mask of `rule` at vertex `v`; `sharp` says which edges the crease rule
-/// follows.
-fn mask(
-    faces: &Faces,
-    topo: &Topology,
-    v: usize,
-    rule: Rule,
-    sharp: &dyn Fn(&u32) -> bool,
-    row: &mut RowBuilder,
-    w: f64,
-) {
-    let vv = v as u32;
-    match rule {
-        Rule::Corner => row.add(vv, w),
-        Rule::Crease => {
-            row.add(vv, 0.75 * w);
-            for e in topo.edges_of(v).iter().filter(|e| sharp(e)) {
-                row.add(topo.other(*e, vv), 0.125 * w);
-            }
-        }
-        Rule::Smooth => {
-            let edges = topo.edges_of(v);
-            let n = edges.len() as f64;
-            row.add(vv, w * (n - 2.0) / n);
-            for &e in edges {
-                row.add(topo.other(e, vv), w / (n * n));
-            }
-            for &f in topo.faces_of(v) {
-                row.add_face(faces.face(f as usize), w / (n * n));
-            }
-        }
-    }
 }

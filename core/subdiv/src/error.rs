@@ -62,6 +62,17 @@ pub enum SubdivError {
         /// The cage's.
         expected: usize,
     },
+    /// A mesh that breaks the mesh model's invariants (index out of range, NaN...).
+    #[error("{0}")]
+    InvalidMesh(String),
+    /// A vertex no face uses (subdivision has no rule for it).
+    #[error(
+        "vertex {vertex} is isolated (no face uses it); remove loose vertices before subdividing"
+    )]
+    IsolatedVertex {
+        /// The vertex.
+        vertex: usize,
+    },
     /// A crease names an edge the mesh does not have.
     #[error("crease {index} is on ({a}, {b}), which is not an edge of the mesh")]
     CreaseNotAnEdge {

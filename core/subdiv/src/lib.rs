@@ -9,9 +9,11 @@
 pub mod bilinear;
 pub mod butterfly;
 pub mod catmull_clark;
+pub mod crease_rules;
 pub mod doo_sabin;
 pub mod error;
 pub mod face_varying;
+pub mod halfedges;
 pub mod level;
 pub mod loop_scheme;
 pub mod normals;
@@ -21,6 +23,8 @@ pub mod topology;
 
 pub use catmull_clark::Boundary;
 pub use error::SubdivError;
+pub use face_varying::UvInterpolation;
+use halfedges::Halfedges;
 pub use level::Level;
 pub use stencil::StencilTable;
 pub use topology::{Faces, Topology};
@@ -79,11 +83,14 @@ impl Scheme {
         matches!(self, Scheme::Loop | Scheme::Butterfly | Scheme::Sqrt3)
     }
 
-    /// Faces out per face in, per level (at most; the first Catmull–Clark or bilinear level
-    /// makes one quad per corner instead).
+    /// Faces out per face in, per level, at most (the first Catmull–Clark or bilinear level
+    /// makes one quad per corner instead): √3 makes 3 per face plus one per boundary or
+    /// crease edge; Doo–Sabin one per face, edge and vertex (4 + χ/F on closed quad meshes,
+    /// more on open ones and larger polygons).
     fn growth(self) -> u64 {
         match self {
-            Scheme::Sqrt3 => 3,
+            Scheme::Sqrt3 => 4,
+            Scheme::DooSabin => 5,
             _ => 4,
         }
     }
@@ -96,7 +103,9 @@ impl Scheme {
         boundary: Boundary,
     ) -> Result<Level, SubdivError> {
         match self {
-            Scheme::CatmullClark => Ok(catmull_clark::refine(faces, topo, boundary)),
+            Scheme::CatmullClark => Err(SubdivError::InvalidOption(
+                "Catmull–Clark refines through Halfedges, not level by level".to_string(),
+            )),
             Scheme::Loop => loop_scheme::refine(faces, topo, boundary),
             Scheme::Butterfly => butterfly::refine(faces, topo, boundary),
             Scheme::DooSabin => doo_sabin::refine(faces, topo, boundary),
@@ -117,6 +126,10 @@ pub struct SubdivOptions {
     pub boundary: Boundary,
     /// Refuse (before allocating) when tables and output are estimated above this many bytes.
     pub memory_limit: u64,
+    /// How the cage's UVs are refined (Blender's default: corners kept).
+    pub uv_interpolation: UvInterpolation,
+    /// Give the refined mesh smooth shading normals ([`normals::smooth_normals`]).
+    pub normals: bool,
 }
 
 impl Default for SubdivOptions {
@@ -126,6 +139,8 @@ impl Default for SubdivOptions {
             levels: 1,
             boundary: Boundary::EdgeOnly,
             memory_limit: 8 << 30,
+            uv_interpolation: UvInterpolation::default(),
+            normals: true,
         }
     }
 }
@@ -169,9 +184,20 @@ impl Refiner {
                 corners: cage.face(face).len(),
             });
         }
+        cage.validate()
+            .map_err(|e| SubdivError::InvalidMesh(e.to_string()))?;
+        let mut used = vec![false; cage.positions.len()];
+        cage.face_indices
+            .iter()
+            .for_each(|&v| used[v as usize] = true);
+        if let Some(vertex) = used.iter().position(|&u| !u) {
+            return Err(SubdivError::IsolatedVertex { vertex });
+        }
         let g = options.scheme.growth();
         let first = match options.scheme {
             Scheme::CatmullClark | Scheme::Bilinear => cage.face_indices.len() as u64,
+            // A face per face, edge and vertex: edges and vertices are at most the corners.
+            Scheme::DooSabin => (cage.face_count() + 2 * cage.face_indices.len()) as u64,
             _ => (cage.face_count() as u64).saturating_mul(g),
         };
         let faces_out = (1..options.levels).fold(first, |f, _| f.saturating_mul(g));
@@ -193,17 +219,36 @@ impl Refiner {
             cage.creases.iter().map(|c| ([c.a, c.b], c.value)).collect();
         let mut origin: Vec<u32> = (0..faces.len() as u32).collect();
         let mut tables = Vec::with_capacity(options.levels as usize);
-        for _ in 0..options.levels {
-            let topo = Topology::build(&faces, &creases)?;
-            let level = options.scheme.refine(&faces, &topo, options.boundary)?;
-            origin = level
-                .face_parent
-                .iter()
-                .map(|&p| origin[p as usize])
-                .collect();
-            tables.push(level.table);
-            faces = level.faces;
-            creases = level.creases;
+        if options.scheme == Scheme::CatmullClark {
+            // Index arithmetic after the cage: no per-level adjacency rebuild.
+            let mut h = Halfedges::from_cage(&faces, &creases)?;
+            for level in 1..=options.levels {
+                tables.push(catmull_clark::stencils(&h, options.boundary));
+                // Child face c is parent corner c.
+                origin = (0..h.faces.indices.len() as u32)
+                    .map(|c| origin[h.face(c) as usize])
+                    .collect();
+                if level == options.levels {
+                    // The last level needs its faces and creases only.
+                    creases = h.refined_creases();
+                    faces = h.refine_faces();
+                } else {
+                    h = h.refine();
+                }
+            }
+        } else {
+            for _ in 0..options.levels {
+                let topo = Topology::build(&faces, &creases)?;
+                let level = options.scheme.refine(&faces, &topo, options.boundary)?;
+                origin = level
+                    .face_parent
+                    .iter()
+                    .map(|&p| origin[p as usize])
+                    .collect();
+                tables.push(level.table);
+                faces = level.faces;
+                creases = level.creases;
+            }
         }
         Ok(Refiner {
             tables,
@@ -243,8 +288,18 @@ impl Refiner {
     }
 
     /// The refined mesh with `positions` (already refined): last level's faces, face groups
-    /// of the cage carried to its faces, creases still sharp.
-    pub fn mesh_with(&self, cage: &Mesh, positions: Vec<[f32; 3]>) -> Mesh {
+    /// of the cage carried to its faces, creases still sharp, the cage's UVs refined by
+    /// `options.uv_interpolation` (schemes that carry them: [`face_varying::refine_uvs`]) and,
+    /// with `options.normals`, smooth shading normals.
+    ///
+    /// # Errors
+    /// UVs that do not fit the cage, or a refiner built from another cage or options.
+    pub fn mesh_with(
+        &self,
+        cage: &Mesh,
+        positions: Vec<[f32; 3]>,
+        options: &SubdivOptions,
+    ) -> Result<Mesh, SubdivError> {
         let mut m = Mesh {
             positions,
             face_offsets: self.faces.offsets.clone(),
@@ -264,7 +319,11 @@ impl Refiner {
             .iter()
             .map(|&([a, b], value)| Crease { a, b, value })
             .collect();
-        m
+        m.uvs = face_varying::refine_uvs(cage, self, options)?;
+        if options.normals {
+            m.normals = Some(normals::smooth_normals(&m));
+        }
+        Ok(m)
     }
 }
 
@@ -275,5 +334,5 @@ impl Refiner {
 pub fn subdivide(cage: &Mesh, options: &SubdivOptions) -> Result<Mesh, SubdivError> {
     let refiner = Refiner::new(cage, options)?;
     let positions = refiner.apply_positions(&cage.positions, "the cage")?;
-    Ok(refiner.mesh_with(cage, positions))
+    refiner.mesh_with(cage, positions, options)
 }

@@ -205,6 +205,10 @@ pub struct MeshPrim<'a> {
     /// is the **transpose** of Blender's `Object.matrix_world` (pass
     /// `matrix_world.transposed()`). Every entry must be finite.
     pub transform: Option<[[f64; 4]; 4]>,
+    /// Animated points: frame `k` (0-based) is authored at time code `k + 1` as
+    /// `points.timeSamples` (and `extent.timeSamples`); each frame has one point per vertex of
+    /// `mesh`. The stage then gets `startTimeCode = 1` and `endTimeCode` = the frame count.
+    pub point_samples: Option<&'a [Vec<[f32; 3]>]>,
 }
 
 impl<'a> MeshPrim<'a> {
@@ -214,6 +218,7 @@ impl<'a> MeshPrim<'a> {
             mesh,
             options: MeshPrimOptions::default(),
             transform: None,
+            point_samples: None,
         }
     }
 
@@ -226,6 +231,12 @@ impl<'a> MeshPrim<'a> {
     /// Sets [`MeshPrim::transform`].
     pub fn with_transform(mut self, transform: [[f64; 4]; 4]) -> Self {
         self.transform = Some(transform);
+        self
+    }
+
+    /// Sets [`MeshPrim::point_samples`].
+    pub fn with_point_samples(mut self, frames: &'a [Vec<[f32; 3]>]) -> Self {
+        self.point_samples = Some(frames);
         self
     }
 }

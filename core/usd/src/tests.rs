@@ -544,3 +544,36 @@ fn lod_schema_structure() {
     assert_eq!(e.unwrap_err().code(), "invalid_request");
     assert!(v.is_empty());
 }
+
+#[test]
+fn animated_points_are_time_samples() {
+    let m = quad();
+    let frames: Vec<Vec<[f32; 3]>> = (0..3)
+        .map(|k| m.positions.iter().map(|p| [p[0], p[1], k as f32]).collect())
+        .collect();
+    let mut v = Vec::new();
+    let prims = [MeshPrim::new(&m).with_point_samples(&frames)];
+    write_stage(&mut v, &StageOptions::default(), &prims).unwrap();
+    let s = String::from_utf8(v).unwrap();
+    assert!(s.contains("    startTimeCode = 1\n    endTimeCode = 3\n"), "{s}");
+    assert!(s.contains("point3f[] points.timeSamples = {\n"), "{s}");
+    assert!(s.contains("        3: [(0, 0, 2), "), "{s}");
+    assert!(s.contains("        2: [(0, 0, 1), (1, 1, 1)],\n"), "{s}");
+
+    // A frame of another size, or with NaN, is refused before anything is written.
+    let mut short = frames.clone();
+    short[1].pop();
+    let mut nan = frames.clone();
+    nan[2][1][0] = f32::NAN;
+    for (bad, why) in [(short, "frame 1 has 3 points"), (nan, "frame 2, point 1")] {
+        let mut v = Vec::new();
+        let e = write_stage(
+            &mut v,
+            &StageOptions::default(),
+            &[MeshPrim::new(&m).with_point_samples(&bad)],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains(why), "{e}");
+        assert!(v.is_empty());
+    }
+}

@@ -26,11 +26,7 @@ pub fn write_mesh_stage(
     write_stage(
         w,
         stage,
-        &[MeshPrim {
-            mesh,
-            options: prim.clone(),
-            transform: None,
-        }],
+        &[MeshPrim::new(mesh).with_options(prim.clone())],
     )
 }
 
@@ -181,6 +177,22 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                         p.options.name
                     )));
                 }
+                for (k, f) in p.point_samples.iter().flat_map(|s| s.iter()).enumerate() {
+                    if f.len() != p.mesh.positions.len() {
+                        return Err(UsdError::InvalidOption(format!(
+                            "mesh prim \"{}\": frame {k} has {} points, the mesh {}",
+                            p.options.name,
+                            f.len(),
+                            p.mesh.positions.len()
+                        )));
+                    }
+                    if let Some(i) = f.iter().position(|q| q.iter().any(|c| !c.is_finite())) {
+                        return Err(UsdError::InvalidOption(format!(
+                            "mesh prim \"{}\": frame {k}, point {i} is not finite",
+                            p.options.name
+                        )));
+                    }
+                }
             }
         }
         Body::Lod { levels, options }
@@ -208,6 +220,16 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
         out.push("    doc = ");
         out.push_string_literal(doc);
         out.push("\n");
+    }
+    let frames = match &body {
+        Body::Prims(prims) => prims
+            .iter()
+            .filter_map(|p| p.point_samples.map(<[_]>::len))
+            .max(),
+        _ => None,
+    };
+    if let Some(n) = frames.filter(|&n| n > 0) {
+        out.push_fmt(format_args!("    startTimeCode = 1\n    endTimeCode = {n}\n"));
     }
     out.push("    metersPerUnit = ");
     out.push_f64(stage.meters_per_unit);
@@ -237,6 +259,7 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                 let extras = PrimExtras {
                     transform: p.transform.as_ref(),
                     visibility: None,
+                    point_samples: p.point_samples,
                 };
                 write_mesh(&mut out, 1, p.mesh, &p.options, &name, &extras)?;
             }
@@ -269,6 +292,7 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                 out.push("\n");
                 let extras = PrimExtras {
                     transform: None,
+                    point_samples: None,
                     visibility: Some(if i == lod.default_index {
                         "inherited"
                     } else {
@@ -380,6 +404,8 @@ struct PrimExtras<'a> {
     transform: Option<&'a [[f64; 4]; 4]>,
     /// The `visibility` token (`"inherited"` / `"invisible"`), when authored.
     visibility: Option<&'static str>,
+    /// Animated points (see [`MeshPrim::point_samples`]).
+    point_samples: Option<&'a [Vec<[f32; 3]>]>,
 }
 
 /// The screen-size thresholds of a `UsdLod` stage: checked when given, else derived from the
@@ -458,6 +484,25 @@ fn write_mesh(
     ));
     out.push_fmt(format_args!("{pad1}point3f[] points = "));
     out.push_tuple_array(&mesh.positions)?;
+    if let Some(frames) = extras.point_samples {
+        out.push_fmt(format_args!("{pad1}float3[] extent.timeSamples = {{\n"));
+        for (k, f) in frames.iter().enumerate() {
+            if let Some((lo, hi)) = extent(f) {
+                out.push_fmt(format_args!("{pad1}    {}: [", k + 1));
+                out.push_tuple(&lo);
+                out.push(", ");
+                out.push_tuple(&hi);
+                out.push("],\n");
+            }
+        }
+        out.push_fmt(format_args!("{pad1}}}\n{pad1}point3f[] points.timeSamples = {{\n"));
+        for (k, f) in frames.iter().enumerate() {
+            out.push_fmt(format_args!("{pad1}    {}: ", k + 1));
+            out.push_tuple_array_open(f)?;
+            out.push(",\n");
+        }
+        out.push_fmt(format_args!("{pad1}}}\n"));
+    }
 
     if let Some(n) = mesh.normals.as_ref().filter(|_| options.write_normals) {
         out.push_fmt(format_args!("{pad1}normal3f[] primvars:normals = "));
