@@ -27,8 +27,10 @@
 //! Children come in parent-corner order (see [`catmull_clark::split_faces`]), so the refined
 //! UV topology's faces are the refined mesh's faces one to one and the result's indices follow
 //! the refined mesh's corners. Schemes whose faces do not split that way (Butterfly, Doo–Sabin,
-//! √3 — and Loop until its triangle split is added to [`refine_level`]) carry no UVs: they are
-//! dropped ([`carries_face_varying`]).
+//! √3) carry no UVs: they are dropped ([`carries_face_varying`]). Loop can join: the value
+//! rules (seams, spans, corners, creases) do not depend on the scheme; it needs its own masks
+//! in `ChannelLevel` (no face values) and the child corners of `loop_scheme::split_triangles`
+//! in `refine_level`.
 //!
 //! Like Blender's converter, corners of one vertex with equal UVs are one value (see
 //! [`weld_by_value`]); Blender welds within 1e-4 while we weld exact equals only.
@@ -1077,13 +1079,85 @@ mod tests {
         );
     }
 
+    /// Random UV layouts (random seams, darts, junctions, bowties in UV space) on a cage with
+    /// a non-manifold vertex: no panic, and every refined value is a convex combination of
+    /// the cage's (within their bounds).
+    #[test]
+    fn random_layouts_stay_convex() {
+        let mut seed = 12345u64;
+        let mut rand = |n: u32| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) % u64::from(n)) as u32
+        };
+        let mut cage = grid(4, 3, |p| [p[0], p[1]]);
+        // A quad touching the grid at one corner only (a bowtie vertex) and a triangle.
+        let base = cage.positions.len() as u32;
+        cage.positions
+            .extend_from_slice(&[[5.0, 3.0, 0.0], [5.0, 4.0, 0.0], [4.4, 4.0, 0.0]]);
+        cage.push_face(&[19, base, base + 1, base + 2]);
+        cage.push_face(&[0, 5, 1]);
+        let corners = cage.face_indices.len();
+        for trial in 0..20 {
+            let values: Vec<[f32; 2]> = (0..12)
+                .map(|_| [rand(1000) as f32 / 1000.0, rand(1000) as f32 / 1000.0])
+                .collect();
+            // Few values, so that neighbouring corners often share one.
+            let indices: Vec<u32> = (0..corners).map(|_| rand(12)).collect();
+            cage.uvs = Some(FaceVarying {
+                values: values.clone(),
+                indices,
+            });
+            let lo = values
+                .iter()
+                .fold([f32::MAX; 2], |a, v| [a[0].min(v[0]), a[1].min(v[1])]);
+            let hi = values
+                .iter()
+                .fold([f32::MIN; 2], |a, v| [a[0].max(v[0]), a[1].max(v[1])]);
+            for uv in UvInterpolation::ALL {
+                for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
+                    let opts = options(2, uv, boundary, Scheme::CatmullClark);
+                    let m = subdivide(&cage, &opts).unwrap();
+                    let fv = m.uvs.unwrap();
+                    assert_eq!(fv.indices.len(), m.face_indices.len());
+                    for p in &fv.values {
+                        assert!(
+                            (0..2).all(|k| p[k] >= lo[k] - 1e-5 && p[k] <= hi[k] + 1e-5),
+                            "trial {trial} {uv:?}: {p:?} outside {lo:?}..{hi:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn schemes_without_corner_order_drop_uvs() {
-        let cage = grid(2, 2, |p| [p[0], p[1]]);
-        for scheme in [Scheme::DooSabin] {
+        let quads = grid(2, 2, |p| [p[0], p[1]]);
+        let mut triangles = quads.clone();
+        triangles.face_offsets = vec![0];
+        triangles.face_indices.clear();
+        for q in quads.faces() {
+            triangles.push_face(&[q[0], q[1], q[2]]);
+            triangles.push_face(&[q[0], q[2], q[3]]);
+        }
+        let uv = quads.uvs.as_ref().unwrap();
+        triangles.uvs = Some(FaceVarying {
+            values: uv.values.clone(),
+            indices: triangles.face_indices.clone(),
+        });
+        let cases = [
+            (&quads, Scheme::DooSabin),
+            (&triangles, Scheme::Loop),
+            (&triangles, Scheme::Butterfly),
+            (&triangles, Scheme::Sqrt3),
+        ];
+        for (cage, scheme) in cases {
+            assert!(!carries_face_varying(scheme));
             let opts = options(1, UvInterpolation::Corners, Boundary::EdgeOnly, scheme);
-            if let Ok(refiner) = Refiner::new(&cage, &opts) {
-                assert_eq!(refine_uvs(&cage, &refiner, &opts).unwrap(), None);
+            if let Ok(refiner) = Refiner::new(cage, &opts) {
+                assert_eq!(refine_uvs(cage, &refiner, &opts).unwrap(), None);
             }
         }
     }

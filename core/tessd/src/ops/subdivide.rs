@@ -10,7 +10,7 @@ use std::time::Instant;
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
-use tessd_subdiv::{Boundary, Refiner, Scheme, SubdivError, SubdivOptions};
+use tessd_subdiv::{Boundary, Refiner, Scheme, SubdivError, SubdivOptions, UvInterpolation};
 
 /// The largest `levels` accepted (the memory estimate refuses most meshes well before).
 pub const MAX_LEVELS: u64 = 10;
@@ -25,7 +25,7 @@ pub fn subdiv_error(e: SubdivError) -> OpError {
     OpError::new(code, e.to_string())
 }
 
-/// Reads `scheme`, `levels` and `boundary`.
+/// Reads `scheme`, `levels`, `boundary`, `uv_interpolation` and `normals`.
 ///
 /// # Errors
 /// `invalid_request` naming the parameter.
@@ -57,10 +57,22 @@ pub fn parse_options(request: &Request) -> Result<SubdivOptions, OpError> {
             )));
         }
     };
+    let uv_interpolation = match request.str_param("uv_interpolation")? {
+        None => UvInterpolation::default(),
+        Some(name) => UvInterpolation::from_name(name).ok_or_else(|| {
+            let names: Vec<&str> = UvInterpolation::ALL.iter().map(|u| u.name()).collect();
+            OpError::request(format!(
+                "`uv_interpolation` must be one of {}, got {name:?}",
+                names.join(", ")
+            ))
+        })?,
+    };
     Ok(SubdivOptions {
         scheme,
         levels: levels as u32,
         boundary,
+        uv_interpolation,
+        normals: bool_param(request, "normals")?.unwrap_or(true),
         ..SubdivOptions::default()
     })
 }
@@ -95,10 +107,13 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         (p, None)
     };
     let apply_ms = t.elapsed().as_secs_f64() * 1e3;
-    let mesh = refiner.mesh_with(&cage, positions);
+    let mesh = refiner
+        .mesh_with(&cage, positions, &options)
+        .map_err(subdiv_error)?;
     let mut result = json!({
         "scheme": options.scheme.name(),
         "levels": options.levels,
+        "uv_interpolation": mesh.uvs.as_ref().map(|_| options.uv_interpolation.name()),
         "cage_vertices": cage.vertex_count(),
         "cage_faces": cage.face_count(),
         "vertices": mesh.vertex_count(),
