@@ -51,6 +51,41 @@ def test_demo_writes_stats_and_valid_usd(tmp_path):
         assert abs(got - target) <= 0.01 * target, (counts, percent)
     assert "lod: LOD0 2930 vertices" in run.stdout
 
+    # Subdivision of Spot's cage (spot_control_mesh.obj: 180 faces, 732 corners): Catmull-Clark
+    # level 1 makes one quad per corner, each later level four per quad.
+    cage_faces, cage_corners = 180, 732
+    refined = out / "spot_subdiv.usda"
+    assert validate_stage(refined) == []
+    stage = Usd.Stage.Open(str(refined))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Root/spot"))
+    assert len(mesh.GetFaceVertexCountsAttr().Get()) == cage_corners * 16
+    assert set(mesh.GetFaceVertexCountsAttr().Get()) == {4}
+    assert mesh.GetSubdivisionSchemeAttr().Get() == "none"
+
+    cage = out / "spot_cage.usda"
+    assert validate_stage(cage) == []
+    stage = Usd.Stage.Open(str(cage))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Root/spot"))
+    assert len(mesh.GetFaceVertexCountsAttr().Get()) == cage_faces
+    assert mesh.GetSubdivisionSchemeAttr().Get() == "catmullClark"
+    assert mesh.GetInterpolateBoundaryAttr().Get() == "edgeOnly"
+
+    # The animation: 24 time samples of the level-2 points, each frame a different shape.
+    anim = out / "spot_subdiv_anim.usda"
+    assert validate_stage(anim) == []
+    stage = Usd.Stage.Open(str(anim))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1, 24)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Root/spot"))
+    assert len(mesh.GetFaceVertexCountsAttr().Get()) == cage_corners * 4
+    points = mesh.GetPointsAttr()
+    assert points.GetTimeSamples() == [float(k) for k in range(1, 25)]
+    a, b = points.Get(1), points.Get(7)
+    assert len(a) == len(b) > cage_corners
+    assert max(abs(p[2] - q[2]) for p, q in zip(a, b)) > 0.01
+    assert "24 frames at level 2, one topology phase" in run.stdout
+
     # The socket is gone after the demo's daemon shut down: nothing left in the output folder
-    # but the three results.
-    assert sorted(p.name for p in out.iterdir()) == ["spot.usda", "spot_lods.usda", "spot_stats.json"]
+    # but the results.
+    assert sorted(p.name for p in out.iterdir()) == [
+        "spot.usda", "spot_cage.usda", "spot_lods.usda", "spot_stats.json", "spot_subdiv.usda",
+        "spot_subdiv_anim.usda"]

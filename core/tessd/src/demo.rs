@@ -2,8 +2,10 @@
 //!
 //! It starts `tessd serve` as a child process on a private socket, sends the bundled Spot mesh
 //! as arrays over the socket, asks for its statistics, a USD file and an LOD chain (50 %, 20 %
-//! and 5 % of its vertices, as a USD variant set `LOD`), and writes them to the output folder.
-//! Later stages (subdivision, B-Rep) extend this list.
+//! and 5 % of its vertices, as a USD variant set `LOD`); then sends Spot's quad cage and asks
+//! for its Catmull–Clark surface (the refined mesh, the cage marked `catmullClark`, and a
+//! 24-frame animation refined with one topology phase), and writes everything to the output
+//! folder. A later stage (B-Rep) extends this list.
 
 use anyhow::{Context, Result, bail};
 use serde_json::json;
@@ -15,6 +17,12 @@ use tessd_mesh::io::{Format, ReadOptions};
 
 /// Spot (Keenan Crane, public domain), triangulated, with UVs.
 pub const SPOT_OBJ: &[u8] = include_bytes!("../data/spot_triangulated.obj");
+
+/// Spot's control mesh (quads, a few triangles and pentagons), with UVs: a subdivision cage.
+pub const SPOT_CAGE_OBJ: &[u8] = include_bytes!("../data/spot_control_mesh.obj");
+
+/// Frames of the demo's animation.
+const FRAMES: usize = 24;
 
 /// Stops the child daemon however the demo ends.
 struct Daemon {
@@ -138,9 +146,78 @@ pub fn run(out: &Path) -> Result<()> {
         counts.join(" / "),
         lods_path.display()
     );
+    subdivision(&mut client, &out)?;
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);
     println!("tessd demo: done, results in {}", out.display());
+    Ok(())
+}
+
+/// Spot's cage subdivided three ways: the refined mesh, the cage for USD renderers to refine,
+/// and an animation (a wave through the cage) refined frame by frame on one set of tables.
+fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
+    let cage = tessd_mesh::io::read(
+        SPOT_CAGE_OBJ,
+        Format::Obj,
+        "spot_control_mesh.obj",
+        &ReadOptions::default(),
+    )?;
+    let frames: Vec<f32> = (0..FRAMES)
+        .flat_map(|k| {
+            let phase = std::f32::consts::TAU * k as f32 / FRAMES as f32;
+            cage.positions
+                .iter()
+                .flat_map(move |p| [p[0], p[1], p[2] + 0.05 * (6.0 * p[0] + phase).sin()])
+        })
+        .collect();
+    let v = cage.positions.len() as u64;
+    let arrays = crate::ops::mesh_arrays::mesh_to_arrays(cage);
+    let refined = out.join("spot_subdiv.usda");
+    let (r, _) = client.call(
+        "subdivide",
+        json!({"output": refined, "levels": 3, "name": "spot"}),
+        &arrays,
+        |_| {},
+    )?;
+    println!(
+        "  subdivide: cage {} faces -> {} faces at level 3 (topology {:.1} ms, apply {:.1} ms) -> {}",
+        r["cage_faces"],
+        r["faces"],
+        r["topology_ms"].as_f64().unwrap_or(0.0),
+        r["apply_ms"].as_f64().unwrap_or(0.0),
+        refined.display()
+    );
+    let cage_path = out.join("spot_cage.usda");
+    client.call(
+        "subdivide",
+        json!({"output": cage_path, "usd": "cage", "levels": 3, "name": "spot"}),
+        &arrays,
+        |_| {},
+    )?;
+    println!(
+        "  subdivide: the cage with subdivisionScheme = \"catmullClark\" -> {}",
+        cage_path.display()
+    );
+    let mut with_frames = arrays;
+    with_frames.push(tessd_ipc::arrays::OwnedArray::new(
+        "frames",
+        vec![FRAMES as u64, v, 3],
+        frames,
+    ));
+    let anim = out.join("spot_subdiv_anim.usda");
+    let (r, _) = client.call(
+        "subdivide",
+        json!({"output": anim, "levels": 2, "name": "spot"}),
+        &with_frames,
+        |_| {},
+    )?;
+    println!(
+        "  subdivide: {} frames at level 2, one topology phase ({:.1} ms), apply {:.2} ms per frame -> {}",
+        r["frames"],
+        r["topology_ms"].as_f64().unwrap_or(0.0),
+        r["apply_ms_per_frame"].as_f64().unwrap_or(0.0),
+        anim.display()
+    );
     Ok(())
 }
 

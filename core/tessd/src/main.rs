@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use report::{print_compare, print_lod, print_simplify, print_stats};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use tessd_ipc::arrays::{Arrays, OwnedArray};
 use tessd_ipc::job::{CancelToken, JobContext, Progress};
 use tessd_ipc::registry::{Request, Response};
 use tessd_ipc::server::{Server, ServerOptions};
@@ -105,6 +106,20 @@ enum Command {
         /// Boundary corners: smooth (edge-only) or kept in place (edge-and-corner).
         #[arg(long, default_value = "edge-only", value_parser = ["edge-only", "edge-and-corner"])]
         boundary: String,
+        /// UV interpolation, as Blender's "UV Smooth" (corners = "Keep Corners", its default).
+        #[arg(long, default_value = "corners", value_parser = ["linear", "corners", "corners-junctions", "corners-junctions-concave", "boundaries", "smooth"])]
+        uv_interpolation: String,
+        /// Do not give the refined mesh smooth shading normals.
+        #[arg(long)]
+        no_normals: bool,
+        /// For a .usda OUT: write the cage with `subdivisionScheme` set (USD renderers refine
+        /// it) instead of the refined mesh.
+        #[arg(long)]
+        usd_cage: bool,
+        /// Animation frames: meshes with the cage's vertices moved (e.g. an OBJ sequence);
+        /// OUT (.usda) gets their refined points as time samples 1, 2, ...
+        #[arg(long, num_args = 1..)]
+        frames: Vec<PathBuf>,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -299,6 +314,10 @@ fn run(cli: Cli) -> Result<()> {
             levels,
             gpu,
             boundary,
+            uv_interpolation,
+            no_normals,
+            usd_cage,
+            frames,
             json,
         } => {
             let params = serde_json::json!({
@@ -308,9 +327,25 @@ fn run(cli: Cli) -> Result<()> {
                 "levels": levels,
                 "gpu": gpu,
                 "boundary": boundary,
+                "uv_interpolation": uv_interpolation,
+                "normals": !no_normals,
+                "usd": if usd_cage { "cage" } else { "refined" },
             });
-            report_or_json(run_local("subdivide", params)?, json, |r| {
+            let arrays = if frames.is_empty() {
+                Vec::new()
+            } else {
+                vec![read_frames(&frames)?]
+            };
+            report_or_json(run_local_with("subdivide", params, &arrays)?, json, |r| {
                 let r = &r.result;
+                if r["usd"] == "cage" {
+                    return println!(
+                        "subdivide: the cage ({} faces) marked {} -> {}",
+                        r["cage_faces"],
+                        r["scheme"],
+                        output.display()
+                    );
+                }
                 println!(
                     "subdivide: {} level(s) of {}: {} vertices, {} faces -> {} (topology {:.1} ms, apply {:.1} ms)",
                     r["levels"],
@@ -414,6 +449,11 @@ fn report_or_json(response: Response, json: bool, summary: impl FnOnce(&Response
 /// Runs one operation in this process with a progress bar on a terminal — the same registry
 /// and code path as a socket request.
 fn run_local(op: &str, params: serde_json::Value) -> Result<Response> {
+    run_local_with(op, params, &[])
+}
+
+/// As [`run_local`], with arrays in the request.
+fn run_local_with(op: &str, params: serde_json::Value, arrays: &[OwnedArray]) -> Result<Response> {
     let serde_json::Value::Object(params) = params else {
         unreachable!()
     };
@@ -421,9 +461,32 @@ fn run_local(op: &str, params: serde_json::Value) -> Result<Response> {
     let request = Request {
         params,
         base_dir: Some(cwd),
+        arrays: Arrays::from_owned(arrays),
         ..Request::default()
     };
     with_progress(op, |ctx| tessd::ops::registry().run(op, request, ctx))
+}
+
+/// The `frames` array of `subdivide`: the positions of each mesh file, which must all have the
+/// same vertex count (the op checks it against the cage).
+fn read_frames(paths: &[PathBuf]) -> Result<OwnedArray> {
+    let mut flat: Vec<f32> = Vec::new();
+    let mut count = None;
+    for p in paths {
+        let m = tessd_mesh::io::read_path(p, &Default::default())
+            .with_context(|| format!("reading frame {}", p.display()))?;
+        if *count.get_or_insert(m.positions.len()) != m.positions.len() {
+            bail!(
+                "frame {} has {} vertices; the first frame has {}",
+                p.display(),
+                m.positions.len(),
+                count.unwrap_or(0)
+            );
+        }
+        flat.extend(m.positions.iter().flatten());
+    }
+    let shape = vec![paths.len() as u64, count.unwrap_or(0) as u64, 3];
+    Ok(OwnedArray::new("frames", shape, flat))
 }
 
 fn with_progress(

@@ -138,6 +138,13 @@ pub struct MeshPrimOptions {
     /// Name of the UV primvar. Default `"st"` (USD's convention, what Blender reads as the UV
     /// map); sanitized like prim names.
     pub uv_primvar_name: String,
+    /// For cages: the `interpolateBoundary` token (`"none"`, `"edgeOnly"`, `"edgeAndCorner"`);
+    /// `None` leaves USD's fallback (`"edgeAndCorner"`).
+    pub interpolate_boundary: Option<&'static str>,
+    /// For cages: the `faceVaryingLinearInterpolation` token (`"none"`, `"cornersOnly"`,
+    /// `"cornersPlus1"`, `"cornersPlus2"`, `"boundaries"`, `"all"`); `None` leaves USD's
+    /// fallback (`"cornersPlus1"`).
+    pub face_varying_linear_interpolation: Option<&'static str>,
 }
 
 impl Default for MeshPrimOptions {
@@ -149,6 +156,8 @@ impl Default for MeshPrimOptions {
             write_normals: true,
             write_uvs: true,
             uv_primvar_name: "st".to_string(),
+            interpolate_boundary: None,
+            face_varying_linear_interpolation: None,
         }
     }
 }
@@ -181,6 +190,18 @@ impl MeshPrimOptions {
     /// Sets [`MeshPrimOptions::write_uvs`].
     pub fn with_uvs(mut self, write_uvs: bool) -> Self {
         self.write_uvs = write_uvs;
+        self
+    }
+
+    /// Sets [`MeshPrimOptions::interpolate_boundary`] and
+    /// [`MeshPrimOptions::face_varying_linear_interpolation`] (cages only).
+    pub fn with_cage_rules(
+        mut self,
+        interpolate_boundary: &'static str,
+        face_varying_linear_interpolation: &'static str,
+    ) -> Self {
+        self.interpolate_boundary = Some(interpolate_boundary);
+        self.face_varying_linear_interpolation = Some(face_varying_linear_interpolation);
         self
     }
 

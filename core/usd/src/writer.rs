@@ -538,6 +538,16 @@ fn write_mesh(
     out.push_fmt(format_args!(
         "{pad1}uniform token subdivisionScheme = \"{scheme}\"\n"
     ));
+    if options.subdivision_scheme.is_some() {
+        if let Some(t) = options.interpolate_boundary {
+            out.push_fmt(format_args!("{pad1}token interpolateBoundary = \"{t}\"\n"));
+        }
+        if let Some(t) = options.face_varying_linear_interpolation {
+            out.push_fmt(format_args!(
+                "{pad1}token faceVaryingLinearInterpolation = \"{t}\"\n"
+            ));
+        }
+    }
     if !mesh.face_groups.is_empty() {
         // `face_groups` gives every face exactly one group, so the subsets partition the faces.
         out.push_fmt(format_args!(
