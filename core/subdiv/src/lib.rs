@@ -264,6 +264,12 @@ impl Refiner {
     /// # Errors
     /// When `data` does not hold one row per cage vertex.
     pub fn apply(&self, data: &[f32], stride: usize, what: &str) -> Result<Vec<f32>, SubdivError> {
+        self.check_rows(data, stride, what)?;
+        Ok(StencilTable::apply_chain(&self.tables, data, stride))
+    }
+
+    /// `data` must hold one row of `stride` floats per cage vertex.
+    fn check_rows(&self, data: &[f32], stride: usize, what: &str) -> Result<(), SubdivError> {
         if stride == 0 || data.len() != self.cage_vertices * stride {
             return Err(SubdivError::VertexCount {
                 what: what.to_string(),
@@ -271,7 +277,23 @@ impl Refiner {
                 expected: self.cage_vertices,
             });
         }
-        Ok(StencilTable::apply_chain(&self.tables, data, stride))
+        Ok(())
+    }
+
+    /// [`Refiner::apply`] into `levels`, buffers kept between calls (see
+    /// [`StencilTable::apply_chain_into`]): the steady state of an animation.
+    ///
+    /// # Errors
+    /// When `data` does not hold one row per cage vertex.
+    pub fn apply_into<'a>(
+        &self,
+        data: &'a [f32],
+        stride: usize,
+        what: &str,
+        levels: &'a mut Vec<Vec<f32>>,
+    ) -> Result<&'a [f32], SubdivError> {
+        self.check_rows(data, stride, what)?;
+        Ok(StencilTable::apply_chain_into(&self.tables, data, stride, levels))
     }
 
     /// Refined positions of `positions` (the cage's, or an animation frame's).

@@ -47,7 +47,8 @@ impl StencilTable {
 
     /// Applies the table to `src` (`source_count` rows of `stride` floats) and writes
     /// `len()` rows of `stride` floats to `dst`, in parallel. Sums are taken in f32 in row
-    /// order, the same order the GPU kernel uses.
+    /// order, the same order the GPU kernel uses. Every row of `dst` is overwritten (it need
+    /// not be zeroed).
     ///
     /// # Panics
     /// If `src` or `dst` have the wrong length.
@@ -58,9 +59,41 @@ impl StencilTable {
             "source rows"
         );
         assert_eq!(dst.len(), self.len() * stride, "destination rows");
-        if stride == 0 {
-            return;
+        // Rows of 1–4 floats (positions, UVs, colours) sum in registers.
+        match stride {
+            0 => {}
+            1 => self.apply_rows::<1>(src, dst),
+            2 => self.apply_rows::<2>(src, dst),
+            3 => self.apply_rows::<3>(src, dst),
+            4 => self.apply_rows::<4>(src, dst),
+            _ => self.apply_any(src, stride, dst),
         }
+    }
+
+    /// [`StencilTable::apply`] for rows of `N` floats.
+    fn apply_rows<const N: usize>(&self, src: &[f32], dst: &mut [f32]) {
+        let src: &[[f32; N]] = src.as_chunks::<N>().0;
+        dst.par_chunks_mut(ROWS_PER_TASK * N)
+            .enumerate()
+            .for_each(|(task, out)| {
+                let first = task * ROWS_PER_TASK;
+                for (r, row) in out.as_chunks_mut::<N>().0.iter_mut().enumerate() {
+                    let i = first + r;
+                    let (s, e) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+                    let mut acc = [0.0f32; N];
+                    for (&v, &w) in self.sources[s..e].iter().zip(&self.weights[s..e]) {
+                        let x = &src[v as usize];
+                        for c in 0..N {
+                            acc[c] += w * x[c];
+                        }
+                    }
+                    *row = acc;
+                }
+            });
+    }
+
+    /// [`StencilTable::apply`] for rows of any length.
+    fn apply_any(&self, src: &[f32], stride: usize, dst: &mut [f32]) {
         dst.par_chunks_mut(ROWS_PER_TASK * stride)
             .enumerate()
             .for_each(|(task, out)| {
@@ -79,13 +112,29 @@ impl StencilTable {
 
     /// Applies a chain of tables (level 1, 2, ...) to `src`, returning the last level's rows.
     pub fn apply_chain(tables: &[StencilTable], src: &[f32], stride: usize) -> Vec<f32> {
-        let mut cur = src.to_vec();
-        for t in tables {
-            let mut next = vec![0.0; t.len() * stride];
-            t.apply(&cur, stride, &mut next);
-            cur = next;
+        let mut levels = Vec::new();
+        Self::apply_chain_into(tables, src, stride, &mut levels);
+        levels.pop().unwrap_or_else(|| src.to_vec())
+    }
+
+    /// [`StencilTable::apply_chain`] into `levels` (one buffer per table, resized as needed
+    /// and reused across calls: animation frames then write into memory already mapped).
+    /// Returns the last level's rows (`src` when there are no tables).
+    pub fn apply_chain_into<'a>(
+        tables: &[StencilTable],
+        src: &'a [f32],
+        stride: usize,
+        levels: &'a mut Vec<Vec<f32>>,
+    ) -> &'a [f32] {
+        levels.resize_with(tables.len(), Vec::new);
+        for (i, t) in tables.iter().enumerate() {
+            let (done, rest) = levels.split_at_mut(i);
+            let from = done.last().map_or(src, |v| v.as_slice());
+            let to = &mut rest[0];
+            to.resize(t.len() * stride, 0.0);
+            t.apply(from, stride, to);
         }
-        cur
+        levels.last().map_or(src, |v| v.as_slice())
     }
 }
 
@@ -110,5 +159,52 @@ mod tests {
             StencilTable::apply_chain(std::slice::from_ref(&t), &src, 2),
             dst.to_vec()
         );
+    }
+
+    #[test]
+    fn every_stride_and_reused_buffers_give_the_same_rows() {
+        // Rows mixing 1 to 5 terms over 7 sources; data of every stride from 1 to 6.
+        let mut t = StencilTable {
+            offsets: vec![0],
+            source_count: 7,
+            ..StencilTable::default()
+        };
+        for r in 0..50u32 {
+            let n = 1 + r % 5;
+            for k in 0..n {
+                t.sources.push((r * 3 + k * 5) % 7);
+                t.weights.push(1.0 / n as f32);
+            }
+            t.offsets.push(t.sources.len() as u32);
+        }
+        let second = StencilTable {
+            source_count: 50,
+            offsets: (0..=20).collect(),
+            sources: (0..20).map(|i| i * 2).collect(),
+            weights: vec![1.0; 20],
+        };
+        let tables = [t, second];
+        let mut levels = Vec::new();
+        for stride in 1..=6usize {
+            let src: Vec<f32> = (0..7 * stride).map(|i| (i * i % 11) as f32).collect();
+            // The reference: each row summed term by term, component by component.
+            let want: Vec<f32> = (0..20)
+                .flat_map(|i| {
+                    let row = 2 * i;
+                    let src = &src;
+                    let t = &tables[0];
+                    (0..stride).map(move |c| {
+                        t.row(row)
+                            .map(|(s, w)| w * src[s as usize * stride + c])
+                            .fold(0.0, |a, x| a + x)
+                    })
+                })
+                .collect();
+            assert_eq!(StencilTable::apply_chain(&tables, &src, stride), want, "stride {stride}");
+            for _ in 0..2 {
+                let got = StencilTable::apply_chain_into(&tables, &src, stride, &mut levels);
+                assert_eq!(got, want.as_slice(), "stride {stride}, reused");
+            }
+        }
     }
 }

@@ -250,6 +250,8 @@ struct Apply<'a> {
     /// Time of the first application (the cage's positions), ms.
     first_ms: f64,
     runs: usize,
+    /// Level buffers reused from frame to frame on the CPU.
+    levels: Vec<Vec<f32>>,
 }
 
 impl<'a> Apply<'a> {
@@ -266,6 +268,7 @@ impl<'a> Apply<'a> {
             gpu,
             first_ms: 0.0,
             runs: 0,
+            levels: Vec::new(),
         })
     }
 
@@ -280,8 +283,11 @@ impl<'a> Apply<'a> {
             }
             None => self
                 .refiner
-                .apply_positions(positions, "the cage")
-                .map_err(subdiv_error)?,
+                .apply_into(positions.as_flattened(), 3, "the cage", &mut self.levels)
+                .map_err(subdiv_error)?
+                .as_chunks::<3>()
+                .0
+                .to_vec(),
         };
         if self.runs == 0 {
             self.first_ms = t.elapsed().as_secs_f64() * 1e3;
