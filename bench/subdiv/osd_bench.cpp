@@ -1,12 +1,14 @@
 // OpenSubdiv side of the subdivision benchmark (tessd vs OpenSubdiv on the same cages).
 //
-// Reads an OBJ cage (v and f records only), refines it uniformly to each level 1..N with
+// Reads an OBJ cage (v and f records only), refines it uniformly to each level F..N with
 // OpenSubdiv 3.5 (Debian libosd-dev) and prints one JSON object per level on stdout.
 // Every level is refined from the cage again (a fresh TopologyRefiner per run), and each
-// timing is the median of --repeat runs. See bench/subdiv/README.md for what each timing means.
+// timing is the median of the runs (--repeat, cut short by --budget). See
+// bench/subdiv/README.md for what each timing means.
 //
-//   osd_bench CAGE.obj [--levels N] [--scheme catmark|loop]
-//             [--boundary edge-only|edge-and-corner] [--repeat R] [--dump-obj PATH]
+//   osd_bench CAGE.obj [--levels N] [--first-level F] [--scheme catmark|loop]
+//             [--boundary edge-only|edge-and-corner] [--repeat R] [--budget SECONDS]
+//             [--dump-obj PATH]
 //
 // Build: bash bench/subdiv/setup_osd.sh   (g++ -O2 ... -losdCPU)
 
@@ -114,6 +116,15 @@ double msSince(Clock::time_point t0, Clock::time_point t1) {
     return std::chrono::duration<double, std::milli>(t1 - t0).count();
 }
 
+// Current resident set in kilobytes (VmRSS of /proc/self/status); 0 when unavailable.
+long currentRssKb() {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.compare(0, 6, "VmRSS:") == 0) return std::strtol(line.c_str() + 6, nullptr, 10);
+    return 0;
+}
+
 long peakRssKb() {
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
@@ -137,8 +148,9 @@ std::string baseName(const std::string &p) {
 
 void usage() {
     std::fprintf(stderr,
-                 "usage: osd_bench CAGE.obj [--levels N (1..6, default 4)] [--scheme catmark|loop]\n"
-                 "                 [--boundary edge-only|edge-and-corner] [--repeat R (default 5)]\n"
+                 "usage: osd_bench CAGE.obj [--levels N (1..6, default 4)] [--first-level F (default 1)]\n"
+                 "                 [--scheme catmark|loop] [--boundary edge-only|edge-and-corner]\n"
+                 "                 [--repeat R (default 5)] [--budget SECONDS (default: none)]\n"
                  "                 [--dump-obj PATH]\n");
     std::exit(2);
 }
@@ -147,7 +159,8 @@ void usage() {
 
 int main(int argc, char **argv) {
     std::string cagePath, schemeName = "catmark", boundaryName = "edge-and-corner", dumpPath;
-    int maxLevel = 4, repeat = 5;
+    int maxLevel = 4, firstLevel = 1, repeat = 5;
+    double budget = -1.0;  // seconds per level; < 0: no budget
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
         auto next = [&]() -> std::string {
@@ -157,7 +170,9 @@ int main(int argc, char **argv) {
         if (a == "--levels") maxLevel = std::atoi(next().c_str());
         else if (a == "--scheme") schemeName = next();
         else if (a == "--boundary") boundaryName = next();
+        else if (a == "--first-level") firstLevel = std::atoi(next().c_str());
         else if (a == "--repeat") repeat = std::atoi(next().c_str());
+        else if (a == "--budget") budget = std::atof(next().c_str());
         else if (a == "--dump-obj") dumpPath = next();
         else if (a == "-h" || a == "--help") usage();
         else if (!a.empty() && a[0] == '-') usage();
@@ -166,6 +181,7 @@ int main(int argc, char **argv) {
     }
     if (cagePath.empty()) usage();
     if (maxLevel < 1 || maxLevel > 6) die("--levels must be 1..6");
+    if (firstLevel < 1 || firstLevel > maxLevel) die("--first-level must be 1..--levels");
     if (repeat < 1) die("--repeat must be >= 1");
 
     Sdc::SchemeType scheme;
@@ -181,6 +197,8 @@ int main(int argc, char **argv) {
     else die("--boundary must be edge-only or edge-and-corner");
 
     Cage cage = readObj(cagePath);
+    // Baseline for peak_over_baseline_kb: the process with its cage read, before any refinement.
+    const long baselineRssKb = currentRssKb();
     if (scheme == Sdc::SCHEME_LOOP)
         for (int n : cage.faceSizes)
             if (n != 3) die("loop scheme needs a triangle cage (found a face with " + std::to_string(n) + " vertices)");
@@ -195,13 +213,21 @@ int main(int argc, char **argv) {
     const Factory::Options factoryOptions(scheme, sdcOptions);
     const int nCage = cage.numVertices();
 
-    for (int level = 1; level <= maxLevel; ++level) {
+    for (int level = firstLevel; level <= maxLevel; ++level) {
         std::vector<double> tCreate, tRefine, tTopo, tPrimvar, tStencilBuild, tStencilEval;
         long outVertices = 0, outFaces = 0;
         int numStencils = 0;
         double maxDiff = 0.0;
 
+        int runs = 0;
+        auto levelStart = Clock::now();
         for (int r = 0; r < repeat; ++r) {
+            // Budget: stop when another run like the last one would end past it (one run at least).
+            if (r > 0 && budget >= 0.0) {
+                double spent = msSince(levelStart, Clock::now()) / 1000.0;
+                if (spent + spent / r > budget) break;
+            }
+            ++runs;
             // --- topology: create + uniform refinement ---------------------------------------
             auto t0 = Clock::now();
             std::unique_ptr<Far::TopologyRefiner> refiner(Factory::Create(desc, factoryOptions));
@@ -292,12 +318,13 @@ int main(int argc, char **argv) {
             "\"topology_ms\": %.4f, \"create_ms\": %.4f, \"refine_ms\": %.4f, \"primvar_ms\": %.4f, "
             "\"stencil_build_ms\": %.4f, \"stencil_eval_ms\": %.4f, \"topology_vertices_per_s\": %.1f, "
             "\"stencil_vs_primvar_max_abs\": %.3g, \"repeat\": %d, \"osd_version\": \"%d.%d.%d\", "
-            "\"peak_rss_kb\": %ld}\n",
+            "\"peak_rss_kb\": %ld, \"baseline_rss_kb\": %ld, \"peak_over_baseline_kb\": %ld}\n",
             jsonEscape(baseName(cagePath)).c_str(), schemeName.c_str(), boundaryName.c_str(), level,
             cage.numVertices(), cage.numFaces(), outVertices, outFaces, topo, medianOf(tCreate),
             medianOf(tRefine), medianOf(tPrimvar), medianOf(tStencilBuild), medianOf(tStencilEval),
-            topo > 0 ? outVertices / (topo / 1000.0) : 0.0, maxDiff, repeat, OPENSUBDIV_VERSION_MAJOR,
-            OPENSUBDIV_VERSION_MINOR, OPENSUBDIV_VERSION_PATCH, peakRssKb());
+            topo > 0 ? outVertices / (topo / 1000.0) : 0.0, maxDiff, runs, OPENSUBDIV_VERSION_MAJOR,
+            OPENSUBDIV_VERSION_MINOR, OPENSUBDIV_VERSION_PATCH, peakRssKb(), baselineRssKb,
+            peakRssKb() - baselineRssKb);
         std::fflush(stdout);
     }
     return 0;

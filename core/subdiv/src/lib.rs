@@ -293,7 +293,12 @@ impl Refiner {
         levels: &'a mut Vec<Vec<f32>>,
     ) -> Result<&'a [f32], SubdivError> {
         self.check_rows(data, stride, what)?;
-        Ok(StencilTable::apply_chain_into(&self.tables, data, stride, levels))
+        Ok(StencilTable::apply_chain_into(
+            &self.tables,
+            data,
+            stride,
+            levels,
+        ))
     }
 
     /// Refined positions of `positions` (the cage's, or an animation frame's).

@@ -200,7 +200,11 @@ mod tests {
                     })
                 })
                 .collect();
-            assert_eq!(StencilTable::apply_chain(&tables, &src, stride), want, "stride {stride}");
+            assert_eq!(
+                StencilTable::apply_chain(&tables, &src, stride),
+                want,
+                "stride {stride}"
+            );
             for _ in 0..2 {
                 let got = StencilTable::apply_chain_into(&tables, &src, stride, &mut levels);
                 assert_eq!(got, want.as_slice(), "stride {stride}, reused");

@@ -462,7 +462,6 @@ fn run_local_with(op: &str, params: serde_json::Value, arrays: &[OwnedArray]) ->
         params,
         base_dir: Some(cwd),
         arrays: Arrays::from_owned(arrays),
-        ..Request::default()
     };
     with_progress(op, |ctx| tessd::ops::registry().run(op, request, ctx))
 }

@@ -555,7 +555,10 @@ fn animated_points_are_time_samples() {
     let prims = [MeshPrim::new(&m).with_point_samples(&frames)];
     write_stage(&mut v, &StageOptions::default(), &prims).unwrap();
     let s = String::from_utf8(v).unwrap();
-    assert!(s.contains("    startTimeCode = 1\n    endTimeCode = 3\n"), "{s}");
+    assert!(
+        s.contains("    startTimeCode = 1\n    endTimeCode = 3\n"),
+        "{s}"
+    );
     assert!(s.contains("point3f[] points.timeSamples = {\n"), "{s}");
     assert!(s.contains("        3: [(0, 0, 2), "), "{s}");
     assert!(s.contains("        2: [(0, 0, 1), (1, 1, 1)],\n"), "{s}");

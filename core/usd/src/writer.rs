@@ -23,11 +23,7 @@ pub fn write_mesh_stage(
     stage: &StageOptions,
     prim: &MeshPrimOptions,
 ) -> Result<(), UsdError> {
-    write_stage(
-        w,
-        stage,
-        &[MeshPrim::new(mesh).with_options(prim.clone())],
-    )
+    write_stage(w, stage, &[MeshPrim::new(mesh).with_options(prim.clone())])
 }
 
 /// Writes a stage holding several meshes (e.g. several Blender objects) as sibling `Mesh` prims
@@ -229,7 +225,9 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
         _ => None,
     };
     if let Some(n) = frames.filter(|&n| n > 0) {
-        out.push_fmt(format_args!("    startTimeCode = 1\n    endTimeCode = {n}\n"));
+        out.push_fmt(format_args!(
+            "    startTimeCode = 1\n    endTimeCode = {n}\n"
+        ));
     }
     out.push("    metersPerUnit = ");
     out.push_f64(stage.meters_per_unit);
@@ -495,7 +493,9 @@ fn write_mesh(
                 out.push("],\n");
             }
         }
-        out.push_fmt(format_args!("{pad1}}}\n{pad1}point3f[] points.timeSamples = {{\n"));
+        out.push_fmt(format_args!(
+            "{pad1}}}\n{pad1}point3f[] points.timeSamples = {{\n"
+        ));
         for (k, f) in frames.iter().enumerate() {
             out.push_fmt(format_args!("{pad1}    {}: ", k + 1));
             out.push_tuple_array_open(f)?;

@@ -4,19 +4,18 @@
 //! Parameters are described in docs/protocol.md ("subdivide").
 
 use super::common::{
-    as_u64, bool_param, check_mesh_output, is_usda, stage_options, stem, usd_error,
-    write_mesh_file,
+    as_u64, bool_param, check_mesh_output, is_usda, stage_options, stem, usd_error, write_mesh_file,
 };
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::json;
 use std::time::Instant;
+use tessd_ipc::arrays::OwnedArray;
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
-use tessd_ipc::arrays::OwnedArray;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
-use tessd_usd::{MeshPrim, MeshPrimOptions, SubdivisionScheme};
 use tessd_subdiv::{Boundary, Refiner, Scheme, SubdivError, SubdivOptions, UvInterpolation};
+use tessd_usd::{MeshPrim, MeshPrimOptions, SubdivisionScheme};
 
 /// The largest `levels` accepted (the memory estimate refuses most meshes well before).
 pub const MAX_LEVELS: u64 = 10;
@@ -193,7 +192,10 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         None => {
             let mut arrays = mesh_to_arrays(mesh);
             if let Some(frames) = refined_frames {
-                let (n, v) = (frames.len() as u64, frames.first().map_or(0, Vec::len) as u64);
+                let (n, v) = (
+                    frames.len() as u64,
+                    frames.first().map_or(0, Vec::len) as u64,
+                );
                 let flat: Vec<f32> = frames.into_iter().flatten().flatten().collect();
                 arrays.push(OwnedArray::new("frame_positions", vec![n, v, 3], flat));
             }
@@ -414,4 +416,3 @@ fn write_cage(
         ..Response::default()
     })
 }
-
