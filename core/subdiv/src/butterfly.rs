@@ -32,7 +32,7 @@ use crate::catmull_clark::Boundary;
 use crate::crease_rules::{self, Phase, Rule};
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};
-use crate::loop_scheme::{check_triangles, split_triangles, third};
+use crate::loop_scheme::{check_triangles, third, triangle_level};
 use crate::topology::{Faces, NONE, Topology};
 
 /// Zorin's weights `s_0 .. s_{k−1}` for the neighbours of a smooth extraordinary vertex of
@@ -79,13 +79,7 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Result<Leve
         row.add(v, 1.0);
         row.push_to(&mut table);
     }
-    let (out, face_parent) = split_triangles(faces, topo);
-    Ok(Level {
-        faces: out,
-        table,
-        creases: crease_rules::split_creases(topo),
-        face_parent,
-    })
+    Ok(triangle_level(faces, topo, table))
 }
 
 /// The neighbours of every smooth vertex in cyclic order (CSR; an empty ring: not smooth).

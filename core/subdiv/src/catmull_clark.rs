@@ -228,31 +228,23 @@ impl Writer {
         let child_sharp = |s: f32| decrement(s) > 0.0;
         let parent = rule_of(&parent_sharp);
         let child = rule_of(&child_sharp);
-        if parent == child {
-            match parent {
-                Rule::Corner => self.term(v, 1.0),
-                Rule::Crease => {
-                    self.term(v, 0.75);
-                    let sharp: Vec<u32> = edges()
-                        .filter(|&(e, _)| parent_sharp(sharpness(e)))
-                        .map(|(_, u)| u)
-                        .collect();
-                    sharp.into_iter().for_each(|u| self.term(u, 0.125));
+        // The mask of `rule`, its crease following the edges `sharp` accepts.
+        let mask = |this: &mut Self, rule: Rule, sharp: &dyn Fn(f32) -> bool| match rule {
+            Rule::Corner => this.term(v, 1.0),
+            Rule::Crease => {
+                this.term(v, 0.75);
+                for (_, u) in edges().filter(|&(e, _)| sharp(sharpness(e))) {
+                    this.term(u, 0.125);
                 }
-                Rule::Smooth => self.smooth_vertex(h, v, fan),
             }
+            Rule::Smooth => this.smooth_vertex(h, v, fan),
+        };
+        if parent == child {
+            mask(self, parent, &parent_sharp);
             return self.end_row();
         }
         // Edges going from sharp to smooth set how much of the sharper rule remains.
-        let (sum, count) = edges()
-            .map(|(e, _)| sharpness(e))
-            .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
-            .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
-        let w = if count == 0 {
-            0.0
-        } else {
-            (sum / count as f64).min(1.0)
-        };
+        let w = crate::crease_rules::transition_weight(edges().map(|(e, _)| sharpness(e)));
         self.blend.clear();
         for (rule, sharp, weight) in [
             (parent, &parent_sharp as &dyn Fn(f32) -> bool, w),
@@ -262,18 +254,7 @@ impl Writer {
                 continue;
             }
             let row = self.table.sources.len();
-            match rule {
-                Rule::Corner => self.term(v, 1.0),
-                Rule::Crease => {
-                    self.term(v, 0.75);
-                    let ends: Vec<u32> = edges()
-                        .filter(|&(e, _)| sharp(sharpness(e)))
-                        .map(|(_, u)| u)
-                        .collect();
-                    ends.into_iter().for_each(|u| self.term(u, 0.125));
-                }
-                Rule::Smooth => self.smooth_vertex(h, v, fan),
-            }
+            mask(self, rule, sharp);
             let terms = self
                 .table
                 .sources

@@ -56,15 +56,22 @@ pub struct Part {
 /// fan (non-manifold), or it is a boundary vertex of a single face under
 /// [`Boundary::EdgeAndCorner`].
 pub fn forced_corner(topo: &Topology, v: usize, boundary: Boundary) -> bool {
-    let edges = topo.edges_of(v);
-    let faces = topo.faces_of(v).len();
-    let boundary_edges = edges.iter().filter(|&&e| topo.is_boundary(e)).count();
-    let manifold = if boundary_edges == 0 {
-        faces == edges.len()
+    topo.fan(v).is_corner(boundary)
+}
+
+/// How much of the sharper rule remains at a vertex whose rule changes between this level and
+/// the next: the mean sharpness of its edges that go from sharp to smooth, at most 1
+/// (OpenSubdiv's fractional blending). `sharpness` lists the vertex's edges' sharpness.
+pub fn transition_weight(sharpness: impl IntoIterator<Item = f32>) -> f64 {
+    let (sum, count) = sharpness
+        .into_iter()
+        .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
+        .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
+    if count == 0 {
+        0.0
     } else {
-        boundary_edges == 2 && faces + 1 == edges.len()
-    };
-    !manifold || (boundary == Boundary::EdgeAndCorner && boundary_edges > 0 && faces == 1)
+        (sum / count as f64).min(1.0)
+    }
 }
 
 /// The sharp edges at `v` in `phase` (boundary edges are infinitely sharp).
@@ -108,17 +115,11 @@ pub fn vertex_parts(topo: &Topology, v: usize, boundary: Boundary) -> [Part; 2] 
             },
         ];
     }
-    let (sum, count) = topo
-        .edges_of(v)
-        .iter()
-        .map(|&e| topo.edge_sharpness[e as usize])
-        .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
-        .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
-    let w = if count == 0 {
-        0.0
-    } else {
-        (sum / count as f64).min(1.0)
-    };
+    let w = transition_weight(
+        topo.edges_of(v)
+            .iter()
+            .map(|&e| topo.edge_sharpness[e as usize]),
+    );
     [
         Part {
             rule: parent,

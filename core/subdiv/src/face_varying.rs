@@ -429,16 +429,7 @@ impl ChannelLevel<'_> {
             return self.vertex_rule(v, x, parent, &parent_sharp, 1.0, row);
         }
         // Edges going from sharp to smooth set how much of the sharper rule remains.
-        let (sum, count) = edges
-            .iter()
-            .map(|&e| sharpness(e))
-            .filter(|&s| s > 0.0 && decrement(s) <= 0.0)
-            .fold((0.0f64, 0usize), |(sum, n), s| (sum + f64::from(s), n + 1));
-        let w = if count == 0 {
-            0.0
-        } else {
-            (sum / count as f64).min(1.0)
-        };
+        let w = crate::crease_rules::transition_weight(edges.iter().map(|&e| sharpness(e)));
         if w > 0.0 {
             self.vertex_rule(v, x, parent, &parent_sharp, w, row);
         }
@@ -499,19 +490,12 @@ struct VertexShape {
 }
 
 fn vertex_shape(topo: &Topology, v: usize, corners_kept: bool) -> VertexShape {
-    let edges = topo.edges_of(v);
-    let faces = topo.faces_of(v).len();
-    let boundary_edges = edges.iter().filter(|&&e| topo.is_boundary(e)).count();
-    let manifold = if boundary_edges == 0 {
-        faces == edges.len()
-    } else {
-        boundary_edges == 2 && faces + 1 == edges.len()
-    };
+    let fan = topo.fan(v);
     VertexShape {
-        boundary: boundary_edges > 0,
-        manifold,
-        faces,
-        sharp_corner: corners_kept && boundary_edges > 0 && faces == 1,
+        boundary: fan.boundary_edges > 0,
+        manifold: fan.manifold,
+        faces: fan.faces,
+        sharp_corner: corners_kept && fan.boundary_edges > 0 && fan.faces == 1,
     }
 }
 
@@ -803,6 +787,7 @@ fn refine_level(
 mod tests {
     use super::*;
     use crate::subdivide;
+    use crate::test_meshes::cube;
     use tessd_mesh::Crease;
 
     /// An nx × ny grid of quads, warped in z, with per-vertex UVs `uv(position)` (no seams).
@@ -825,27 +810,6 @@ mod tests {
             values: m.positions.iter().map(|&p| uv(p)).collect(),
             indices: m.face_indices.clone(),
         });
-        m
-    }
-
-    /// A cube, outward quads, vertices at the corners of [0, 1]³.
-    fn cube() -> Mesh {
-        let mut m = Mesh {
-            positions: (0..8)
-                .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
-                .collect(),
-            ..Mesh::default()
-        };
-        for f in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            m.push_face(&f);
-        }
         m
     }
 

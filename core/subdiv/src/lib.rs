@@ -21,6 +21,9 @@ pub mod sqrt3;
 pub mod stencil;
 pub mod topology;
 
+#[cfg(test)]
+mod test_meshes;
+
 pub use catmull_clark::Boundary;
 pub use error::SubdivError;
 pub use face_varying::UvInterpolation;

@@ -19,6 +19,7 @@ use crate::catmull_clark::Boundary;
 use crate::crease_rules::{self, Phase, Rule};
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};
+use crate::stencil::StencilTable;
 use crate::topology::{Faces, NONE, Topology};
 
 /// Loop's smooth-vertex weight per neighbour at valence `n` (the centre takes `1 − nβ`).
@@ -45,13 +46,7 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Result<Leve
         vertex_point(topo, v, boundary, &mut row);
         row.push_to(&mut table);
     }
-    let (out, face_parent) = split_triangles(faces, topo);
-    Ok(Level {
-        faces: out,
-        table,
-        creases: crease_rules::split_creases(topo),
-        face_parent,
-    })
+    Ok(triangle_level(faces, topo, table))
 }
 
 /// [`SubdivError::NotTriangles`] for the first face of `faces` that is not a triangle.
@@ -63,6 +58,18 @@ pub(crate) fn check_triangles(faces: &Faces, scheme: &'static str) -> Result<(),
             corners: faces.face(face).len(),
         }),
         None => Ok(()),
+    }
+}
+
+/// A level of a 1-to-4 triangle scheme (Loop, Butterfly) with its `table`: the split
+/// triangles, their parents, and both halves of every crease.
+pub fn triangle_level(faces: &Faces, topo: &Topology, table: StencilTable) -> Level {
+    let (out, face_parent) = split_triangles(faces, topo);
+    Level {
+        faces: out,
+        table,
+        creases: crease_rules::split_creases(topo),
+        face_parent,
     }
 }
 

@@ -208,28 +208,8 @@ fn fans(mesh: &Mesh, v: u32, group: &[(u32, u32, u32)], sharp: &HashSet<u64>) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_meshes::cube;
     use tessd_mesh::Crease;
-
-    /// A unit cube, outward quads.
-    fn cube() -> Mesh {
-        let mut m = Mesh {
-            positions: (0..8)
-                .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
-                .collect(),
-            ..Mesh::default()
-        };
-        for f in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            m.push_face(&f);
-        }
-        m
-    }
 
     fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
         a[0] * b[0] + a[1] * b[1] + a[2] * b[2]

@@ -152,15 +152,7 @@ fn vertex_point(
         // An unused vertex is carried through unchanged.
         return row.add(vv, 1.0);
     }
-    let faces = topo.faces_of(v).len();
-    let boundary_edges = edges.iter().filter(|&&e| topo.is_boundary(e)).count();
-    let manifold = if boundary_edges == 0 {
-        faces == edges.len()
-    } else {
-        boundary_edges == 2 && faces + 1 == edges.len()
-    };
-    let corner =
-        !manifold || (boundary == Boundary::EdgeAndCorner && boundary_edges > 0 && faces == 1);
+    let corner = topo.fan(v).is_corner(boundary);
     let sharp = || edges.iter().filter(|&&e| split[e as usize]);
     match sharp().count() {
         _ if corner => row.add(vv, 1.0),

@@ -4,6 +4,7 @@
 //! Built by one sort of the face corners' edge keys, so it costs O(corners log corners) and a
 //! few flat arrays, no hashing.
 
+use crate::catmull_clark::Boundary;
 use crate::error::SubdivError;
 
 /// Sharpness at or above which an edge is infinitely sharp (OpenSubdiv's
@@ -62,6 +63,27 @@ pub struct Topology {
 
 /// No face.
 pub const NONE: u32 = u32::MAX;
+
+/// The faces around one vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VertexFan {
+    /// Faces using the vertex.
+    pub faces: usize,
+    /// Boundary edges at the vertex.
+    pub boundary_edges: usize,
+    /// True when the faces form one fan: closed (interior) or open between two boundary
+    /// edges.
+    pub manifold: bool,
+}
+
+impl VertexFan {
+    /// True when the vertex is a corner whatever the sharpness of its edges: not one fan, or a
+    /// boundary vertex of a single face under [`Boundary::EdgeAndCorner`].
+    pub fn is_corner(&self, boundary: Boundary) -> bool {
+        !self.manifold
+            || (boundary == Boundary::EdgeAndCorner && self.boundary_edges > 0 && self.faces == 1)
+    }
+}
 
 impl Topology {
     /// Builds the adjacency of `faces`, with sharpness from `creases` ((a, b), sharpness).
@@ -166,6 +188,23 @@ impl Topology {
     pub fn other(&self, e: u32, v: u32) -> u32 {
         let [a, b] = self.edge_vertices[e as usize];
         if a == v { b } else { a }
+    }
+
+    /// How the faces around vertex `v` lie.
+    pub fn fan(&self, v: usize) -> VertexFan {
+        let edges = self.edges_of(v);
+        let faces = self.faces_of(v).len();
+        let boundary_edges = edges.iter().filter(|&&e| self.is_boundary(e)).count();
+        let manifold = if boundary_edges == 0 {
+            faces == edges.len()
+        } else {
+            boundary_edges == 2 && faces + 1 == edges.len()
+        };
+        VertexFan {
+            faces,
+            boundary_edges,
+            manifold,
+        }
     }
 
     /// True when edge `e` has one face.

@@ -4,21 +4,8 @@
 use tessd_mesh::Mesh;
 use tessd_subdiv::{Refiner, Scheme, SubdivError, SubdivOptions};
 
-/// Two triangles sharing edge (1, 2): a valid cage for every scheme.
-fn pair() -> Mesh {
-    let mut m = Mesh {
-        positions: vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [1.0, 1.0, 0.0],
-        ],
-        ..Mesh::default()
-    };
-    m.push_face(&[0, 1, 2]);
-    m.push_face(&[2, 1, 3]);
-    m
-}
+mod common;
+use common::{pair, unit_quad};
 
 fn options(scheme: Scheme, levels: u32) -> SubdivOptions {
     SubdivOptions {
@@ -153,11 +140,7 @@ fn frames_of_another_vertex_count_are_refused() {
 
 #[test]
 fn quads_are_refused_by_the_triangle_schemes() {
-    let mut m = Mesh {
-        positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
-        ..Mesh::default()
-    };
-    m.push_face(&[0, 1, 2, 3]);
+    let m = unit_quad();
     for scheme in Scheme::ALL.into_iter().filter(|s| s.needs_triangles()) {
         assert_eq!(
             refuse(&m, scheme),

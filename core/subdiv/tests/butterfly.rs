@@ -3,55 +3,15 @@
 //! Zorin's extraordinary stencils, affine invariance.
 
 use std::collections::HashMap;
-use tessd_mesh::{Crease, Mesh};
+use tessd_mesh::Mesh;
 use tessd_subdiv::butterfly::extraordinary_weights;
-use tessd_subdiv::{Boundary, Faces, Refiner, Scheme, SubdivOptions, Topology, subdivide};
+use tessd_subdiv::{Boundary, Refiner, Scheme, SubdivOptions, subdivide};
+
+mod common;
+use common::{bumps, creased, edge_uses, edges, grid, icosahedron};
 
 fn options(levels: u32, boundary: Boundary) -> SubdivOptions {
-    SubdivOptions {
-        scheme: Scheme::Butterfly,
-        levels,
-        boundary,
-        ..SubdivOptions::default()
-    }
-}
-
-fn dist(p: [f32; 3], q: [f32; 3]) -> f64 {
-    (0..3)
-        .map(|k| f64::from(p[k] - q[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
-}
-
-/// The cage's edges in [`Topology`] order: new vertex `e` is the point of edge `e`.
-fn edges(m: &Mesh) -> Vec<[u32; 2]> {
-    let faces = Faces {
-        offsets: m.face_offsets.clone(),
-        indices: m.face_indices.clone(),
-        vertex_count: m.positions.len() as u32,
-    };
-    Topology::build(&faces, &[]).unwrap().edge_vertices
-}
-
-/// A regular triangulated `n × n` vertex grid over `[0, 1]²` (vertex `i + n j` at `(i, j)/(n
-/// − 1)`), each square cut from `(i, j)` to `(i + 1, j + 1)`, heights `z(x, y)`.
-fn grid(n: u32, z: impl Fn(f64, f64) -> f64) -> Mesh {
-    let h = 1.0 / f64::from(n - 1);
-    let mut m = Mesh::default();
-    for j in 0..n {
-        for i in 0..n {
-            let (x, y) = (f64::from(i) * h, f64::from(j) * h);
-            m.positions.push([x as f32, y as f32, z(x, y) as f32]);
-        }
-    }
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let v = i + n * j;
-            m.push_face(&[v, v + 1, v + 1 + n]);
-            m.push_face(&[v, v + 1 + n, v + n]);
-        }
-    }
-    m
+    common::options(Scheme::Butterfly, levels, boundary)
 }
 
 fn cubic(x: f64, y: f64) -> f64 {
@@ -63,10 +23,6 @@ fn cubic(x: f64, y: f64) -> f64 {
 
 fn quartic(x: f64, y: f64) -> f64 {
     5.0 * (x.powi(4) + y.powi(4))
-}
-
-fn bumps(x: f64, y: f64) -> f64 {
-    0.2 * (7.0 * x).sin() * (5.0 * y + 1.0).cos()
 }
 
 /// A bipyramid: ring `0..k` on the unit circle (valence 4), apexes `k` (top) and `k + 1`
@@ -83,47 +39,6 @@ fn bipyramid(k: u32) -> Mesh {
         m.push_face(&[i, j, k]);
         m.push_face(&[j, i, k + 1]);
     }
-    m
-}
-
-fn icosahedron() -> Mesh {
-    let g = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut p = Vec::new();
-    for s in [1.0, -1.0] {
-        for t in [g, -g] {
-            p.extend([[0.0, s, t], [s, t, 0.0], [t, 0.0, s]]);
-        }
-    }
-    let n = p.len() as u32;
-    let adj = |a: u32, b: u32| (dist(p[a as usize], p[b as usize]) - 2.0).abs() < 1e-4;
-    let mut m = Mesh::default();
-    for a in 0..n {
-        for b in a + 1..n {
-            for c in b + 1..n {
-                if adj(a, b) && adj(b, c) && adj(a, c) {
-                    let [x, y, z] = [a, b, c].map(|v| p[v as usize]);
-                    let u = [y[0] - x[0], y[1] - x[1], y[2] - x[2]];
-                    let w = [z[0] - x[0], z[1] - x[1], z[2] - x[2]];
-                    let nrm = [
-                        u[1] * w[2] - u[2] * w[1],
-                        u[2] * w[0] - u[0] * w[2],
-                        u[0] * w[1] - u[1] * w[0],
-                    ];
-                    let out: f32 = (0..3).map(|k| nrm[k] * x[k]).sum();
-                    m.push_face(&if out > 0.0 { [a, b, c] } else { [a, c, b] });
-                }
-            }
-        }
-    }
-    m.positions = p;
-    m
-}
-
-fn creased(mut m: Mesh, creases: &[(u32, u32, f32)]) -> Mesh {
-    m.creases = creases
-        .iter()
-        .map(|&(a, b, value)| Crease { a, b, value })
-        .collect();
     m
 }
 
@@ -183,7 +98,7 @@ fn edge_points_near_the_border_stay_on_the_lattice() {
     // The ghost wings reproduce linear data: in xy every interior edge point is a midpoint.
     let cage = grid(7, bumps);
     let out = subdivide(&cage, &options(1, Boundary::EdgeOnly)).unwrap();
-    let uses = face_uses(&cage);
+    let uses = edge_uses(&cage);
     for (e, &[a, b]) in edges(&cage).iter().enumerate() {
         if uses[&(a, b)] == 2 {
             let (pa, pb, p) = (
@@ -199,17 +114,6 @@ fn edge_points_near_the_border_stay_on_the_lattice() {
             }
         }
     }
-}
-
-fn face_uses(m: &Mesh) -> HashMap<(u32, u32), usize> {
-    let mut uses = HashMap::new();
-    for f in m.faces() {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    uses
 }
 
 #[test]

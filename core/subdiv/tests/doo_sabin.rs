@@ -2,142 +2,23 @@
 //! n-gons, symmetry, orientation, and the Chaikin boundary, each expected value computed here
 //! from the cage, not read back from the scheme.
 
-use std::collections::HashMap;
+use tessd_mesh::Mesh;
+use tessd_subdiv::{Boundary, Level, Scheme, SubdivOptions, doo_sabin, subdivide};
 
-use tessd_mesh::{Crease, Mesh};
-use tessd_subdiv::{
-    Boundary, Faces, Level, Scheme, SubdivError, SubdivOptions, Topology, doo_sabin, subdivide,
+mod common;
+use common::{
+    P, PLANE, add, assert_misorientation_named, assert_oriented, assert_rows_sum_to_one,
+    assert_two_levels_sum_to_one, boundary_loop_points, boundary_polygon, creased, cross, dist,
+    euler, mesh, norm, off_plane, on_plane, p64, print_open_level, refine_with,
 };
 
-type P = [f64; 3];
-
-fn mesh(positions: Vec<[f32; 3]>, faces: &[Vec<u32>]) -> Mesh {
-    let mut m = Mesh {
-        positions,
-        ..Mesh::default()
-    };
-    faces.iter().for_each(|f| m.push_face(f));
-    m
-}
-
-fn faces_of(m: &Mesh) -> Faces {
-    Faces {
-        offsets: m.face_offsets.clone(),
-        indices: m.face_indices.clone(),
-        vertex_count: m.positions.len() as u32,
-    }
-}
-
 fn options(levels: u32, boundary: Boundary) -> SubdivOptions {
-    SubdivOptions {
-        scheme: Scheme::DooSabin,
-        levels,
-        boundary,
-        ..SubdivOptions::default()
-    }
+    common::options(Scheme::DooSabin, levels, boundary)
 }
 
 /// One level through `refine` directly, with the new positions.
 fn refine(m: &Mesh, boundary: Boundary) -> (Level, Mesh) {
-    let faces = faces_of(m);
-    let creases: Vec<([u32; 2], f32)> = m.creases.iter().map(|c| ([c.a, c.b], c.value)).collect();
-    let topo = Topology::build(&faces, &creases).unwrap();
-    let level = doo_sabin::refine(&faces, &topo, boundary).unwrap();
-    let mut flat = vec![0.0; level.table.len() * 3];
-    level.table.apply(m.positions.as_flattened(), 3, &mut flat);
-    let out = Mesh {
-        positions: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-        face_offsets: level.faces.offsets.clone(),
-        face_indices: level.faces.indices.clone(),
-        ..Mesh::default()
-    };
-    (level, out)
-}
-
-fn p64(p: [f32; 3]) -> P {
-    p.map(f64::from)
-}
-
-fn add(a: P, b: P, w: f64) -> P {
-    [a[0] + w * b[0], a[1] + w * b[1], a[2] + w * b[2]]
-}
-
-fn dist(a: P, b: P) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-}
-
-fn norm(a: P) -> f64 {
-    dist(a, [0.0; 3])
-}
-
-/// Directed edges of `m`, each asserted to be used once; on a closed mesh each reverse too.
-fn assert_oriented(m: &Mesh, closed: bool) -> HashMap<(u32, u32), usize> {
-    let mut directed = HashMap::new();
-    for (f, c) in m.faces().enumerate() {
-        for k in 0..c.len() {
-            let d = (c[k], c[(k + 1) % c.len()]);
-            assert!(
-                directed.insert(d, f).is_none(),
-                "edge {d:?} runs the same way in two faces"
-            );
-        }
-    }
-    if closed {
-        for &(a, b) in directed.keys() {
-            assert!(
-                directed.contains_key(&(b, a)),
-                "edge ({a}, {b}) has one face"
-            );
-        }
-    }
-    directed
-}
-
-/// V − E + F over the vertices the faces use.
-fn euler(m: &Mesh) -> i64 {
-    let mut used = vec![false; m.positions.len()];
-    m.face_indices.iter().for_each(|&v| used[v as usize] = true);
-    let mut edges: Vec<(u32, u32)> = m
-        .faces()
-        .flat_map(|c| {
-            (0..c.len()).map(move |k| {
-                (
-                    c[k].min(c[(k + 1) % c.len()]),
-                    c[k].max(c[(k + 1) % c.len()]),
-                )
-            })
-        })
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
-    used.iter().filter(|&&u| u).count() as i64 - edges.len() as i64 + m.face_count() as i64
-}
-
-fn assert_rows_sum_to_one(level: &Level) {
-    for i in 0..level.table.len() {
-        let s: f64 = level.table.row(i).map(|(_, w)| f64::from(w)).sum();
-        assert!((s - 1.0).abs() < 1e-6, "row {i} sums to {s}");
-        assert!(level.table.row(i).all(|(_, w)| w > 0.0), "row {i}");
-    }
-}
-
-/// The boundary loop of a mesh with one boundary, following the faces' direction.
-fn boundary_loop(m: &Mesh) -> Vec<u32> {
-    let directed = assert_oriented(m, false);
-    let next: HashMap<u32, u32> = directed
-        .keys()
-        .filter(|&&(a, b)| !directed.contains_key(&(b, a)))
-        .map(|&(a, b)| (a, b))
-        .collect();
-    let start = *next.keys().min().expect("a boundary");
-    let mut out = vec![start];
-    let mut v = next[&start];
-    while v != start {
-        out.push(v);
-        v = next[&v];
-    }
-    assert_eq!(out.len(), next.len(), "one boundary loop");
-    out
+    refine_with(m, |faces, topo| doo_sabin::refine(faces, topo, boundary))
 }
 
 /// `got` is `want` up to where the loop starts.
@@ -223,7 +104,6 @@ fn torus(m: u32, n: u32) -> Mesh {
 
 /// A `w` × `h` vertex quad grid in a tilted plane, moved about within the plane.
 fn planar_grid(w: u32, h: u32) -> (Mesh, P, P) {
-    let (o, u, v) = ([0.3, -0.2, 0.5], [1.0, 0.2, -0.3], [0.1, 0.9, 0.4]);
     let mut positions = Vec::new();
     for j in 0..h {
         for i in 0..w {
@@ -231,7 +111,7 @@ fn planar_grid(w: u32, h: u32) -> (Mesh, P, P) {
                 i as f64 + 0.2 * (1.7 * j as f64 + i as f64).sin(),
                 j as f64 + 0.15 * (2.3 * i as f64).cos(),
             );
-            positions.push([0, 1, 2].map(|k| (o[k] + x * u[k] + y * v[k]) as f32));
+            positions.push(on_plane(x, y));
         }
     }
     let faces: Vec<Vec<u32>> = (0..h - 1)
@@ -246,12 +126,7 @@ fn planar_grid(w: u32, h: u32) -> (Mesh, P, P) {
             })
         })
         .collect();
-    let normal = [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ];
-    (mesh(positions, &faces), o, normal)
+    (mesh(positions, &faces), PLANE[0], cross(PLANE[1], PLANE[2]))
 }
 
 #[test]
@@ -427,22 +302,9 @@ fn face_parents_are_faces_they_take_points_from() {
 #[test]
 fn open_grid_stays_planar_and_its_boundary_is_chaikin() {
     let (cage, origin, normal) = planar_grid(5, 4);
-    let cage_loop = boundary_loop(&cage);
-    let mut faces_at = vec![0; cage.positions.len()];
-    cage.face_indices
-        .iter()
-        .for_each(|&v| faces_at[v as usize] += 1);
     for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
         let keep = boundary == Boundary::EdgeAndCorner;
-        let mut want: Vec<(P, bool)> = cage_loop
-            .iter()
-            .map(|&v| {
-                (
-                    p64(cage.positions[v as usize]),
-                    keep && faces_at[v as usize] == 1,
-                )
-            })
-            .collect();
+        let mut want = boundary_polygon(&cage, keep);
         assert_eq!(
             want.iter().filter(|w| w.1).count(),
             if keep { 4 } else { 0 }
@@ -451,29 +313,14 @@ fn open_grid_stays_planar_and_its_boundary_is_chaikin() {
             want = chaikin(&want);
             let out = subdivide(&cage, &options(levels, boundary)).unwrap();
             assert_eq!(euler(&out), 1, "a disc");
-            let off = out
-                .positions
-                .iter()
-                .map(|&p| {
-                    let d = add(p64(p), origin, -1.0);
-                    ((0..3).map(|k| d[k] * normal[k]).sum::<f64>() / norm(normal)).abs()
-                })
-                .fold(0.0, f64::max);
+            let off = off_plane(&out, origin, normal);
             assert!(
                 off < 1e-5,
                 "{boundary:?} level {levels}: {off} off the plane"
             );
-            let got: Vec<P> = boundary_loop(&out)
-                .iter()
-                .map(|&v| p64(out.positions[v as usize]))
-                .collect();
+            let got = boundary_loop_points(&out);
             assert_same_loop(&got, &want.iter().map(|w| w.0).collect::<Vec<_>>(), 1e-5);
-            println!(
-                "{boundary:?} level {levels}: {} vertices, {} faces, boundary of {} points",
-                out.positions.len(),
-                out.face_count(),
-                got.len()
-            );
+            print_open_level(boundary, levels, &out, got.len());
         }
     }
 }
@@ -522,42 +369,26 @@ fn bowtie_vertex_is_kept_as_a_corner() {
 fn rows_sum_to_one_on_mixed_polygons() {
     let (grid, _, _) = planar_grid(4, 3);
     for m in [cube(), prism(8), torus(4, 3), grid] {
-        for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
-            let (level, out) = refine(&m, boundary);
-            assert_rows_sum_to_one(&level);
-            let (level, _) = refine(&out, boundary);
-            assert_rows_sum_to_one(&level);
-        }
+        assert_two_levels_sum_to_one(&m, refine);
     }
 }
 
 #[test]
 fn creases_are_ignored() {
-    let mut creased = cube();
-    creased.creases = vec![Crease {
-        a: 0,
-        b: 2,
-        value: 10.0,
-    }];
-    let (level, out) = refine(&creased, Boundary::EdgeOnly);
+    let cage = creased(cube(), &[(0, 2, 10.0)]);
+    let (level, out) = refine(&cage, Boundary::EdgeOnly);
     assert!(level.creases.is_empty());
     assert_eq!(
         out.positions,
         refine(&cube(), Boundary::EdgeOnly).1.positions
     );
-    let through = subdivide(&creased, &options(2, Boundary::EdgeOnly)).unwrap();
+    let through = subdivide(&cage, &options(2, Boundary::EdgeOnly)).unwrap();
     assert!(through.creases.is_empty());
 }
 
 #[test]
 fn inconsistent_orientation_is_named() {
-    let positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
     // Both faces run edge (1, 2) from 1 to 2.
-    let cage = mesh(positions, &[vec![0, 1, 2], vec![1, 2, 3]]);
-    let err = subdivide(&cage, &options(1, Boundary::EdgeOnly)).unwrap_err();
-    assert!(
-        matches!(err, SubdivError::DegenerateFace { face: 1, .. }),
-        "{err}"
-    );
+    let err = assert_misorientation_named(Scheme::DooSabin);
     println!("{err}");
 }

@@ -2,61 +2,19 @@
 //! baselines: one step of ours on level k must give level k + 1 within 1e-6 of the bounding
 //! box, order-independently) and against the scheme's analytic properties.
 
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
 use tessd_mesh::{Crease, Mesh};
 use tessd_subdiv::{
     Boundary, Refiner, Scheme, StencilTable, SubdivError, SubdivOptions, subdivide,
 };
 
-fn data(name: &str) -> PathBuf {
-    let dir = match std::env::var_os("TESSD_SHARED_DATA") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-    };
-    let p = dir.join("subdiv").join(name);
-    assert!(
-        p.exists(),
-        "shared test data not found at {}; set TESSD_SHARED_DATA",
-        p.display()
-    );
-    p
-}
-
-fn read(name: &str) -> Mesh {
-    tessd_mesh::io::read_path(&data(name), &Default::default()).unwrap()
-}
+mod common;
+use common::{
+    both_sided, bumps_f32, creased, dist32, edge_uses, grid_f32, icosahedron, octahedron,
+    one_sided, read, size,
+};
 
 fn options(levels: u32, boundary: Boundary) -> SubdivOptions {
-    SubdivOptions {
-        scheme: Scheme::Loop,
-        levels,
-        boundary,
-        ..SubdivOptions::default()
-    }
-}
-
-fn dist(p: [f32; 3], q: [f32; 3]) -> f64 {
-    (0..3)
-        .map(|k| f64::from(p[k] - q[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
-}
-
-/// Largest distance from a point of `a` to its nearest point of `b`.
-fn one_sided(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
-    a.iter()
-        .map(|&p| b.iter().map(|&q| dist(p, q)).fold(f64::INFINITY, f64::min))
-        .fold(0.0, f64::max)
-}
-
-fn both_sided(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
-    one_sided(a, b).max(one_sided(b, a))
-}
-
-fn size(m: &Mesh) -> f64 {
-    let (lo, hi) = m.bounds().unwrap();
-    (0..3).map(|i| hi[i] - lo[i]).fold(0.0f32, f32::max) as f64
+    common::options(Scheme::Loop, levels, boundary)
 }
 
 #[test]
@@ -122,98 +80,8 @@ fn wrong_beta_and_catmull_clark_fail_the_same_comparison() {
     assert!(d > 100.0 * tol, "Catmull–Clark passes: {d}");
 }
 
-/// A regular triangulated `n × n` vertex grid over `[0, 1]²` (vertex `i + n j` at `(i, j)/(n
-/// − 1)`), each square cut from `(i, j)` to `(i + 1, j + 1)`, heights `z(x, y)`.
-fn grid(n: u32, z: impl Fn(f32, f32) -> f32) -> Mesh {
-    let h = 1.0 / (n - 1) as f32;
-    let mut m = Mesh::default();
-    for j in 0..n {
-        for i in 0..n {
-            let (x, y) = (i as f32 * h, j as f32 * h);
-            m.positions.push([x, y, z(x, y)]);
-        }
-    }
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let v = i + n * j;
-            m.push_face(&[v, v + 1, v + 1 + n]);
-            m.push_face(&[v, v + 1 + n, v + n]);
-        }
-    }
-    m
-}
-
-/// A bumpy height that is not polynomial.
-fn bumps(x: f32, y: f32) -> f32 {
-    0.2 * (7.0 * x).sin() * (5.0 * y + 1.0).cos()
-}
-
-/// The triangles of a convex polyhedron whose edges all have length `edge`, outward.
-fn solid(points: Vec<[f32; 3]>, edge: f64) -> Mesh {
-    let n = points.len() as u32;
-    let adjacent =
-        |a: u32, b: u32| (dist(points[a as usize], points[b as usize]) - edge).abs() < 1e-4;
-    let mut m = Mesh::default();
-    for a in 0..n {
-        for b in a + 1..n {
-            for c in b + 1..n {
-                if !(adjacent(a, b) && adjacent(b, c) && adjacent(a, c)) {
-                    continue;
-                }
-                let [p, q, r] = [a, b, c].map(|v| points[v as usize]);
-                let u = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
-                let w = [r[0] - p[0], r[1] - p[1], r[2] - p[2]];
-                let nrm = [
-                    u[1] * w[2] - u[2] * w[1],
-                    u[2] * w[0] - u[0] * w[2],
-                    u[0] * w[1] - u[1] * w[0],
-                ];
-                let out: f32 = (0..3).map(|k| nrm[k] * (p[k] + q[k] + r[k])).sum();
-                m.push_face(&if out > 0.0 { [a, b, c] } else { [a, c, b] });
-            }
-        }
-    }
-    m.positions = points;
-    m
-}
-
-fn octahedron() -> Mesh {
-    let mut p = Vec::new();
-    for k in 0..3 {
-        for s in [1.0, -1.0] {
-            let mut v = [0.0; 3];
-            v[k] = s;
-            p.push(v);
-        }
-    }
-    solid(p, 2f64.sqrt())
-}
-
-fn icosahedron() -> Mesh {
-    let g = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut p = Vec::new();
-    for s in [1.0, -1.0] {
-        for t in [g, -g] {
-            p.extend([[0.0, s, t], [s, t, 0.0], [t, 0.0, s]]);
-        }
-    }
-    solid(p, 2.0)
-}
-
 fn radius(p: [f32; 3]) -> f64 {
-    dist(p, [0.0; 3])
-}
-
-/// Edges (a, b), a < b, with how many faces use each.
-fn edge_uses(m: &Mesh) -> HashMap<(u32, u32), usize> {
-    let mut uses = HashMap::new();
-    for f in m.faces() {
-        for k in 0..f.len() {
-            let (a, b) = (f[k], f[(k + 1) % f.len()]);
-            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    uses
+    dist32(p, [0.0; 3])
 }
 
 #[test]
@@ -245,7 +113,7 @@ fn regular_solids_refine_symmetrically() {
             .iter()
             .copied()
             .filter(|&q| {
-                (dist(q, v0) - dist(cage.positions[0], nearest_other(&cage, 0))).abs() < 1e-4
+                (dist32(q, v0) - dist32(cage.positions[0], nearest_other(&cage, 0))).abs() < 1e-4
             })
             .collect();
         assert_eq!(nb.len(), valence);
@@ -267,35 +135,16 @@ fn nearest_other(m: &Mesh, v: usize) -> [f32; 3] {
     *m.positions
         .iter()
         .filter(|&&q| q != p)
-        .min_by(|&&a, &&b| dist(a, p).total_cmp(&dist(b, p)))
+        .min_by(|&&a, &&b| dist32(a, p).total_cmp(&dist32(b, p)))
         .unwrap()
 }
 
 #[test]
 fn every_row_sums_to_one() {
-    let mut g = grid(6, bumps);
-    g.creases = vec![
-        Crease {
-            a: 7,
-            b: 8,
-            value: 0.4,
-        },
-        Crease {
-            a: 8,
-            b: 9,
-            value: 1.5,
-        },
-        Crease {
-            a: 14,
-            b: 15,
-            value: 10.0,
-        },
-        Crease {
-            a: 8,
-            b: 15,
-            value: 2.0,
-        },
-    ];
+    let g = creased(
+        grid_f32(6, bumps_f32),
+        &[(7, 8, 0.4), (8, 9, 1.5), (14, 15, 10.0), (8, 15, 2.0)],
+    );
     for cage in [g, icosahedron(), octahedron()] {
         for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
             let r = Refiner::new(&cage, &options(3, boundary)).unwrap();
@@ -313,24 +162,10 @@ fn every_row_sums_to_one() {
 fn planar_mesh_stays_planar() {
     // The plane z = 0.3 x − 0.7 y + 0.2, with creases of every kind.
     let plane = |x: f32, y: f32| 0.3 * x - 0.7 * y + 0.2;
-    let mut cage = grid(5, plane);
-    cage.creases = vec![
-        Crease {
-            a: 6,
-            b: 7,
-            value: 0.5,
-        },
-        Crease {
-            a: 7,
-            b: 8,
-            value: 10.0,
-        },
-        Crease {
-            a: 12,
-            b: 7,
-            value: 1.3,
-        },
-    ];
+    let cage = creased(
+        grid_f32(5, plane),
+        &[(6, 7, 0.5), (7, 8, 10.0), (12, 7, 1.3)],
+    );
     for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
         let out = subdivide(&cage, &options(3, boundary)).unwrap();
         let worst = out
@@ -357,7 +192,7 @@ fn boundary_points(m: &Mesh) -> Vec<[f32; 3]> {
 #[test]
 fn boundary_is_the_cubic_bspline_of_the_boundary_polygon() {
     let n = 6u32;
-    let cage = grid(n, bumps);
+    let cage = grid_f32(n, bumps_f32);
     // The boundary polygon, going round.
     let mut ring: Vec<u32> = (0..n).collect();
     ring.extend((1..n).map(|j| n - 1 + n * j));
@@ -380,11 +215,11 @@ fn boundary_is_the_cubic_bspline_of_the_boundary_polygon() {
 /// The grid with row `j = 3` (y = 0.5) flat at z = 0 and creased with sharpness `s`.
 fn creased_grid(s: f32) -> Mesh {
     let n = 7u32;
-    let mut m = grid(n, |x, y| {
+    let mut m = grid_f32(n, |x, y| {
         if (y - 0.5).abs() < 1e-6 {
             0.0
         } else {
-            bumps(x, y) + 0.3
+            bumps_f32(x, y) + 0.3
         }
     });
     m.creases = (0..n - 1)
@@ -437,19 +272,19 @@ fn semi_sharp_creases_blend_between_smooth_and_sharp() {
     let mut moved = 0.0f64;
     for i in 0..smooth.len() {
         // s = 1 is fully sharp for one level; s = 0.5 is halfway to it from smooth.
-        assert!(dist(one[i], sharp[i]) < 1e-6, "vertex {i}");
+        assert!(dist32(one[i], sharp[i]) < 1e-6, "vertex {i}");
         let mid: [f32; 3] = std::array::from_fn(|k| 0.5 * (smooth[i][k] + one[i][k]));
         assert!(
-            dist(half[i], mid) < 1e-6,
+            dist32(half[i], mid) < 1e-6,
             "vertex {i}: {:?} vs {mid:?}",
             half[i]
         );
-        moved = moved.max(dist(smooth[i], one[i]));
+        moved = moved.max(dist32(smooth[i], one[i]));
     }
     assert!(moved > 1e-2, "the crease changes nothing: {moved}");
     // One more level: s = 1 has run out, infinity has not.
     let (one2, sharp2) = (level(1.0, 2), level(10.0, 2));
-    assert!(one2.iter().zip(&sharp2).any(|(&a, &b)| dist(a, b) > 1e-3));
+    assert!(one2.iter().zip(&sharp2).any(|(&a, &b)| dist32(a, b) > 1e-3));
 }
 
 #[test]
@@ -464,7 +299,7 @@ fn refining_twice_equals_two_levels_with_fractional_creases() {
         .positions
         .iter()
         .zip(&two.positions)
-        .map(|(&a, &b)| dist(a, b))
+        .map(|(&a, &b)| dist32(a, b))
         .fold(0.0, f64::max);
     assert!(d < 1e-6, "{d}");
 }
@@ -472,11 +307,11 @@ fn refining_twice_equals_two_levels_with_fractional_creases() {
 #[test]
 fn edge_and_corner_keeps_corners_fixed() {
     let n = 5u32;
-    let cage = grid(n, bumps);
+    let cage = grid_f32(n, bumps_f32);
     // (n − 1, 0) and (0, n − 1) have one face; (0, 0) and (n − 1, n − 1) two.
     let single = [n - 1, n * (n - 1)].map(|v| cage.positions[v as usize]);
     let double = [0, n * n - 1].map(|v| cage.positions[v as usize]);
-    let found = |out: &Mesh, p: [f32; 3]| out.positions.iter().any(|&q| dist(p, q) < 1e-7);
+    let found = |out: &Mesh, p: [f32; 3]| out.positions.iter().any(|&q| dist32(p, q) < 1e-7);
     let corners = subdivide(&cage, &options(3, Boundary::EdgeAndCorner)).unwrap();
     let edges = subdivide(&cage, &options(3, Boundary::EdgeOnly)).unwrap();
     for p in single {
@@ -490,7 +325,7 @@ fn edge_and_corner_keeps_corners_fixed() {
 
 #[test]
 fn non_triangle_cages_are_refused() {
-    let mut cage = grid(3, bumps);
+    let mut cage = grid_f32(3, bumps_f32);
     cage.push_face(&[0, 1, 4, 3]);
     for scheme in [Scheme::Loop, Scheme::Butterfly] {
         let o = SubdivOptions {

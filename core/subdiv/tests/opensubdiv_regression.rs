@@ -2,39 +2,10 @@
 //! Hbr baselines) must give its next level: every vertex within 1e-6 (relative to the bounding
 //! box), order-independently, and the same vertex and face counts.
 
-use std::path::{Path, PathBuf};
-use tessd_mesh::Mesh;
 use tessd_subdiv::{Boundary, SubdivOptions, subdivide};
 
-fn data(name: &str) -> PathBuf {
-    let dir = match std::env::var_os("TESSD_SHARED_DATA") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-    };
-    let p = dir.join("subdiv").join(name);
-    assert!(
-        p.exists(),
-        "shared test data not found at {}; set TESSD_SHARED_DATA",
-        p.display()
-    );
-    p
-}
-
-fn read(name: &str) -> Mesh {
-    tessd_mesh::io::read_path(&data(name), &Default::default()).unwrap()
-}
-
-/// Largest distance from a point of `a` to its nearest point of `b`.
-fn one_sided(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
-    a.iter()
-        .map(|p| {
-            b.iter()
-                .map(|q| (0..3).map(|k| f64::from(p[k] - q[k]).powi(2)).sum::<f64>())
-                .fold(f64::INFINITY, f64::min)
-                .sqrt()
-        })
-        .fold(0.0, f64::max)
-}
+mod common;
+use common::{both_sided, one_sided, read, size};
 
 fn check(shape: &str, boundary: Boundary) {
     for k in 0..2 {
@@ -45,8 +16,7 @@ fn check(shape: &str, boundary: Boundary) {
             ..SubdivOptions::default()
         };
         let got = subdivide(&cage, &options).unwrap();
-        let (lo, hi) = want.bounds().unwrap();
-        let size = (0..3).map(|i| hi[i] - lo[i]).fold(0.0f32, f32::max) as f64;
+        let size = size(&want);
         let used: Vec<[f32; 3]> = {
             let mut seen = vec![false; got.positions.len()];
             got.face_indices
@@ -67,7 +37,7 @@ fn check(shape: &str, boundary: Boundary) {
             want.face_count(),
             "{shape} level {k}: faces"
         );
-        let d = one_sided(&used, &want.positions).max(one_sided(&want.positions, &used));
+        let d = both_sided(&used, &want.positions);
         println!(
             "{shape} level {k} -> {}: max distance {:.3e} of size {size}",
             k + 1,

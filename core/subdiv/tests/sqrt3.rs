@@ -7,143 +7,24 @@ use std::f64::consts::PI;
 
 use tessd_mesh::{Crease, Mesh};
 use tessd_subdiv::{
-    Boundary, Faces, Level, Scheme, SubdivError, SubdivOptions, Topology, sqrt3, subdivide,
+    Boundary, Level, Scheme, SubdivError, SubdivOptions, Topology, sqrt3, subdivide,
 };
 
-type P = [f64; 3];
-
-fn mesh(positions: Vec<[f32; 3]>, faces: &[Vec<u32>]) -> Mesh {
-    let mut m = Mesh {
-        positions,
-        ..Mesh::default()
-    };
-    faces.iter().for_each(|f| m.push_face(f));
-    m
-}
-
-fn faces_of(m: &Mesh) -> Faces {
-    Faces {
-        offsets: m.face_offsets.clone(),
-        indices: m.face_indices.clone(),
-        vertex_count: m.positions.len() as u32,
-    }
-}
+mod common;
+use common::{
+    P, PLANE, add, assert_misorientation_named, assert_oriented, assert_rows_sum_to_one,
+    assert_two_levels_sum_to_one, boundary_loop_points, boundary_polygon, creased, cross, dist,
+    dot, euler, faces_of, mesh, norm, normal, off_plane, on_plane, p64, print_open_level,
+    refine_with, solid, unit_quad,
+};
 
 fn options(levels: u32, boundary: Boundary) -> SubdivOptions {
-    SubdivOptions {
-        scheme: Scheme::Sqrt3,
-        levels,
-        boundary,
-        ..SubdivOptions::default()
-    }
+    common::options(Scheme::Sqrt3, levels, boundary)
 }
 
 /// One level through `refine` directly, with the new positions and creases.
 fn refine(m: &Mesh, boundary: Boundary) -> (Level, Mesh) {
-    let faces = faces_of(m);
-    let creases: Vec<([u32; 2], f32)> = m.creases.iter().map(|c| ([c.a, c.b], c.value)).collect();
-    let topo = Topology::build(&faces, &creases).unwrap();
-    let level = sqrt3::refine(&faces, &topo, boundary).unwrap();
-    let mut flat = vec![0.0; level.table.len() * 3];
-    level.table.apply(m.positions.as_flattened(), 3, &mut flat);
-    let out = Mesh {
-        positions: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-        face_offsets: level.faces.offsets.clone(),
-        face_indices: level.faces.indices.clone(),
-        creases: level
-            .creases
-            .iter()
-            .map(|&([a, b], value)| Crease { a, b, value })
-            .collect(),
-        ..Mesh::default()
-    };
-    (level, out)
-}
-
-fn p64(p: [f32; 3]) -> P {
-    p.map(f64::from)
-}
-
-fn add(a: P, b: P, w: f64) -> P {
-    [a[0] + w * b[0], a[1] + w * b[1], a[2] + w * b[2]]
-}
-
-fn sub(a: P, b: P) -> P {
-    add(a, b, -1.0)
-}
-
-fn dot(a: P, b: P) -> f64 {
-    (0..3).map(|k| a[k] * b[k]).sum()
-}
-
-fn cross(a: P, b: P) -> P {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dist(a: P, b: P) -> f64 {
-    dot(sub(a, b), sub(a, b)).sqrt()
-}
-
-fn norm(a: P) -> f64 {
-    dot(a, a).sqrt()
-}
-
-fn normal(m: &Mesh, c: &[u32]) -> P {
-    let p = |i: usize| p64(m.positions[c[i] as usize]);
-    cross(sub(p(1), p(0)), sub(p(2), p(0)))
-}
-
-/// Directed edges of `m`, each asserted to be used once; on a closed mesh each reverse too.
-fn assert_oriented(m: &Mesh, closed: bool) -> HashMap<(u32, u32), usize> {
-    let mut directed = HashMap::new();
-    for (f, c) in m.faces().enumerate() {
-        for k in 0..c.len() {
-            let d = (c[k], c[(k + 1) % c.len()]);
-            assert!(
-                directed.insert(d, f).is_none(),
-                "edge {d:?} runs the same way in two faces"
-            );
-        }
-    }
-    if closed {
-        for &(a, b) in directed.keys() {
-            assert!(
-                directed.contains_key(&(b, a)),
-                "edge ({a}, {b}) has one face"
-            );
-        }
-    }
-    directed
-}
-
-/// V − E + F over the vertices the faces use.
-fn euler(m: &Mesh) -> i64 {
-    let mut used = vec![false; m.positions.len()];
-    m.face_indices.iter().for_each(|&v| used[v as usize] = true);
-    let mut edges: Vec<(u32, u32)> = m
-        .faces()
-        .flat_map(|c| {
-            (0..3).map(move |k| {
-                let (a, b) = (c[k], c[(k + 1) % 3]);
-                (a.min(b), a.max(b))
-            })
-        })
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
-    used.iter().filter(|&&u| u).count() as i64 - edges.len() as i64 + m.face_count() as i64
-}
-
-fn assert_rows_sum_to_one(level: &Level) {
-    for i in 0..level.table.len() {
-        let s: f64 = level.table.row(i).map(|(_, w)| f64::from(w)).sum();
-        assert!((s - 1.0).abs() < 1e-6, "row {i} sums to {s}");
-        assert!(level.table.row(i).all(|(_, w)| w > 0.0), "row {i}");
-    }
+    refine_with(m, |faces, topo| sqrt3::refine(faces, topo, boundary))
 }
 
 /// The one closed loop made of `edges` (each vertex on two of them).
@@ -163,25 +44,6 @@ fn edge_loop(edges: &[(u32, u32)]) -> Vec<u32> {
         (prev, v) = (v, if n[0] == prev { n[1] } else { n[0] });
     }
     assert_eq!(out.len(), edges.len(), "one loop");
-    out
-}
-
-/// The boundary loop of a mesh with one boundary, following the faces' direction.
-fn boundary_loop(m: &Mesh) -> Vec<u32> {
-    let directed = assert_oriented(m, false);
-    let next: HashMap<u32, u32> = directed
-        .keys()
-        .filter(|&&(a, b)| !directed.contains_key(&(b, a)))
-        .map(|&(a, b)| (a, b))
-        .collect();
-    let start = *next.keys().min().expect("a boundary");
-    let mut out = vec![start];
-    let mut v = next[&start];
-    while v != start {
-        out.push(v);
-        v = next[&v];
-    }
-    assert_eq!(out.len(), next.len(), "one boundary loop");
     out
 }
 
@@ -215,28 +77,11 @@ fn cubic_bspline(poly: &[(P, bool)]) -> Vec<(P, bool)> {
 /// tetrahedron, octahedron, icosahedron), oriented outward.
 fn regular(points: &[P]) -> Mesh {
     let n = points.len();
-    let pairs = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j)));
-    let edge = pairs
-        .clone()
+    let edge = (0..n)
+        .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
         .map(|(i, j)| dist(points[i], points[j]))
         .fold(f64::INFINITY, f64::min);
-    let adjacent = |i: usize, j: usize| (dist(points[i], points[j]) - edge).abs() < 1e-9;
-    let mut faces = Vec::new();
-    for (i, j) in pairs {
-        for k in j + 1..n {
-            if adjacent(i, j) && adjacent(j, k) && adjacent(i, k) {
-                let c = add(add(points[i], points[j], 1.0), points[k], 1.0);
-                let nrm = cross(sub(points[j], points[i]), sub(points[k], points[i]));
-                let (i, j, k) = (i as u32, j as u32, k as u32);
-                faces.push(if dot(nrm, c) > 0.0 {
-                    vec![i, j, k]
-                } else {
-                    vec![i, k, j]
-                });
-            }
-        }
-    }
-    mesh(points.iter().map(|p| p.map(|x| x as f32)).collect(), &faces)
+    solid(points.iter().map(|p| p.map(|x| x as f32)).collect(), edge)
 }
 
 fn tetrahedron() -> Mesh {
@@ -474,25 +319,15 @@ fn icosahedron_vertices_move_to_one_radius() {
 
 #[test]
 fn rows_sum_to_one() {
-    let mut creased = octahedron();
-    creased.creases = vec![Crease {
-        a: 0,
-        b: 1,
-        value: 2.5,
-    }];
+    let creased_octahedron = creased(octahedron(), &[(0, 1, 2.5)]);
     for m in [
         tetrahedron(),
         icosahedron(),
         torus(4, 5).0,
         triangle_grid(4, 3),
-        creased,
+        creased_octahedron,
     ] {
-        for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
-            let (level, out) = refine(&m, boundary);
-            assert_rows_sum_to_one(&level);
-            let (level, _) = refine(&out, boundary);
-            assert_rows_sum_to_one(&level);
-        }
+        assert_two_levels_sum_to_one(&m, refine);
     }
 }
 
@@ -500,34 +335,21 @@ fn rows_sum_to_one() {
 fn open_mesh_stays_planar_and_its_boundary_is_a_cubic_b_spline() {
     // The regular grid moved about within a tilted plane.
     let mut cage = triangle_grid(5, 4);
-    let (o, u, v) = ([0.3, -0.2, 0.5], [1.0, 0.2, -0.3], [0.1, 0.9, 0.4]);
     for p in &mut cage.positions {
         let (x, y) = (f64::from(p[0]), f64::from(p[1]));
         let (x, y) = (x + 0.2 * (1.3 * y).sin(), y + 0.1 * (2.1 * x).cos());
-        *p = [0, 1, 2].map(|k| (o[k] + x * u[k] + y * v[k]) as f32);
+        *p = on_plane(x, y);
     }
+    let [o, u, v] = PLANE;
     let plane = cross(u, v);
-    let cage_loop = boundary_loop(&cage);
-    let mut faces_at = vec![0; cage.positions.len()];
-    cage.face_indices
-        .iter()
-        .for_each(|&v| faces_at[v as usize] += 1);
     for boundary in [Boundary::EdgeOnly, Boundary::EdgeAndCorner] {
         let keep = boundary == Boundary::EdgeAndCorner;
-        let mut want: Vec<(P, bool)> = cage_loop
-            .iter()
-            .map(|&v| {
-                (
-                    p64(cage.positions[v as usize]),
-                    keep && faces_at[v as usize] == 1,
-                )
-            })
-            .collect();
+        let mut want = boundary_polygon(&cage, keep);
         assert_eq!(
             want.iter().filter(|w| w.1).count(),
             if keep { 2 } else { 0 }
         );
-        let (mut f, mut b) = (cage.face_count(), cage_loop.len());
+        let (mut f, mut b) = (cage.face_count(), want.len());
         for levels in 1..=3 {
             want = cubic_bspline(&want);
             let out = subdivide(&cage, &options(levels, boundary)).unwrap();
@@ -535,11 +357,7 @@ fn open_mesh_stays_planar_and_its_boundary_is_a_cubic_b_spline() {
             (f, b) = (3 * f + b, 2 * b);
             assert_eq!(out.face_count(), f, "{boundary:?} level {levels}");
             assert_eq!(euler(&out), 1, "a disc");
-            let off = out
-                .positions
-                .iter()
-                .map(|&p| (dot(sub(p64(p), o), plane) / norm(plane)).abs())
-                .fold(0.0, f64::max);
+            let off = off_plane(&out, o, plane);
             assert!(
                 off < 1e-5,
                 "{boundary:?} level {levels}: {off} off the plane"
@@ -547,18 +365,10 @@ fn open_mesh_stays_planar_and_its_boundary_is_a_cubic_b_spline() {
             for c in out.faces() {
                 assert!(dot(normal(&out, c), plane) > 0.0, "a face turned over");
             }
-            let got: Vec<P> = boundary_loop(&out)
-                .iter()
-                .map(|&v| p64(out.positions[v as usize]))
-                .collect();
+            let got = boundary_loop_points(&out);
             let want_pts: Vec<P> = want.iter().map(|w| w.0).collect();
             assert_same_loop(&got, &want_pts, true, 1e-5);
-            println!(
-                "{boundary:?} level {levels}: {} vertices, {} faces, boundary of {} points",
-                out.positions.len(),
-                out.face_count(),
-                got.len()
-            );
+            print_open_level(boundary, levels, &out, got.len());
         }
     }
 }
@@ -616,9 +426,9 @@ fn sharp_crease_is_a_cubic_b_spline_curve() {
 
 #[test]
 fn semi_sharp_creases_lose_one_per_level() {
-    let mut cage = icosahedron();
-    let (a, b) = (cage.face(0)[0], cage.face(0)[1]);
-    cage.creases = vec![Crease { a, b, value: 2.0 }];
+    let ico = icosahedron();
+    let (a, b) = (ico.face(0)[0], ico.face(0)[1]);
+    let cage = creased(ico, &[(a, b, 2.0)]);
     let (_, one) = refine(&cage, Boundary::EdgeOnly);
     assert_eq!(one.creases.len(), 2, "both halves");
     assert!(one.creases.iter().all(|c| c.value == 1.0));
@@ -651,10 +461,7 @@ fn corner_of_one_face_keeps_a_single_face() {
 
 #[test]
 fn non_triangles_are_refused() {
-    let quad = mesh(
-        vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
-        &[vec![0, 1, 2, 3]],
-    );
+    let quad = unit_quad();
     let want = SubdivError::NotTriangles {
         scheme: "sqrt3",
         face: 0,
@@ -674,11 +481,5 @@ fn non_triangles_are_refused() {
 
 #[test]
 fn inconsistent_orientation_is_named() {
-    let positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
-    let cage = mesh(positions, &[vec![0, 1, 2], vec![1, 2, 3]]);
-    let err = subdivide(&cage, &options(1, Boundary::EdgeOnly)).unwrap_err();
-    assert!(
-        matches!(err, SubdivError::DegenerateFace { face: 1, .. }),
-        "{err}"
-    );
+    assert_misorientation_named(Scheme::Sqrt3);
 }

@@ -1,0 +1,24 @@
+//! Small meshes the unit tests share.
+
+use tessd_mesh::Mesh;
+
+/// A cube, outward quads, vertices at the corners of [0, 1]³.
+pub fn cube() -> Mesh {
+    let mut m = Mesh {
+        positions: (0..8)
+            .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+            .collect(),
+        ..Mesh::default()
+    };
+    for f in [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ] {
+        m.push_face(&f);
+    }
+    m
+}
