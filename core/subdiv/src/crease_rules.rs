@@ -166,20 +166,8 @@ pub fn split_creases(topo: &Topology) -> Vec<([u32; 2], f32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_meshes::hex_fan as fan;
     use crate::topology::{Faces, INFINITELY_SHARP};
-
-    /// A hexagonal fan around vertex 0; ring 1..=6.
-    fn fan() -> Faces {
-        let mut indices = Vec::new();
-        for i in 0..6u32 {
-            indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 6]);
-        }
-        Faces {
-            offsets: (0..=6).map(|f| 3 * f).collect(),
-            indices,
-            vertex_count: 7,
-        }
-    }
 
     #[test]
     fn edge_weights_follow_uniform_creasing() {

@@ -182,19 +182,7 @@ fn mask(topo: &Topology, v: usize, rule: Rule, phase: Phase, row: &mut RowBuilde
 mod tests {
     use super::*;
     use crate::stencil::StencilTable;
-
-    /// A hexagonal fan around vertex 0; ring 1..=6.
-    fn fan() -> Faces {
-        let mut indices = Vec::new();
-        for i in 0..6u32 {
-            indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 6]);
-        }
-        Faces {
-            offsets: (0..=6).map(|f| 3 * f).collect(),
-            indices,
-            vertex_count: 7,
-        }
-    }
+    use crate::test_meshes::hex_fan as fan;
 
     fn row(t: &StencilTable, i: usize) -> Vec<(u32, f32)> {
         t.row(i).collect()

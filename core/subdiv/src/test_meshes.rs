@@ -1,5 +1,6 @@
 //! Small meshes the unit tests share.
 
+use crate::topology::Faces;
 use tessd_mesh::Mesh;
 
 /// A cube, outward quads, vertices at the corners of [0, 1]³.
@@ -21,4 +22,17 @@ pub fn cube() -> Mesh {
         m.push_face(&f);
     }
     m
+}
+
+/// Six triangles around vertex 0; ring 1..=6.
+pub fn hex_fan() -> Faces {
+    let mut indices = Vec::new();
+    for i in 0..6u32 {
+        indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 6]);
+    }
+    Faces {
+        offsets: (0..=6).map(|f| 3 * f).collect(),
+        indices,
+        vertex_count: 7,
+    }
 }
