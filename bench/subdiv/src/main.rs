@@ -28,20 +28,99 @@
 mod mem;
 mod one;
 
+use clap::{Args, Parser};
 use one::Repeats;
 use serde_json::{Value, json};
 use std::fs::OpenOptions;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, ExitCode};
 use std::time::Instant;
 
+/// Command line.
+#[derive(Parser)]
+#[command(name = "bench-subdiv", about = "tessd's subdivision beside OpenSubdiv")]
+enum Cli {
+    /// The harness: every cage × level × tool in its own child process, one JSON line each.
+    Run(RunArgs),
+    /// One configuration in this process; prints one JSON object.
+    One(OneArgs),
+}
+
+/// Repeats of every timed phase: `budget / warm-up time`, clamped to `min..=max`.
+#[derive(Args, Clone, Copy)]
+struct RepeatArgs {
+    /// Seconds of runs per phase.
+    #[arg(long, default_value_t = 1.0)]
+    budget: f64,
+    /// Fewest runs.
+    #[arg(long = "min-repeat", default_value_t = 3)]
+    min_repeat: usize,
+    /// Most runs.
+    #[arg(long = "max-repeat", default_value_t = 15)]
+    max_repeat: usize,
+}
+
+impl RepeatArgs {
+    fn repeats(self) -> Repeats {
+        Repeats {
+            budget_s: self.budget,
+            min: self.min_repeat,
+            max: self.max_repeat,
+        }
+    }
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// Cages (OBJ), comma-separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    cages: Vec<PathBuf>,
+    /// Levels.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5")]
+    levels: Vec<u32>,
+    /// tessd's rayon pool sizes.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    threads: Vec<usize>,
+    /// Tools: tessd, gpu, osd.
+    #[arg(long, value_delimiter = ',', default_value = "tessd,gpu,osd")]
+    tools: Vec<String>,
+    /// The OpenSubdiv harness.
+    #[arg(long, default_value = "bench/out/subdiv/osd_bench")]
+    osd: PathBuf,
+    /// Output JSON lines (appended).
+    #[arg(long, default_value = "bench/results/subdiv_raw.jsonl")]
+    jsonl: PathBuf,
+    /// Seconds of runs per OpenSubdiv configuration.
+    #[arg(long = "osd-budget", default_value_t = 4.0)]
+    osd_budget: f64,
+    /// Most OpenSubdiv runs.
+    #[arg(long = "osd-max-repeat", default_value_t = 9)]
+    osd_max_repeat: u32,
+    #[command(flatten)]
+    repeat: RepeatArgs,
+}
+
+#[derive(Args)]
+struct OneArgs {
+    /// The cage (OBJ).
+    cage: PathBuf,
+    /// Levels.
+    level: u32,
+    /// tessd on the CPU in a pool of this many threads.
+    #[arg(long, required_unless_present = "gpu")]
+    threads: Option<usize>,
+    /// tessd's GPU apply instead.
+    #[arg(long)]
+    gpu: bool,
+    #[command(flatten)]
+    repeat: RepeatArgs,
+}
+
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let result = match args.first().map(String::as_str) {
-        Some("run") => run(&args[1..]),
-        Some("one") => one_cmd(&args[1..]),
-        _ => Err(USAGE.to_string()),
+    let result = match Cli::parse() {
+        Cli::Run(a) => run(a),
+        Cli::One(a) => one_cmd(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -52,77 +131,15 @@ fn main() -> ExitCode {
     }
 }
 
-const USAGE: &str = "usage: bench-subdiv run --cages A.obj,B.obj [--levels 1,2,3,4,5] [--threads 1,2] \
-                     [--tools tessd,gpu,osd] [--osd PATH] [--jsonl FILE] [--budget S] \
-                     [--min-repeat N] [--max-repeat N] [--osd-budget S] [--osd-max-repeat N]\n       \
-                     bench-subdiv one CAGE LEVEL (--threads N | --gpu) [--budget S] \
-                     [--min-repeat N] [--max-repeat N]";
-
-/// Positional arguments and `--key value` pairs (`--gpu` takes no value).
-type Parsed = (Vec<String>, Vec<(String, String)>);
-
-fn options(args: &[String]) -> Result<Parsed, String> {
-    let (mut pos, mut opts) = (Vec::new(), Vec::new());
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        if let Some(k) = a.strip_prefix("--") {
-            if k == "gpu" {
-                opts.push((k.to_string(), String::new()));
-                continue;
-            }
-            let v = it.next().ok_or_else(|| format!("--{k} needs a value"))?;
-            opts.push((k.to_string(), v.clone()));
-        } else {
-            pos.push(a.clone());
-        }
-    }
-    Ok((pos, opts))
-}
-
-fn opt<'a>(opts: &'a [(String, String)], key: &str) -> Option<&'a str> {
-    opts.iter()
-        .rev()
-        .find(|(k, _)| k == key)
-        .map(|(_, v)| v.as_str())
-}
-
-fn parse<T: std::str::FromStr>(s: &str, what: &str) -> Result<T, String> {
-    s.parse().map_err(|_| format!("bad {what}: {s}"))
-}
-
-fn list<T: std::str::FromStr>(s: &str, what: &str) -> Result<Vec<T>, String> {
-    s.split(',')
-        .filter(|x| !x.is_empty())
-        .map(|x| parse(x, what))
-        .collect()
-}
-
-fn repeats(opts: &[(String, String)]) -> Result<Repeats, String> {
-    Ok(Repeats {
-        budget_s: parse(opt(opts, "budget").unwrap_or("1.0"), "--budget")?,
-        min: parse(opt(opts, "min-repeat").unwrap_or("3"), "--min-repeat")?,
-        max: parse(opt(opts, "max-repeat").unwrap_or("15"), "--max-repeat")?,
-    })
-}
-
 // ---------------------------------------------------------------------------------------
 // Child: one configuration.
 
-fn one_cmd(args: &[String]) -> Result<(), String> {
-    let (pos, opts) = options(args)?;
-    let [cage, level] = pos.as_slice() else {
-        return Err(USAGE.to_string());
-    };
-    let level: u32 = parse(level, "level")?;
-    let repeats = repeats(&opts)?;
-    let rec = if opt(&opts, "gpu").is_some() {
-        one::tessd_gpu(Path::new(cage), level, repeats)?
-    } else {
-        let threads = parse(
-            opt(&opts, "threads").ok_or("one needs --threads or --gpu")?,
-            "--threads",
-        )?;
-        one::tessd_cpu(Path::new(cage), level, threads, repeats)?
+fn one_cmd(a: OneArgs) -> Result<(), String> {
+    let repeats = a.repeat.repeats();
+    let rec = match a.threads {
+        _ if a.gpu => one::tessd_gpu(&a.cage, a.level, repeats)?,
+        Some(threads) => one::tessd_cpu(&a.cage, a.level, threads, repeats)?,
+        None => return Err("one needs --threads or --gpu".to_string()),
     };
     println!("{rec}");
     Ok(())
@@ -141,28 +158,19 @@ struct Job {
     command: Command,
 }
 
-fn run(args: &[String]) -> Result<(), String> {
-    let (pos, opts) = options(args)?;
-    if !pos.is_empty() {
-        return Err(USAGE.to_string());
-    }
-    let cages: Vec<PathBuf> = opt(&opts, "cages")
-        .ok_or("run needs --cages")?
-        .split(',')
-        .filter(|s| !s.is_empty())
-        .map(PathBuf::from)
-        .collect();
-    let levels: Vec<u32> = list(opt(&opts, "levels").unwrap_or("1,2,3,4,5"), "--levels")?;
-    let threads: Vec<usize> = list(opt(&opts, "threads").unwrap_or("1,2"), "--threads")?;
-    let tools: Vec<String> = list(opt(&opts, "tools").unwrap_or("tessd,gpu,osd"), "--tools")?;
-    let osd = PathBuf::from(opt(&opts, "osd").unwrap_or("bench/out/subdiv/osd_bench"));
-    let jsonl = PathBuf::from(opt(&opts, "jsonl").unwrap_or("bench/results/subdiv_raw.jsonl"));
-    let osd_budget: f64 = parse(opt(&opts, "osd-budget").unwrap_or("4"), "--osd-budget")?;
-    let osd_max: u32 = parse(
-        opt(&opts, "osd-max-repeat").unwrap_or("9"),
-        "--osd-max-repeat",
-    )?;
-    let repeats = repeats(&opts)?;
+fn run(a: RunArgs) -> Result<(), String> {
+    let RunArgs {
+        cages,
+        levels,
+        threads,
+        tools,
+        osd,
+        jsonl,
+        osd_budget,
+        osd_max_repeat: osd_max,
+        repeat,
+    } = a;
+    let repeats = repeat.repeats();
     let exe = std::env::current_exe().map_err(|e| format!("own path: {e}"))?;
     for cage in &cages {
         if !cage.is_file() {
