@@ -102,6 +102,8 @@ class Job:
         self._files: List[str] = []
         self._error: Optional[BaseException] = None
         self._cancel_sent = False
+        #: Milliseconds the daemon spent on the operation (from its reply), once done.
+        self.elapsed_ms: Optional[float] = None
 
     # -- called by the reader thread --------------------------------------------------------
 
@@ -140,6 +142,8 @@ class Job:
                 result = message.get("result")
                 self._result = result if isinstance(result, dict) else {"value": result}
                 self._arrays = arrays
+                elapsed = message.get("elapsed_ms")
+                self.elapsed_ms = float(elapsed) if isinstance(elapsed, (int, float)) else None
                 files = message.get("files")
                 self._files = list(files) if isinstance(files, list) else []
         elif kind == "error":

@@ -56,6 +56,8 @@ def test_job_poll_never_blocks(daemon):
         assert fractions == sorted(fractions) and fractions[-1] == 1.0
         assert job.done and job.result(0)[0]["steps"] == 6
         assert job.cancel() is False  # already finished
+        # The daemon's own time: the sleep it did, less than the client's wall time.
+        assert 600 <= job.elapsed_ms < polls * 10 + 1000, job.elapsed_ms
 
 
 def test_job_cancel(daemon):

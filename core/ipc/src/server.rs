@@ -319,7 +319,7 @@ impl Connection {
                     Err(e) => log::info!("{op} #{id} failed: {e}"),
                 }
                 lock(&this.jobs).remove(&id);
-                this.reply(&Value::from(id), result);
+                this.reply_timed(&Value::from(id), result, Some(started.elapsed()));
                 this.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
             });
         if let Err(e) = spawned {
@@ -337,6 +337,17 @@ impl Connection {
 
     /// Sends the final frame of a request.
     fn reply(&self, id: &Value, result: Result<Response, OpError>) {
+        self.reply_timed(id, result, None);
+    }
+
+    /// Sends the final frame of a request; an operation's `ok` frame carries `elapsed_ms`, the
+    /// time the daemon spent on it (so hosts can tell work from transfer).
+    fn reply_timed(
+        &self,
+        id: &Value,
+        result: Result<Response, OpError>,
+        elapsed: Option<Duration>,
+    ) {
         match result {
             Ok(r) => {
                 let files: Vec<Value> = r
@@ -344,7 +355,10 @@ impl Connection {
                     .iter()
                     .map(|p| Value::from(p.display().to_string()))
                     .collect();
-                let msg = json!({"id": id, "type": "ok", "result": r.result, "files": files, "arrays": []});
+                let mut msg = json!({"id": id, "type": "ok", "result": r.result, "files": files, "arrays": []});
+                if let Some(t) = elapsed {
+                    msg["elapsed_ms"] = json!(t.as_secs_f64() * 1e3);
+                }
                 self.send(msg, &r.arrays);
             }
             Err(e) => {
