@@ -1,0 +1,25 @@
+"""tessd for Blender: the daemon's mesh operations one click away.
+
+The add-on is thin on purpose: it converts Blender meshes to the protocol's arrays and back
+(convert.py), drives daemon requests without blocking the UI (jobs.py) and offers the
+operators and menus. All geometry is computed by the `tessd` daemon, reached through the
+`tessd` Python client that build.py bundles as the `vendor` subpackage.
+
+Scripting contract (public API): bpy.ops.tessd.simplify, generate_lods, subdivide, export_usd.
+"""
+
+from . import daemon, menus, ops_export, ops_lods, ops_simplify, ops_subdivide, preferences
+
+_MODULES = (preferences, ops_simplify, ops_lods, ops_subdivide, ops_export, menus)
+
+
+def register():
+    for module in _MODULES:
+        module.register()
+    daemon.register()
+
+
+def unregister():
+    daemon.unregister()
+    for module in reversed(_MODULES):
+        module.unregister()
