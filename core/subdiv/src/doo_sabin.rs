@@ -5,7 +5,8 @@
 //! new mesh has three kinds of faces, all oriented like the cage:
 //! - an **F-face** per old face: its corners' new points, in the face's order;
 //! - an **E-face** (quad) per edge: the two points at each end of the edge, one per side;
-//! - a **V-face** per vertex: the points of the corners around it, in walking order.
+//! - a **V-face** per vertex: the points of the corners around it, in walking order (none for
+//!   an interior vertex of two faces, whose two points are an edge of its E-faces).
 //!
 //! The corner point of corner `k` of an `n`-gon is `Σⱼ αⱼ·v_{k+j}` with Doo and Sabin's weights
 //! `α₀ = 1/4 + 5/(4n)`, `αⱼ = (3 + 2cos(2πj/n))/(4n)`. On quads they are the biquadratic
@@ -269,7 +270,11 @@ pub fn refine(faces: &Faces, topo: &Topology, boundary: Boundary) -> Result<Leve
             if !visited[s.corner as usize] {
                 ring.clear();
                 let (low, _) = walk(*s, &mut ring, &mut visited);
-                emit(&mut out, &mut ring.iter().copied(), low);
+                // An interior vertex of two faces has a V-face of two points, an edge the two
+                // E-faces around it already share: no face.
+                if ring.len() >= 3 {
+                    emit(&mut out, &mut ring.iter().copied(), low);
+                }
             }
         }
     }

@@ -392,3 +392,31 @@ fn inconsistent_orientation_is_named() {
     let err = assert_misorientation_named(Scheme::DooSabin);
     println!("{err}");
 }
+
+#[test]
+fn interior_vertices_of_two_faces_get_no_v_face() {
+    // Two quads back to back: every vertex is interior with two faces. Their V-faces would be
+    // two-point faces; without them the result is a closed box of 2 F-faces and 4 E-faces.
+    let pillow = mesh(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
+        &[vec![0, 1, 2, 3], vec![3, 2, 1, 0]],
+    );
+    let (_, out) = refine(&pillow, Boundary::EdgeOnly);
+    assert_eq!(out.face_count(), 6);
+    assert!(out.faces().all(|f| f.len() == 4));
+    assert_oriented(&out, true);
+    assert_eq!(euler(&out), 2);
+    // Suzanne (open, with one interior vertex of two faces) refines to a valid mesh, levels 1–2.
+    let suzanne = common::read_mesh("mesh/suzanne.obj");
+    for levels in 1..=2 {
+        let m = subdivide(&suzanne, &options(levels, Boundary::EdgeOnly)).unwrap();
+        m.validate().unwrap();
+        assert!(m.faces().all(|f| f.len() >= 3));
+        assert_oriented(&m, false);
+    }
+}

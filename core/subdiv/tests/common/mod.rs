@@ -423,11 +423,17 @@ pub fn assert_misorientation_named(scheme: Scheme) -> SubdivError {
 /// The path of `name` in the shared test data's `subdiv` folder (`$TESSD_SHARED_DATA`, else
 /// `../../../shared/data` from this crate), asserted to exist.
 pub fn data(name: &str) -> PathBuf {
+    shared(&format!("subdiv/{name}"))
+}
+
+/// A file of the shared test data (`TESSD_SHARED_DATA`, else `../shared/data` beside the repo),
+/// by its path under that folder.
+pub fn shared(rel: &str) -> PathBuf {
     let dir = match std::env::var_os("TESSD_SHARED_DATA") {
         Some(d) => PathBuf::from(d),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
     };
-    let p = dir.join("subdiv").join(name);
+    let p = dir.join(rel);
     assert!(
         p.exists(),
         "shared test data not found at {}; set TESSD_SHARED_DATA",
@@ -436,7 +442,11 @@ pub fn data(name: &str) -> PathBuf {
     p
 }
 
-/// The mesh in shared-data file `name` (an OBJ), read with default options.
+/// A mesh of the shared test data, by its path under that folder (`mesh/suzanne.obj`).
+pub fn read_mesh(rel: &str) -> Mesh {
+    tessd_mesh::io::read_path(&shared(rel), &Default::default()).unwrap()
+}
+
 pub fn read(name: &str) -> Mesh {
     tessd_mesh::io::read_path(&data(name), &Default::default()).unwrap()
 }
