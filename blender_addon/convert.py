@@ -133,6 +133,28 @@ def _per_corner(values, indices):
     return values if indices is None else values[np.asarray(indices, dtype=np.int64)]
 
 
+def drop_loose(arrays, frames=None):
+    """`arrays` (and animation `frames` [F, V, 3]) without the vertices no face uses.
+
+    Subdivision has no rule for a loose vertex and the daemon refuses one; Blender meshes often
+    carry a few (leftovers of edits), so they are left out of what is sent. Creases on loose
+    edges go with them."""
+    used = np.zeros(len(arrays["positions"]), dtype=bool)
+    used[arrays["face_indices"]] = True
+    if used.all():
+        return arrays, frames
+    remap = np.cumsum(used, dtype=np.int64) - 1
+    out = dict(arrays, positions=arrays["positions"][used],
+               face_indices=remap[arrays["face_indices"]].astype(np.uint32))
+    if "crease_edges" in arrays:
+        keep = used[arrays["crease_edges"]].all(axis=1)
+        out["crease_edges"] = remap[arrays["crease_edges"][keep]].astype(np.uint32)
+        out["crease_values"] = arrays["crease_values"][keep]
+        if not keep.any():
+            del out["crease_edges"], out["crease_values"]
+    return out, (None if frames is None else np.ascontiguousarray(frames[:, used]))
+
+
 def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix=""):
     """A new mesh from a reply's arrays (`prefix` e.g. "lod1." for the `lod` op).
 

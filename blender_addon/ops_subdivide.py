@@ -139,13 +139,16 @@ class TESSD_OT_subdivide(JobOperator, bpy.types.Operator):
             arrays, extra = common.arrays_of(context, obj, self.use_modifiers and not self.replace,
                                              normals=False, creases=self.use_creases)
             params = dict(self._params(), **extra)
+            frames = None
+            if self.use_animation:
+                frames = convert.frames_of(obj, context.scene, context.evaluated_depsgraph_get(),
+                                           self.frame_start, self.frame_end)
+                if frames.shape[1] != len(arrays["positions"]):
+                    raise ValueError("its modifiers change the vertex count between frames")
+            arrays, frames = convert.drop_loose(arrays, frames)
             requests = [Request("subdivide", params, arrays, label=obj.name, object_name=obj.name)]
             if not self.use_animation:
                 return requests
-            frames = convert.frames_of(obj, context.scene, context.evaluated_depsgraph_get(),
-                                       self.frame_start, self.frame_end)
-            if frames.shape[1] != len(arrays["positions"]):
-                raise ValueError("its modifiers change the vertex count between frames")
         except ValueError as e:
             raise UserError("tessd: %s cannot be sent: %s" % (obj.name, e)) from e
         path = cache_file_path(self, obj)
