@@ -198,6 +198,10 @@ class JobOperator:
     dialog = True
     title = "tessd"
 
+    @classmethod
+    def poll(cls, context):
+        return context.mode == 'OBJECT'
+
     def prepare(self, context):
         raise NotImplementedError
 

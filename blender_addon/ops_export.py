@@ -21,7 +21,6 @@ class TESSD_OT_export_usd(JobOperator, ExportHelper, bpy.types.Operator):
 
     bl_idname = "tessd.export_usd"
     bl_label = "Export USD via tessd"
-    bl_options = {'REGISTER', 'UNDO'}
     title = "tessd USD export"
     dialog = False
 
@@ -32,10 +31,6 @@ class TESSD_OT_export_usd(JobOperator, ExportHelper, bpy.types.Operator):
                                                 "variant set")
     levels: bpy.props.StringProperty(name="Levels", default="50%,20%,5%")
     use_modifiers: bpy.props.BoolProperty(name="Apply modifiers", default=True)
-
-    @classmethod
-    def poll(cls, context):
-        return context.mode == 'OBJECT'
 
     def invoke(self, context, event):
         self._modal = context.window is not None

@@ -33,7 +33,6 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
 
     bl_idname = "tessd.generate_lods"
     bl_label = "Generate LODs"
-    bl_options = {'REGISTER', 'UNDO'}
     title = "tessd LODs"
 
     levels: bpy.props.StringProperty(name="Levels", default="50%,20%,5%",
@@ -52,10 +51,6 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
                                          description="Place the levels next to each other "
                                                      "along X instead of on top of each other")
     use_modifiers: bpy.props.BoolProperty(name="Apply modifiers", default=True)
-
-    @classmethod
-    def poll(cls, context):
-        return context.mode == 'OBJECT'
 
     def draw(self, context):
         layout = self.layout

@@ -53,7 +53,6 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
 
     bl_idname = "tessd.simplify"
     bl_label = "Simplify"
-    bl_options = {'REGISTER', 'UNDO'}
     title = "tessd simplify"
 
     method: bpy.props.EnumProperty(name="Method", items=METHODS, default='QUALITY')
@@ -82,10 +81,6 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
                                                       "modifiers); not with Replace mesh")
     triangulate: bpy.props.BoolProperty(name="Triangulate", default=False)
     preserve_boundaries: bpy.props.BoolProperty(name="Preserve boundaries", default=False)
-
-    @classmethod
-    def poll(cls, context):
-        return context.mode == 'OBJECT'
 
     def draw(self, context):
         layout = self.layout

@@ -63,7 +63,6 @@ class TESSD_OT_subdivide(JobOperator, bpy.types.Operator):
 
     bl_idname = "tessd.subdivide"
     bl_label = "Subdivide"
-    bl_options = {'REGISTER', 'UNDO'}
     title = "tessd subdivide"
 
     scheme: bpy.props.EnumProperty(name="Scheme", items=SCHEMES, default='CATMULL_CLARK')
@@ -86,10 +85,6 @@ class TESSD_OT_subdivide(JobOperator, bpy.types.Operator):
     cache_path: bpy.props.StringProperty(name="Cache file", default="", subtype='FILE_PATH',
                                          description=".usda for the animation (empty: "
                                                      "//tessd_cache/<name>_subdiv.usda)")
-
-    @classmethod
-    def poll(cls, context):
-        return context.mode == 'OBJECT'
 
     def invoke(self, context, event):
         if not self.properties.is_property_set("frame_start"):
