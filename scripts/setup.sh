@@ -23,6 +23,8 @@ fi
 #   .venv        tests: usd-core, numpy, pytest            (python/requirements-test.txt)
 #   .venv-bench  peer tools for cross-checks and benchmarks: pymeshlab, matplotlib
 #                                                          (bench/requirements-bench.txt)
+#   .venv-cad    B-Rep export tests: cadquery 2.8 + cadquery-ocp 7.9, pytest
+#                                                          (python/requirements-cad.txt)
 make_venv() {
   local dir=$1 reqs=$2
   if [ ! -x "$dir/bin/python" ]; then
@@ -37,8 +39,11 @@ make_venv() {
   fi
 }
 make_venv .venv python/requirements-test.txt
-# `setup.sh --demo` skips the peer tools (the demo needs none of them).
-[ "${1:-}" = "--demo" ] || make_venv .venv-bench bench/requirements-bench.txt
+# `setup.sh --demo` skips the peer tools and the CAD venv (the demo needs none of them).
+if [ "${1:-}" != "--demo" ]; then
+  make_venv .venv-bench bench/requirements-bench.txt
+  make_venv .venv-cad python/requirements-cad.txt
+fi
 
 echo "setup: building tessd (release)"
 cargo build --release -p tessd --quiet

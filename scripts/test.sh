@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine (scripts/setup.sh) and runs every test: Rust (cargo test) and Python
-# (pytest against the real daemon, real usd-core).
+# (pytest against the real daemon, real usd-core; the B-Rep exporter against real OCP).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -9,6 +9,8 @@ export TESSD_SHARED_DATA="${TESSD_SHARED_DATA:-$PWD/../shared/data}"
 echo "== cargo test"
 cargo test --workspace --release
 echo "== pytest (daemon, USD, demo, simplification)"
-.venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare
+.venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
+echo "== pytest (B-Rep export on real OpenCASCADE: cadquery / OCP 7.9)"
+.venv-cad/bin/python -m pytest tests/brep -q -p no:cacheprovider

@@ -112,6 +112,13 @@ def test_convert_arrays_with_attributes(client):
     assert np.array_equal(per_corner, normals)
     assert arrays["crease_edges"].tolist() == [[1, 2]] and arrays["crease_values"].tolist() == [2.5]
     assert arrays["face_groups"].tolist() == [0, 1]
+    # Bare group indices: the missing names become group<i>; an index past the faces is refused.
+    _, arrays = client.call("mesh.convert", {}, arrays=sent)
+    assert arrays["face_groups"].tolist() == [0, 1]
+    bad = dict(sent, face_groups=np.array([0, 4_000_000_000], dtype=np.uint32))
+    with pytest.raises(tessd.TessdError) as e:
+        client.call("mesh.convert", {}, arrays=bad)
+    assert e.value.code == "invalid_mesh"
 
 
 def test_convert_without_numpy_gives_raw_arrays(daemon, shared_data):

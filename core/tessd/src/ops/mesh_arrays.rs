@@ -177,6 +177,14 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
     let face_groups = view::<u32>(arrays, "face_groups")?
         .map(|(g, _)| g.to_vec())
         .unwrap_or_default();
+    // Groups without (enough) names get `group<i>`, so hosts may send bare group indices.
+    let mut group_names = group_names;
+    if let Some(&top) = face_groups.iter().max() {
+        let needed = top as usize + 1;
+        if group_names.len() < needed && needed <= face_groups.len() {
+            group_names.extend((group_names.len()..needed).map(|i| format!("group{i}")));
+        }
+    }
     Ok(Mesh {
         positions,
         face_offsets,

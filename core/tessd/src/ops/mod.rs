@@ -1,6 +1,7 @@
 //! The daemon's operations: thin adapters (parse, validate, call the library, encode) filled
 //! into the [`Registry`] that the server and job files share.
 
+pub mod brep_load;
 pub mod common;
 pub mod compare;
 pub mod debug_echo;
@@ -23,6 +24,7 @@ pub fn registry() -> Registry {
         .register("lod", lod::run)
         .register("compare", compare::run)
         .register("subdivide", subdivide::run)
+        .register("brep.load", brep_load::run)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [
@@ -37,6 +39,7 @@ pub fn registry() -> Registry {
         "usd.write.usda",
         "usd.lod.variants",
         "usd.lod.usdlod",
+        "brep.format.1",
         "progress",
         "cancel",
     ] {

@@ -1,0 +1,839 @@
+//! Validation of a document against docs/brep-format.md ("Validation"): every refusal is one
+//! [`ValidationError`] variant naming the face / loop / trim / pole (or edge) at fault, so a
+//! host can point its user at the broken element rather than at "bad input".
+
+use crate::bspline::{KnotError, KnotVector};
+use crate::model::{
+    BSplineCurve, BSplineSurface, Curve, Document, FORMAT, Frame, Surface, VERSION,
+};
+use crate::vector::Vector;
+use std::collections::{HashMap, HashSet};
+use std::fmt;
+use thiserror::Error;
+
+/// Tolerance on unit lengths and orthogonality of directions and frames.
+pub const DIRECTION_TOLERANCE: f64 = 1e-9;
+
+/// Loop closure tolerance, relative to the diagonal of the face's `bounds`.
+pub const CLOSURE_TOLERANCE: f64 = 1e-7;
+
+/// How far (relative to the diagonal of `bounds`) a trim may stray outside the face's `bounds`.
+pub const BOUNDS_TOLERANCE: f64 = 1e-7;
+
+/// How far (relative to the knot span's length) a non-periodic B-spline trim's range may
+/// extend beyond its knots.
+pub const RANGE_TOLERANCE: f64 = 1e-9;
+
+/// The element an error is about.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Place {
+    /// The document as a whole.
+    Document,
+    /// A face, by id.
+    Face {
+        /// The face id.
+        face: u64,
+    },
+    /// A face's surface.
+    Surface {
+        /// The face id.
+        face: u64,
+    },
+    /// The curve a revolution or extrusion surface sweeps.
+    SurfaceCurve {
+        /// The face id.
+        face: u64,
+    },
+    /// A loop of a face (0 is the outer loop).
+    Loop {
+        /// The face id.
+        face: u64,
+        /// Index among the face's loops.
+        loop_index: usize,
+    },
+    /// A trim of a loop.
+    Trim {
+        /// The face id.
+        face: u64,
+        /// Index among the face's loops.
+        loop_index: usize,
+        /// Index among the loop's trims.
+        trim: usize,
+    },
+    /// A shared edge, by id.
+    Edge {
+        /// The edge id.
+        edge: u64,
+    },
+}
+
+impl fmt::Display for Place {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Place::Document => write!(f, "document"),
+            Place::Face { face } => write!(f, "face {face}"),
+            Place::Surface { face } => write!(f, "face {face}, surface"),
+            Place::SurfaceCurve { face } => write!(f, "face {face}, surface curve"),
+            Place::Loop { face, loop_index } => write!(f, "face {face}, loop {loop_index}"),
+            Place::Trim {
+                face,
+                loop_index,
+                trim,
+            } => write!(f, "face {face}, loop {loop_index}, trim {trim}"),
+            Place::Edge { edge } => write!(f, "edge {edge}"),
+        }
+    }
+}
+
+/// Why a document is refused. Messages start with the element (`face 17, loop 1, trim 2: …`).
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum ValidationError {
+    /// The text is not JSON.
+    #[error("not JSON: {message}")]
+    Json {
+        /// serde_json's message, with line and column.
+        message: String,
+    },
+    /// JSON that does not have the document's structure: a missing field, a mistyped value,
+    /// an unknown `type`.
+    #[error("{at}: {message}")]
+    Structure {
+        /// Where (`face 17, loop 0, trim 3`, or `face at index 2` when the id is unreadable).
+        at: String,
+        /// serde's message (`missing field \`radius\``, `unknown variant \`offset\`, …`).
+        message: String,
+    },
+    /// `format` is not `"tessd-brep"`.
+    #[error("document: `format` must be \"{FORMAT}\", got {found}")]
+    Format {
+        /// What was there (JSON text, `missing` when absent).
+        found: String,
+    },
+    /// `version` is not one this crate reads.
+    #[error("document: unsupported `version` {found}; this reader supports version {VERSION}")]
+    Version {
+        /// What was there (JSON text, `missing` when absent).
+        found: String,
+    },
+    /// Two faces share an id.
+    #[error("face {face}: the id is used by faces at index {first} and {second}")]
+    DuplicateFaceId {
+        /// The id.
+        face: u64,
+        /// Index of the first face with it.
+        first: usize,
+        /// Index of the second.
+        second: usize,
+    },
+    /// Two edges share an id.
+    #[error("edge {edge}: the id is used twice")]
+    DuplicateEdgeId {
+        /// The id.
+        edge: u64,
+    },
+    /// A NaN or infinite number.
+    #[error("{at}: {field} is not finite")]
+    NonFinite {
+        /// The element.
+        at: Place,
+        /// The field, with indices (`origin`, `poles[3][1]`, `range`).
+        field: String,
+    },
+    /// A direction that is not of unit length.
+    #[error(
+        "{at}: {field} has length {length}; it must be a unit vector (within {DIRECTION_TOLERANCE})"
+    )]
+    NotUnit {
+        /// The element.
+        at: Place,
+        /// The field.
+        field: &'static str,
+        /// Its length.
+        length: f64,
+    },
+    /// A frame whose axes are not orthogonal.
+    #[error(
+        "{at}: x_dir · y_dir = {dot}; the axes must be orthogonal (within {DIRECTION_TOLERANCE})"
+    )]
+    NotOrthogonal {
+        /// The element.
+        at: Place,
+        /// The dot product.
+        dot: f64,
+    },
+    /// A radius ≤ 0 (< 0 for a cone's reference radius).
+    #[error("{at}: {field} is {value}; it must be positive")]
+    Radius {
+        /// The element.
+        at: Place,
+        /// The field.
+        field: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// A cone's reference radius below 0.
+    #[error("{at}: radius is {value}; a cone's radius must be ≥ 0")]
+    ConeRadius {
+        /// The element.
+        at: Place,
+        /// The value.
+        value: f64,
+    },
+    /// A cone's semi-angle outside 0 < |a| < π/2.
+    #[error("{at}: semi_angle is {value}; it must satisfy 0 < |semi_angle| < π/2")]
+    SemiAngle {
+        /// The element.
+        at: Place,
+        /// The value.
+        value: f64,
+    },
+    /// A B-spline's degree, knots or multiplicities break a rule.
+    #[error("{at}: {direction}{error}")]
+    Knots {
+        /// The element.
+        at: Place,
+        /// `"u: "`, `"v: "` for surfaces, empty for curves.
+        direction: &'static str,
+        /// The rule broken.
+        error: KnotError,
+    },
+    /// A B-spline with another number of poles than its knots imply.
+    #[error("{at}: {what} has {got} poles; the knots and degree need {expected}")]
+    PoleCount {
+        /// The element.
+        at: Place,
+        /// `poles`, or `poles[i]` for a row of a surface's poles.
+        what: String,
+        /// Poles given.
+        got: usize,
+        /// Poles needed.
+        expected: usize,
+    },
+    /// Weights of another count than the poles.
+    #[error("{at}: {what} has {got} weights for {expected} poles")]
+    WeightCount {
+        /// The element.
+        at: Place,
+        /// `weights`, or `weights[i]`.
+        what: String,
+        /// Weights given.
+        got: usize,
+        /// Poles there.
+        expected: usize,
+    },
+    /// A weight ≤ 0.
+    #[error("{at}: the weight of pole {pole} is {value}; weights must be positive")]
+    Weight {
+        /// The element.
+        at: Place,
+        /// The pole index (`3`, or `[3][1]` for surfaces).
+        pole: String,
+        /// The weight.
+        value: f64,
+    },
+    /// A face whose `bounds` are not an interval in each direction.
+    #[error("face {face}: bounds {bounds:?} must have u0 < u1 and v0 < v1")]
+    Bounds {
+        /// The face id.
+        face: u64,
+        /// The bounds.
+        bounds: [f64; 4],
+    },
+    /// A loop without trims.
+    #[error("face {face}, loop {loop_index}: the loop has no trims")]
+    EmptyLoop {
+        /// The face id.
+        face: u64,
+        /// The loop.
+        loop_index: usize,
+    },
+    /// A trim with `t0 == t1`.
+    #[error("{at}: range [{t}, {t}] is empty")]
+    EmptyRange {
+        /// The trim or edge.
+        at: Place,
+        /// The parameter.
+        t: f64,
+    },
+    /// A B-spline curve's range outside its knots.
+    #[error("{at}: range [{}, {}] lies outside the curve's knot span [{}, {}]", range[0], range[1], domain[0], domain[1])]
+    RangeOutsideKnots {
+        /// The trim or edge.
+        at: Place,
+        /// The range.
+        range: [f64; 2],
+        /// The first and last knot.
+        domain: [f64; 2],
+    },
+    /// A gap between the end of one trim and the start of the next.
+    #[error(
+        "face {face}, loop {loop_index}: open loop: trim {trim} ends {gap:.3e} away from the start of trim {next} (tolerance {tolerance:.3e})"
+    )]
+    OpenLoop {
+        /// The face id.
+        face: u64,
+        /// The loop.
+        loop_index: usize,
+        /// The trim whose end is off.
+        trim: usize,
+        /// The trim that should start there.
+        next: usize,
+        /// The distance in (u, v).
+        gap: f64,
+        /// The tolerance.
+        tolerance: f64,
+    },
+    /// A trim passing outside the face's bounds.
+    #[error("face {face}, loop {loop_index}, trim {trim}: point ({}, {}) at t = {t} lies outside the face's bounds {bounds:?}", point[0], point[1])]
+    OutsideBounds {
+        /// The face id.
+        face: u64,
+        /// The loop.
+        loop_index: usize,
+        /// The trim.
+        trim: usize,
+        /// The trim's parameter there.
+        t: f64,
+        /// The point in (u, v).
+        point: [f64; 2],
+        /// The face's bounds.
+        bounds: [f64; 4],
+    },
+    /// An outer loop (loop 0) that turns clockwise.
+    #[error(
+        "face {face}, loop 0: the outer loop is clockwise (signed area {area:.3e}); it must be counter-clockwise in (u, v)"
+    )]
+    OuterClockwise {
+        /// The face id.
+        face: u64,
+        /// The signed area.
+        area: f64,
+    },
+    /// A hole that turns counter-clockwise.
+    #[error(
+        "face {face}, loop {loop_index}: the hole is counter-clockwise (signed area {area:.3e}); holes must be clockwise in (u, v)"
+    )]
+    HoleCounterClockwise {
+        /// The face id.
+        face: u64,
+        /// The loop.
+        loop_index: usize,
+        /// The signed area.
+        area: f64,
+    },
+    /// A trim naming an edge id no edge has.
+    #[error("face {face}, loop {loop_index}, trim {trim}: edge {edge} does not exist")]
+    UnknownEdge {
+        /// The face id.
+        face: u64,
+        /// The loop.
+        loop_index: usize,
+        /// The trim.
+        trim: usize,
+        /// The edge id.
+        edge: u64,
+    },
+    /// An edge naming a face id no face has.
+    #[error("edge {edge}: face {face} does not exist")]
+    UnknownFace {
+        /// The edge id.
+        edge: u64,
+        /// The face id.
+        face: u64,
+    },
+}
+
+/// Every error of `doc`, in document order (faces, then edges). Checks that depend on an
+/// element already refused (a loop's closure when one of its curves is invalid) are skipped,
+/// so each error is a cause, not a consequence.
+pub fn validate(doc: &Document) -> Vec<ValidationError> {
+    let mut c = Checker::default();
+    if doc.format != FORMAT {
+        c.push(ValidationError::Format {
+            found: serde_json::Value::from(doc.format.clone()).to_string(),
+        });
+    }
+    if doc.version != VERSION {
+        c.push(ValidationError::Version {
+            found: doc.version.to_string(),
+        });
+    }
+    let edge_ids: HashSet<u64> = doc.edges.iter().flatten().map(|e| e.id).collect();
+    let mut face_index: HashMap<u64, usize> = HashMap::new();
+    for (index, face) in doc.faces.iter().enumerate() {
+        if let Some(&first) = face_index.get(&face.id) {
+            c.push(ValidationError::DuplicateFaceId {
+                face: face.id,
+                first,
+                second: index,
+            });
+        } else {
+            face_index.insert(face.id, index);
+        }
+        c.face(face, &edge_ids);
+    }
+    let mut seen = HashSet::new();
+    for edge in doc.edges.iter().flatten() {
+        let at = Place::Edge { edge: edge.id };
+        if !seen.insert(edge.id) {
+            c.push(ValidationError::DuplicateEdgeId { edge: edge.id });
+        }
+        if let Some(curve) = &edge.curve
+            && c.curve(curve, &at)
+        {
+            c.range(curve, edge.range, &at);
+        }
+        for &face in &edge.faces {
+            if !face_index.contains_key(&face) {
+                c.push(ValidationError::UnknownFace {
+                    edge: edge.id,
+                    face,
+                });
+            }
+        }
+    }
+    c.errors
+}
+
+#[derive(Default)]
+struct Checker {
+    errors: Vec<ValidationError>,
+}
+
+impl Checker {
+    fn push(&mut self, e: ValidationError) {
+        self.errors.push(e);
+    }
+
+    /// Pushes `e` and returns false when `bad`.
+    fn check(&mut self, bad: bool, e: impl FnOnce() -> ValidationError) -> bool {
+        if bad {
+            self.push(e());
+        }
+        !bad
+    }
+
+    fn finite<V: Vector>(&mut self, v: &V, at: &Place, field: impl Into<String>) -> bool {
+        self.check(!v.is_finite(), || ValidationError::NonFinite {
+            at: at.clone(),
+            field: field.into(),
+        })
+    }
+
+    fn unit<V: Vector>(&mut self, v: &V, at: &Place, field: &'static str) -> bool {
+        if !self.finite(v, at, field) {
+            return false;
+        }
+        let length = v.norm();
+        self.check((length - 1.0).abs() > DIRECTION_TOLERANCE, || {
+            ValidationError::NotUnit {
+                at: at.clone(),
+                field,
+                length,
+            }
+        })
+    }
+
+    fn axes<V: Vector>(&mut self, x: &V, y: &V, at: &Place) -> bool {
+        let ok = self.unit(x, at, "x_dir") & self.unit(y, at, "y_dir");
+        if !ok {
+            return false;
+        }
+        let dot = x.dot(*y);
+        self.check(dot.abs() > DIRECTION_TOLERANCE, || {
+            ValidationError::NotOrthogonal {
+                at: at.clone(),
+                dot,
+            }
+        })
+    }
+
+    fn frame(&mut self, f: &Frame, at: &Place) -> bool {
+        self.finite(&f.origin, at, "origin") & self.axes(&f.x_dir, &f.y_dir, at)
+    }
+
+    fn positive(&mut self, value: f64, at: &Place, field: &'static str) -> bool {
+        if !self.finite(&[value, 0.0], at, field) {
+            return false;
+        }
+        self.check(value <= 0.0, || ValidationError::Radius {
+            at: at.clone(),
+            field,
+            value,
+        })
+    }
+
+    fn knots(
+        &mut self,
+        degree: usize,
+        knots: &[f64],
+        mults: &[u32],
+        periodic: bool,
+        at: &Place,
+        direction: &'static str,
+    ) -> Option<KnotVector> {
+        KnotVector::new(degree, knots, mults, periodic)
+            .map_err(|error| {
+                self.push(ValidationError::Knots {
+                    at: at.clone(),
+                    direction,
+                    error,
+                })
+            })
+            .ok()
+    }
+
+    /// A weight list (or `None`): counts, finite and positive values.
+    fn weights(&mut self, weights: Option<&[f64]>, poles: usize, at: &Place, row: Option<usize>) {
+        let Some(w) = weights else { return };
+        let prefix = row.map_or(String::new(), |i| format!("[{i}]"));
+        if !self.check(w.len() != poles, || ValidationError::WeightCount {
+            at: at.clone(),
+            what: format!("weights{prefix}"),
+            got: w.len(),
+            expected: poles,
+        }) {
+            return;
+        }
+        if let Some((j, &value)) = w
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(**v > 0.0 && v.is_finite()))
+        {
+            let pole = match row {
+                Some(i) => format!("[{i}][{j}]"),
+                None => j.to_string(),
+            };
+            if value.is_finite() {
+                self.push(ValidationError::Weight {
+                    at: at.clone(),
+                    pole,
+                    value,
+                });
+            } else {
+                self.push(ValidationError::NonFinite {
+                    at: at.clone(),
+                    field: format!("the weight of pole {pole}"),
+                });
+            }
+        }
+    }
+
+    fn bspline_curve<P: Vector>(&mut self, b: &BSplineCurve<P>, at: &Place) -> bool {
+        let Some(kv) = self.knots(b.degree, &b.knots, &b.mults, b.periodic, at, "") else {
+            return false;
+        };
+        let before = self.errors.len();
+        if self.check(b.poles.len() != kv.pole_count(), || {
+            ValidationError::PoleCount {
+                at: at.clone(),
+                what: "poles".into(),
+                got: b.poles.len(),
+                expected: kv.pole_count(),
+            }
+        }) {
+            if let Some(i) = b.poles.iter().position(|p| !p.is_finite()) {
+                self.finite(&b.poles[i], at, format!("pole {i}"));
+            }
+            self.weights(b.weights.as_deref(), b.poles.len(), at, None);
+        }
+        self.errors.len() == before
+    }
+
+    fn bspline_surface(&mut self, b: &BSplineSurface, at: &Place) -> bool {
+        let ku = self.knots(b.degree_u, &b.knots_u, &b.mults_u, b.periodic_u, at, "u: ");
+        let kv = self.knots(b.degree_v, &b.knots_v, &b.mults_v, b.periodic_v, at, "v: ");
+        let (Some(ku), Some(kv)) = (ku, kv) else {
+            return false;
+        };
+        let before = self.errors.len();
+        if !self.check(b.poles.len() != ku.pole_count(), || {
+            ValidationError::PoleCount {
+                at: at.clone(),
+                what: "poles (rows in u)".into(),
+                got: b.poles.len(),
+                expected: ku.pole_count(),
+            }
+        }) {
+            return false;
+        }
+        for (i, row) in b.poles.iter().enumerate() {
+            if !self.check(row.len() != kv.pole_count(), || {
+                ValidationError::PoleCount {
+                    at: at.clone(),
+                    what: format!("poles[{i}] (in v)"),
+                    got: row.len(),
+                    expected: kv.pole_count(),
+                }
+            }) {
+                return false;
+            }
+            if let Some(j) = row.iter().position(|p| !p.is_finite()) {
+                self.finite(&row[j], at, format!("pole [{i}][{j}]"));
+                return false;
+            }
+        }
+        if let Some(w) = &b.weights {
+            if !self.check(w.len() != b.poles.len(), || ValidationError::WeightCount {
+                at: at.clone(),
+                what: "weights (rows in u)".into(),
+                got: w.len(),
+                expected: b.poles.len(),
+            }) {
+                return false;
+            }
+            for (i, row) in w.iter().enumerate() {
+                self.weights(Some(row), kv.pole_count(), at, Some(i));
+            }
+        }
+        self.errors.len() == before
+    }
+
+    fn curve<P: Vector>(&mut self, curve: &Curve<P>, at: &Place) -> bool {
+        match curve {
+            Curve::Line { origin, dir } => {
+                self.finite(origin, at, "origin") & self.unit(dir, at, "dir")
+            }
+            Curve::Circle {
+                center,
+                x_dir,
+                y_dir,
+                radius,
+            } => {
+                self.finite(center, at, "center")
+                    & self.axes(x_dir, y_dir, at)
+                    & self.positive(*radius, at, "radius")
+            }
+            Curve::Ellipse {
+                center,
+                x_dir,
+                y_dir,
+                major_radius,
+                minor_radius,
+            } => {
+                self.finite(center, at, "center")
+                    & self.axes(x_dir, y_dir, at)
+                    & self.positive(*major_radius, at, "major_radius")
+                    & self.positive(*minor_radius, at, "minor_radius")
+            }
+            Curve::Bspline(b) => self.bspline_curve(b, at),
+        }
+    }
+
+    /// A curve's range: finite, not empty, within a non-periodic B-spline's knots.
+    fn range<P: Vector>(&mut self, curve: &Curve<P>, range: [f64; 2], at: &Place) -> bool {
+        if !self.finite(&range, at, "range") {
+            return false;
+        }
+        if !self.check(range[0] == range[1], || ValidationError::EmptyRange {
+            at: at.clone(),
+            t: range[0],
+        }) {
+            return false;
+        }
+        if let Curve::Bspline(b) = curve
+            && !b.periodic
+        {
+            let domain = [b.knots[0], b.knots[b.knots.len() - 1]];
+            let tol = RANGE_TOLERANCE * (domain[1] - domain[0]);
+            let (lo, hi) = (range[0].min(range[1]), range[0].max(range[1]));
+            return self.check(lo < domain[0] - tol || hi > domain[1] + tol, || {
+                ValidationError::RangeOutsideKnots {
+                    at: at.clone(),
+                    range,
+                    domain,
+                }
+            });
+        }
+        true
+    }
+
+    fn surface(&mut self, s: &Surface, face: u64) -> bool {
+        let at = Place::Surface { face };
+        match s {
+            Surface::Plane { frame } => self.frame(frame, &at),
+            Surface::Cylinder { frame, radius } | Surface::Sphere { frame, radius } => {
+                self.frame(frame, &at) & self.positive(*radius, &at, "radius")
+            }
+            Surface::Cone {
+                frame,
+                radius,
+                semi_angle,
+            } => {
+                let mut ok = self.frame(frame, &at);
+                ok &= self.finite(&[*radius, *semi_angle], &at, "radius / semi_angle")
+                    && self.check(*radius < 0.0, || ValidationError::ConeRadius {
+                        at: at.clone(),
+                        value: *radius,
+                    })
+                    && self.check(
+                        semi_angle.abs() <= 1e-12
+                            || semi_angle.abs() >= std::f64::consts::FRAC_PI_2 - 1e-12,
+                        || ValidationError::SemiAngle {
+                            at: at.clone(),
+                            value: *semi_angle,
+                        },
+                    );
+                ok
+            }
+            Surface::Torus {
+                frame,
+                major_radius,
+                minor_radius,
+            } => {
+                self.frame(frame, &at)
+                    & self.positive(*major_radius, &at, "major_radius")
+                    & self.positive(*minor_radius, &at, "minor_radius")
+            }
+            Surface::Revolution {
+                axis_origin,
+                axis_dir,
+                curve,
+            } => {
+                self.finite(axis_origin, &at, "axis_origin")
+                    & self.unit(axis_dir, &at, "axis_dir")
+                    & self.curve(curve.as_ref(), &Place::SurfaceCurve { face })
+            }
+            Surface::Extrusion { direction, curve } => {
+                self.unit(direction, &at, "direction")
+                    & self.curve(curve.as_ref(), &Place::SurfaceCurve { face })
+            }
+            Surface::Bspline(b) => self.bspline_surface(b, &at),
+        }
+    }
+
+    fn face(&mut self, face: &crate::model::Face, edge_ids: &HashSet<u64>) {
+        let id = face.id;
+        self.surface(&face.surface, id);
+        let b = face.bounds;
+        let bounds_ok = if !b.iter().all(|x| x.is_finite()) {
+            self.push(ValidationError::NonFinite {
+                at: Place::Face { face: id },
+                field: "bounds".into(),
+            });
+            false
+        } else {
+            self.check(!(b[0] < b[1] && b[2] < b[3]), || ValidationError::Bounds {
+                face: id,
+                bounds: b,
+            })
+        };
+        let size = ((b[1] - b[0]).powi(2) + (b[3] - b[2]).powi(2)).sqrt();
+        for (l, lp) in face.loops.iter().enumerate() {
+            if !self.check(lp.trims.is_empty(), || ValidationError::EmptyLoop {
+                face: id,
+                loop_index: l,
+            }) {
+                continue;
+            }
+            let mut loop_ok = bounds_ok;
+            for (t, trim) in lp.trims.iter().enumerate() {
+                let at = Place::Trim {
+                    face: id,
+                    loop_index: l,
+                    trim: t,
+                };
+                let ok = self.curve(&trim.curve, &at) && self.range(&trim.curve, trim.range, &at);
+                loop_ok &= ok;
+                if let Some(edge) = trim.edge
+                    && !edge_ids.contains(&edge)
+                {
+                    self.push(ValidationError::UnknownEdge {
+                        face: id,
+                        loop_index: l,
+                        trim: t,
+                        edge,
+                    });
+                }
+            }
+            if loop_ok {
+                self.loop_geometry(face, l, size);
+            }
+        }
+    }
+
+    /// Bounds, closure and orientation of loop `l`, whose trims are valid.
+    fn loop_geometry(&mut self, face: &crate::model::Face, l: usize, size: f64) {
+        let id = face.id;
+        let b = face.bounds;
+        let trims = &face.loops[l].trims;
+        let slack = BOUNDS_TOLERANCE * size;
+        let mut polyline: Vec<[f64; 2]> = Vec::new();
+        for (t, trim) in trims.iter().enumerate() {
+            let [t0, t1] = trim.range;
+            let n = trim.curve.segments(t0, t1);
+            for k in 0..=n {
+                let s = t0 + (t1 - t0) * (k as f64 / n as f64);
+                let p = trim.curve.point(s);
+                let outside = p[0] < b[0] - slack
+                    || p[0] > b[1] + slack
+                    || p[1] < b[2] - slack
+                    || p[1] > b[3] + slack;
+                if outside {
+                    self.push(ValidationError::OutsideBounds {
+                        face: id,
+                        loop_index: l,
+                        trim: t,
+                        t: s,
+                        point: p,
+                        bounds: b,
+                    });
+                    return;
+                }
+                if k < n {
+                    polyline.push(p);
+                }
+            }
+        }
+        let tolerance = CLOSURE_TOLERANCE * size;
+        let mut closed = true;
+        for (t, trim) in trims.iter().enumerate() {
+            let next = (t + 1) % trims.len();
+            let end = trim.curve.point(trim.range[1]);
+            let start = trims[next].curve.point(trims[next].range[0]);
+            let gap = end.sub(start).norm();
+            if gap > tolerance {
+                self.push(ValidationError::OpenLoop {
+                    face: id,
+                    loop_index: l,
+                    trim: t,
+                    next,
+                    gap,
+                    tolerance,
+                });
+                closed = false;
+            }
+        }
+        if !closed {
+            return;
+        }
+        let area = signed_area(&polyline);
+        if l == 0 {
+            self.check(area <= 0.0, || ValidationError::OuterClockwise {
+                face: id,
+                area,
+            });
+        } else {
+            self.check(area >= 0.0, || ValidationError::HoleCounterClockwise {
+                face: id,
+                loop_index: l,
+                area,
+            });
+        }
+    }
+}
+
+/// The signed area of a closed polygon (shoelace; positive when counter-clockwise).
+pub fn signed_area(points: &[[f64; 2]]) -> f64 {
+    let Some(&o) = points.first() else {
+        return 0.0;
+    };
+    // Relative to the first point, so large parameter offsets do not cost precision.
+    let mut twice = 0.0;
+    for w in 0..points.len() {
+        let a = points[w].sub(o);
+        let b = points[(w + 1) % points.len()].sub(o);
+        twice += a[0] * b[1] - a[1] * b[0];
+    }
+    twice / 2.0
+}

@@ -1,0 +1,64 @@
+"""`python -m tessd.brep export PART OUT.json [--units mm] [--source TEXT]`
+
+Reads PART (.step/.stp, .iges/.igs, .brep/.brp) through OCP and writes the `tessd-brep` v1 JSON
+(docs/brep-format.md) to OUT.json (`-`: standard output). A summary goes to standard error."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from typing import List, Optional
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m tessd.brep", description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    ex = sub.add_parser("export", help="a CAD file → tessd-brep JSON")
+    ex.add_argument("part", help="a .step/.stp, .iges/.igs or .brep/.brp file")
+    ex.add_argument("out", help="the JSON file to write (- for standard output)")
+    ex.add_argument("--units", default="mm", choices=["mm", "cm", "m", "in"],
+                    help="length unit of the output (STEP/IGES are converted to it; default mm)")
+    ex.add_argument("--source", default=None, help="the document's `source` (default: PART's name)")
+    args = ap.parse_args(argv)
+
+    from . import ocp
+
+    t0 = time.perf_counter()
+    try:
+        # OCCT's readers print to standard output (IGES: "Total number of loaded entities"):
+        # send that to standard error so `-` gets nothing but the JSON.
+        sys.stdout.flush()
+        saved = os.dup(1)
+        os.dup2(2, 1)
+        try:
+            shape = ocp.read_file(args.part, units=args.units)
+        finally:
+            sys.stdout.flush()
+            os.dup2(saved, 1)
+            os.close(saved)
+        t1 = time.perf_counter()
+        doc = ocp.export_topods(shape, units=args.units,
+                                source=args.source if args.source is not None else os.path.basename(args.part))
+    except (OSError, ocp.ExportError) as e:
+        print(f"tessd.brep: {e}", file=sys.stderr)
+        return 1
+    t2 = time.perf_counter()
+    text = json.dumps(doc, allow_nan=False, separators=(",", ":"))
+    if args.out == "-":
+        sys.stdout.write(text + "\n")
+    else:
+        tmp = args.out + ".tmp"
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, args.out)
+    print(f"tessd.brep: {args.part}: {len(doc['faces'])} faces, {len(doc['edges'])} edges "
+          f"(read {1000 * (t1 - t0):.0f} ms, export {1000 * (t2 - t1):.0f} ms) -> {args.out}",
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,606 @@
+"""The OCP (OpenCASCADE) walk: a `TopoDS_Shape` → a `tessd-brep` v1 document (docs/brep-format.md).
+
+Written against cadquery-ocp 7.9 (`import OCP`); the few names that OCP 8.0 renamed (static
+methods lose their `_s` suffix there, e.g. `TopoDS.Face_s` → `TopoDS.Face`) go through `_static`,
+so the module also loads under OCP 8.0. Nothing here uses `BRepTopAdaptor_FClass2d` (dropped in 8.0).
+
+How the OCP model maps onto the format:
+- faces are numbered by `TopExp::MapShapes(shape, FACE)` (1-based, FreeCAD's "FaceN"), edges by
+  one map over the faces' edges (so `edges` lists only edges that bound a face);
+- each face is walked as `face.Oriented(FORWARD)`: its loops then come out in the normalised
+  orientation (outer counter-clockwise, holes clockwise) and `reversed` is the face's own
+  orientation;
+- plane / cylinder / cone / sphere / torus / revolution / extrusion / B-spline surfaces are
+  written as they are; a Bézier surface (or curve) becomes the identical B-spline; anything else
+  (offset surfaces, revolution/extrusion of an offset curve, ...) goes through
+  `BRepBuilderAPI_NurbsConvert`, which re-computes the pcurves for the converted surface;
+- a cylinder / cone / sphere / torus on an *indirect* (left-handed) `gp_Ax3` (common in STEP and
+  mirrored parts) cannot be written with the format's right-handed frame and OCP's (u, v): for it
+  the frame is (X, -Y) (right-handed, z = the axis) and u becomes 2π - u, i.e. every pcurve is
+  mirrored about u = π (exact: lines, circles, ellipses and B-splines mirror into their own kind
+  with the same parameter), its loops are re-reversed and `reversed` flips (the mirrored
+  parametrisation has the opposite ∂S/∂u × ∂S/∂v). S(2π - u, v) is then OCP's S(u, v) exactly.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
+from OCP.Geom import (
+    Geom_BezierCurve,
+    Geom_BezierSurface,
+    Geom_BSplineCurve,
+    Geom_BSplineSurface,
+    Geom_Circle,
+    Geom_Ellipse,
+    Geom_Line,
+    Geom_RectangularTrimmedSurface,
+    Geom_SurfaceOfLinearExtrusion,
+    Geom_SurfaceOfRevolution,
+    Geom_TrimmedCurve,
+)
+from OCP.Geom2d import (
+    Geom2d_BezierCurve,
+    Geom2d_BSplineCurve,
+    Geom2d_Circle,
+    Geom2d_Ellipse,
+    Geom2d_Line,
+    Geom2d_TrimmedCurve,
+)
+from OCP.Geom2dConvert import Geom2dConvert, Geom2dConvert_ApproxCurve
+from OCP.GeomAbs import (
+    GeomAbs_C2,
+    GeomAbs_Cone,
+    GeomAbs_Cylinder,
+    GeomAbs_Plane,
+    GeomAbs_Sphere,
+    GeomAbs_Torus,
+)
+from OCP.GeomConvert import GeomConvert, GeomConvert_ApproxCurve
+from OCP.gp import gp_Ax2d, gp_Dir2d, gp_Pnt2d
+from OCP.TopAbs import (
+    TopAbs_EDGE,
+    TopAbs_EXTERNAL,
+    TopAbs_FACE,
+    TopAbs_FORWARD,
+    TopAbs_INTERNAL,
+    TopAbs_REVERSED,
+    TopAbs_WIRE,
+)
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
+from OCP.TopTools import TopTools_IndexedMapOfShape
+
+FORMAT = "tessd-brep"
+VERSION = 1
+UNITS = ("mm", "cm", "m", "in")
+
+TWO_PI = 2.0 * math.pi
+# The mirror that turns OCP's u into 2π - u (the axis u = π).
+_MIRROR_U = gp_Ax2d(gp_Pnt2d(math.pi, 0.0), gp_Dir2d(0.0, 1.0))
+# Approximation tolerance (absolute, in the curve's units) for curves whose exact B-spline would
+# change the parameter (hyperbolas) or that have none (offset curves): they are approximated on
+# their own parameter instead.
+_APPROX_TOL = 1e-9
+# Gaps between consecutive trims above this fraction of the bounds' size get a bridging segment.
+_GAP_BRIDGE = 1e-8
+# Samples per trim taken to make sure `bounds` holds every trim (see _face_bounds).
+_BOUNDS_SAMPLES = 16
+
+
+def _static(cls: Any, name: str) -> Any:
+    """`cls.name_s` (OCP 7.x) or `cls.name` (OCP 8.0 dropped the suffix)."""
+    f = getattr(cls, name + "_s", None)
+    return f if f is not None else getattr(cls, name)
+
+
+_face = _static(TopoDS, "Face")
+_edge = _static(TopoDS, "Edge")
+_wire = _static(TopoDS, "Wire")
+_map_shapes = _static(TopExp, "MapShapes")
+_surface_of = _static(BRep_Tool, "Surface")
+_curve_of = _static(BRep_Tool, "Curve")
+_pcurve_of = _static(BRep_Tool, "CurveOnSurface")
+_range_of = _static(BRep_Tool, "Range")
+_degenerated = _static(BRep_Tool, "Degenerated")
+_uv_bounds = _static(BRepTools, "UVBounds")
+_outer_wire = _static(BRepTools, "OuterWire")
+_curve2d_to_bspline = _static(Geom2dConvert, "CurveToBSplineCurve")
+_curve_to_bspline = _static(GeomConvert, "CurveToBSplineCurve")
+_surface_to_bspline = _static(GeomConvert, "SurfaceToBSplineSurface")
+
+
+class ExportError(ValueError):
+    """A shape the exporter cannot write; the message names the face / edge."""
+
+
+# --------------------------------------------------------------------------------------------
+# small conversions
+
+
+def _xyz(p: Any) -> List[float]:
+    return [p.X(), p.Y(), p.Z()]
+
+
+def _xy(p: Any) -> List[float]:
+    return [p.X(), p.Y()]
+
+
+def _neg(v: Sequence[float]) -> List[float]:
+    return [-x for x in v]
+
+
+def _bspline_curve_json(c: Any, dim: int) -> Dict[str, Any]:
+    pt = _xyz if dim == 3 else _xy
+    n = c.NbPoles()
+    rational = c.IsRational()
+    return {
+        "type": "bspline",
+        "degree": c.Degree(),
+        "poles": [pt(c.Pole(i)) for i in range(1, n + 1)],
+        "weights": [c.Weight(i) for i in range(1, n + 1)] if rational else None,
+        "knots": [c.Knot(i) for i in range(1, c.NbKnots() + 1)],
+        "mults": [c.Multiplicity(i) for i in range(1, c.NbKnots() + 1)],
+        "periodic": bool(c.IsPeriodic()),
+    }
+
+
+def _curve_json(c: Any, dim: int) -> Dict[str, Any]:
+    """A line / circle / ellipse / B-spline (2D or 3D) as CURVE2D / CURVE3D."""
+    pt = _xyz if dim == 3 else _xy
+    if isinstance(c, (Geom_Line, Geom2d_Line)):
+        ax = c.Position()  # gp_Ax1 / gp_Ax2d
+        return {"type": "line", "origin": pt(ax.Location()), "dir": pt(ax.Direction())}
+    if isinstance(c, (Geom_Circle, Geom2d_Circle)):
+        pos = c.Position()
+        return {"type": "circle", "center": pt(pos.Location()), "x_dir": pt(pos.XDirection()),
+                "y_dir": pt(pos.YDirection()), "radius": c.Radius()}
+    if isinstance(c, (Geom_Ellipse, Geom2d_Ellipse)):
+        pos = c.Position()
+        return {"type": "ellipse", "center": pt(pos.Location()), "x_dir": pt(pos.XDirection()),
+                "y_dir": pt(pos.YDirection()), "major_radius": c.MajorRadius(),
+                "minor_radius": c.MinorRadius()}
+    if isinstance(c, (Geom_BSplineCurve, Geom2d_BSplineCurve)):
+        return _bspline_curve_json(c, dim)
+    raise TypeError(f"not a format curve: {type(c).__name__}")
+
+
+def _exact_curve(c: Any, dim: int) -> Optional[Any]:
+    """The curve as a format type with the *same* parametrisation, or None if it has none
+    (trimmed curves are unwrapped; Béziers become the identical B-spline)."""
+    trimmed = Geom_TrimmedCurve if dim == 3 else Geom2d_TrimmedCurve
+    while isinstance(c, trimmed):
+        c = c.BasisCurve()
+    if dim == 3:
+        if isinstance(c, (Geom_Line, Geom_Circle, Geom_Ellipse, Geom_BSplineCurve)):
+            return c
+        if isinstance(c, Geom_BezierCurve):
+            return _curve_to_bspline(c)
+    else:
+        if isinstance(c, (Geom2d_Line, Geom2d_Circle, Geom2d_Ellipse, Geom2d_BSplineCurve)):
+            return c
+        if isinstance(c, Geom2d_BezierCurve):
+            return _curve2d_to_bspline(c)
+    return None
+
+
+def _curve_on_range(c: Any, t0: float, t1: float, dim: int) -> Tuple[Any, float, float]:
+    """(curve, t0, t1) of a format type for `c` on [t0, t1] (t0 < t1): the same curve and range
+    where it has an exact format type, else the B-spline of OCP's converters on that range (its
+    own parameter range; parabolas, hyperbolas, offset curves)."""
+    exact = _exact_curve(c, dim)
+    if exact is not None:
+        if isinstance(exact, (Geom_BSplineCurve, Geom2d_BSplineCurve)):
+            lo, hi = exact.FirstParameter(), exact.LastParameter()
+            if exact.IsPeriodic():
+                if t0 >= lo - 1e-12 * (hi - lo) and t1 <= hi + 1e-12 * (hi - lo):
+                    return exact, max(t0, lo), min(t1, hi)
+                # A periodic trim running over the knot span: its non-periodic segment.
+                seg = (_curve_to_bspline if dim == 3 else _curve2d_to_bspline)(
+                    (Geom_TrimmedCurve if dim == 3 else Geom2d_TrimmedCurve)(exact, t0, t1))
+                return seg, seg.FirstParameter(), seg.LastParameter()
+            # OCP ranges may overshoot the knot span by rounding; the format refuses that.
+            return exact, max(t0, lo), min(t1, hi)
+        return exact, t0, t1
+    trimmed = (Geom_TrimmedCurve if dim == 3 else Geom2d_TrimmedCurve)(c, t0, t1)
+    try:
+        bs = (_curve_to_bspline if dim == 3 else _curve2d_to_bspline)(trimmed)
+    except Exception:  # offset curves in older OCCT
+        bs = None
+    if bs is not None and _same_parameter(trimmed, bs, t0, t1):
+        return bs, t0, t1  # exact and same parameter (parabolas, Béziers, offsets of lines...)
+    # Hyperbolas have no rational form in their own parameter: approximate on the same parameter
+    # (so that the trim's t stays the edge's t, as OCP's SameParameter edges have it).
+    approx = (GeomConvert_ApproxCurve if dim == 3 else Geom2dConvert_ApproxCurve)(
+        trimmed, _APPROX_TOL, GeomAbs_C2, 200, 9)
+    if approx.HasResult() and approx.MaxError() <= _APPROX_TOL:
+        a = approx.Curve()
+        if _same_parameter(trimmed, a, t0, t1, tol=10 * _APPROX_TOL):
+            return a, a.FirstParameter(), a.LastParameter()
+    if bs is None:
+        raise ExportError(f"no B-spline for a {type(c).__name__} on [{t0}, {t1}]")
+    return bs, bs.FirstParameter(), bs.LastParameter()  # exact, another parameter
+
+
+def _same_parameter(c: Any, bs: Any, t0: float, t1: float, tol: float = 1e-12) -> bool:
+    """Whether `bs` is `c` on [t0, t1] point for point at the same parameter (sampled)."""
+    if abs(bs.FirstParameter() - t0) > 1e-12 * (1 + abs(t0)) or \
+            abs(bs.LastParameter() - t1) > 1e-12 * (1 + abs(t1)):
+        return False
+    scale = 1.0 + max(abs(x) for x in _xyz_any(c.Value(t0)) + _xyz_any(c.Value(t1)))
+    for k in range(1, 16):
+        t = t0 + (t1 - t0) * k / 16
+        if c.Value(t).Distance(bs.Value(t)) > tol * scale:
+            return False
+    return True
+
+
+def _xyz_any(p: Any) -> List[float]:
+    return [p.X(), p.Y(), p.Z()] if hasattr(p, "Z") else [p.X(), p.Y()]
+
+
+def _frame(origin: Any, x: Sequence[float], y: Sequence[float]) -> Dict[str, Any]:
+    return {"origin": _xyz(origin), "x_dir": list(x), "y_dir": list(y)}
+
+
+def _bspline_surface_json(s: Any) -> Dict[str, Any]:
+    nu, nv = s.NbUPoles(), s.NbVPoles()
+    rational = s.IsURational() or s.IsVRational()
+    return {
+        "type": "bspline",
+        "degree_u": s.UDegree(),
+        "degree_v": s.VDegree(),
+        "poles": [[_xyz(s.Pole(i, j)) for j in range(1, nv + 1)] for i in range(1, nu + 1)],
+        "weights": ([[s.Weight(i, j) for j in range(1, nv + 1)] for i in range(1, nu + 1)]
+                    if rational else None),
+        "knots_u": [s.UKnot(i) for i in range(1, s.NbUKnots() + 1)],
+        "mults_u": [s.UMultiplicity(i) for i in range(1, s.NbUKnots() + 1)],
+        "knots_v": [s.VKnot(i) for i in range(1, s.NbVKnots() + 1)],
+        "mults_v": [s.VMultiplicity(i) for i in range(1, s.NbVKnots() + 1)],
+        "periodic_u": bool(s.IsUPeriodic()),
+        "periodic_v": bool(s.IsVPeriodic()),
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# surfaces
+
+
+def _surface(face: Any) -> Tuple[Optional[Dict[str, Any]], bool]:
+    """(SURFACE, mirror_u) for a forward face, or (None, False) when it needs NurbsConvert."""
+    ad = BRepAdaptor_Surface(face, False)  # location applied
+    t = ad.GetType()
+    if t == GeomAbs_Plane:
+        pos = ad.Plane().Position()  # any handedness: S = O + uX + vY, normal X × Y as in OCP
+        return dict(type="plane", **_frame(pos.Location(), _xyz(pos.XDirection()),
+                                           _xyz(pos.YDirection()))), False
+    if t in (GeomAbs_Cylinder, GeomAbs_Cone, GeomAbs_Sphere, GeomAbs_Torus):
+        if t == GeomAbs_Cylinder:
+            g = ad.Cylinder()
+            extra: Dict[str, Any] = {"type": "cylinder", "radius": g.Radius()}
+        elif t == GeomAbs_Cone:
+            g = ad.Cone()
+            extra = {"type": "cone", "radius": g.RefRadius(), "semi_angle": g.SemiAngle()}
+        elif t == GeomAbs_Sphere:
+            g = ad.Sphere()
+            extra = {"type": "sphere", "radius": g.Radius()}
+        else:
+            g = ad.Torus()
+            extra = {"type": "torus", "major_radius": g.MajorRadius(),
+                     "minor_radius": g.MinorRadius()}
+        pos = g.Position()
+        x, y = _xyz(pos.XDirection()), _xyz(pos.YDirection())
+        mirror = not pos.Direct()
+        if mirror:  # OCP's axis is -(X × Y): use (X, -Y) and u → 2π - u
+            y = _neg(y)
+        surf = {"type": extra.pop("type"), **_frame(pos.Location(), x, y), **extra}
+        return surf, mirror
+
+    geom = _surface_of(face)  # a transformed copy when the face has a location
+    while isinstance(geom, Geom_RectangularTrimmedSurface):
+        geom = geom.BasisSurface()
+    if isinstance(geom, Geom_BSplineSurface):
+        return _bspline_surface_json(geom), False
+    if isinstance(geom, Geom_BezierSurface):
+        return _bspline_surface_json(_surface_to_bspline(geom)), False
+    if isinstance(geom, Geom_SurfaceOfRevolution):
+        c = _exact_curve(geom.BasisCurve(), 3)
+        if c is not None:
+            ax = geom.Axis()
+            return {"type": "revolution", "axis_origin": _xyz(ax.Location()),
+                    "axis_dir": _xyz(ax.Direction()), "curve": _curve_json(c, 3)}, False
+    if isinstance(geom, Geom_SurfaceOfLinearExtrusion):
+        c = _exact_curve(geom.BasisCurve(), 3)
+        if c is not None:
+            return {"type": "extrusion", "direction": _xyz(geom.Direction()),
+                    "curve": _curve_json(c, 3)}, False
+    return None, False
+
+
+# --------------------------------------------------------------------------------------------
+# loops
+
+
+def _wire_edges(wire: Any, face: Any) -> List[Any]:
+    """The wire's boundary edges in connection order (BRepTools_WireExplorer), with their
+    orientation in the face; INTERNAL / EXTERNAL edges are no boundary and are left out. Falls
+    back to the stored order when the explorer cannot chain every edge (unsewn data)."""
+    stored = []
+    exp = TopExp_Explorer(wire, TopAbs_EDGE)
+    while exp.More():
+        e = _edge(exp.Current())
+        if e.Orientation() not in (TopAbs_INTERNAL, TopAbs_EXTERNAL):
+            stored.append(e)
+        exp.Next()
+    chained = []
+    we = BRepTools_WireExplorer(wire, face)
+    while we.More():
+        e = _edge(we.Current())
+        if e.Orientation() not in (TopAbs_INTERNAL, TopAbs_EXTERNAL):
+            chained.append(e)
+        we.Next()
+    return chained if len(chained) == len(stored) else stored
+
+
+class _Trim:
+    __slots__ = ("curve", "t0", "t1", "edge")
+
+    def __init__(self, curve: Any, t0: float, t1: float, edge: Optional[int]) -> None:
+        self.curve, self.t0, self.t1, self.edge = curve, t0, t1, edge
+
+    def json(self) -> Dict[str, Any]:
+        return {"curve": _curve_json(self.curve, 2), "range": [self.t0, self.t1], "edge": self.edge}
+
+
+def _trim(edge: Any, face: Any, mirror: bool, edge_id: Optional[int], where: str) -> _Trim:
+    c = _pcurve_of(edge, face, 0.0, 0.0)  # OCP returns only the curve...
+    if c is None:
+        raise ExportError(f"{where}: edge {edge_id} has no pcurve on the face")
+    first, last = _range_of(edge, face)  # ...its range comes from here
+    c, first, last = _curve_on_range(c, first, last, 2)
+    if mirror:
+        c = c.Mirrored(_MIRROR_U)  # same kind, same parameter; u → 2π - u
+    if edge.Orientation() == TopAbs_REVERSED:
+        first, last = last, first
+    return _Trim(c, first, last, edge_id)
+
+
+def _face_bounds(face: Any, mirror: bool, loops: List[List[_Trim]], where: str) -> List[float]:
+    """OCP's UVBounds, widened (if at all) to hold sampled points of every exported trim."""
+    u0, u1, v0, v1 = _uv_bounds(face)
+    if mirror:
+        u0, u1 = TWO_PI - u1, TWO_PI - u0
+    for loop in loops:
+        for tr in loop:
+            for k in range(_BOUNDS_SAMPLES + 1):
+                p = tr.curve.Value(tr.t0 + (tr.t1 - tr.t0) * k / _BOUNDS_SAMPLES)
+                u, v = p.X(), p.Y()
+                u0, u1, v0, v1 = min(u0, u), max(u1, u), min(v0, v), max(v1, v)
+    b = [u0, u1, v0, v1]
+    if not all(math.isfinite(x) for x in b):
+        raise ExportError(f"{where}: unbounded parameter range {b} (a face without trims on an "
+                          "infinite surface)")
+    return b
+
+
+# --------------------------------------------------------------------------------------------
+# the walk
+
+
+def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
+    """A `tessd-brep` v1 document (a dict ready for `json.dump`) from a `TopoDS_Shape`."""
+    if units not in UNITS:
+        raise ValueError(f"units must be one of {UNITS}, not {units!r}")
+    if shape is None or shape.IsNull():
+        raise ExportError("empty shape")
+    face_map = TopTools_IndexedMapOfShape()
+    _map_shapes(shape, TopAbs_FACE, face_map)
+    edge_map = TopTools_IndexedMapOfShape()
+    for i in range(1, face_map.Extent() + 1):
+        _map_shapes(face_map.FindKey(i), TopAbs_EDGE, edge_map)
+    edge_faces: Dict[int, List[int]] = {}
+
+    faces = []
+    for fid in range(1, face_map.Extent() + 1):
+        faces.append(_export_face(_face(face_map.FindKey(fid)), fid, edge_map, edge_faces))
+
+    edges = []
+    for eid in range(1, edge_map.Extent() + 1):
+        edges.append(_export_edge(_edge(edge_map.FindKey(eid)), eid, edge_faces.get(eid, [])))
+
+    doc: Dict[str, Any] = {"format": FORMAT, "version": VERSION, "units": units}
+    if source is not None:
+        doc["source"] = source
+    doc["faces"] = faces
+    doc["edges"] = edges
+    return doc
+
+
+def _export_face(face: Any, fid: int, edge_map: Any, edge_faces: Dict[int, List[int]]) -> Dict[str, Any]:
+    where = f"face {fid}"
+    reversed_ = face.Orientation() == TopAbs_REVERSED
+    ff = _face(face.Oriented(TopAbs_FORWARD))
+    surf, mirror = _surface(ff)
+
+    work = ff
+    # OCP edge of `work` → edge id (ids are the original shape's edges).
+    renamed: Optional[List[Tuple[Any, int]]] = None
+    if surf is None:  # no exact format type: OCP's NURBS conversion of the face (pcurves included)
+        conv = BRepBuilderAPI_NurbsConvert(ff, True)
+        work = _face(_face(conv.Shape()).Oriented(TopAbs_FORWARD))
+        renamed = []
+        exp = TopExp_Explorer(ff, TopAbs_EDGE)
+        while exp.More():
+            orig = exp.Current()
+            renamed.append((conv.ModifiedShape(orig), edge_map.FindIndex(orig)))
+            exp.Next()
+        surf, mirror = _surface(work)
+        if surf is None:
+            raise ExportError(f"{where}: NurbsConvert gave no B-spline surface")
+
+    def edge_id(e: Any) -> Optional[int]:
+        if renamed is None:
+            i = edge_map.FindIndex(e)
+            return i if i > 0 else None
+        return next((i for new, i in renamed if new.IsSame(e)), None)
+
+    outer = _outer_wire(work)
+    wires = []
+    exp = TopExp_Explorer(work, TopAbs_WIRE)
+    while exp.More():
+        w = _wire(exp.Current())
+        if not outer.IsNull() and w.IsSame(outer):
+            wires.insert(0, w)
+        else:
+            wires.append(w)
+        exp.Next()
+
+    loops: List[List[_Trim]] = []
+    for li, w in enumerate(wires):
+        trims = []
+        for e in _wire_edges(w, work):
+            eid = edge_id(e)
+            trims.append(_trim(e, work, mirror, eid, f"{where} loop {li}"))
+            if eid is not None:
+                lst = edge_faces.setdefault(eid, [])
+                if fid not in lst:
+                    lst.append(fid)
+        if not trims:
+            continue
+        if mirror:  # the mirror turned the loop around: walk it the other way
+            trims = [_Trim(t.curve, t.t1, t.t0, t.edge) for t in reversed(trims)]
+        loops.append(trims)
+
+    # OuterWire compares bounding boxes; where that picks a hole (its box as large as the outer
+    # loop's), the signed areas decide: the outer loop is the counter-clockwise one.
+    if len(loops) > 1 and _signed_area(loops[0]) < 0:
+        ccw = [i for i, lp in enumerate(loops) if _signed_area(lp) > 0]
+        if len(ccw) == 1:
+            loops.insert(0, loops.pop(ccw[0]))
+    bounds = _face_bounds(work, mirror, loops, where)
+    size = math.hypot(bounds[1] - bounds[0], bounds[3] - bounds[2])
+    loops = [_bridge_gaps(loop, size) for loop in loops]
+    return {
+        "id": fid,
+        "reversed": reversed_ != mirror,
+        "surface": surf,
+        "bounds": bounds,
+        "loops": [{"edges": [t.json() for t in loop]} for loop in loops],
+    }
+
+
+def _signed_area(loop: List[_Trim], samples: int = 16) -> float:
+    pts = []
+    for tr in loop:
+        for k in range(samples):
+            p = tr.curve.Value(tr.t0 + (tr.t1 - tr.t0) * k / samples)
+            pts.append((p.X(), p.Y()))
+    return 0.5 * sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(pts, pts[1:] + pts[:1]))
+
+
+def _bridge_gaps(loop: List[_Trim], size: float) -> List[_Trim]:
+    """The loop with a straight (u, v) segment (no edge) across every gap between consecutive
+    trims above `_GAP_BRIDGE` × the bounds' size. Real data has such gaps (pcurves that meet only
+    within the vertex tolerance: up to ~1e-5 of the bounds in the shared data), and the format
+    wants loops closed within 1e-7 of the bounds."""
+    if size <= 0:
+        return loop
+    out: List[_Trim] = []
+    for i, tr in enumerate(loop):
+        out.append(tr)
+        nxt = loop[(i + 1) % len(loop)]
+        a, b = tr.curve.Value(tr.t1), nxt.curve.Value(nxt.t0)
+        gap = a.Distance(b)
+        if gap > _GAP_BRIDGE * size:
+            line = Geom2d_Line(a, gp_Dir2d(b.X() - a.X(), b.Y() - a.Y()))
+            out.append(_Trim(line, 0.0, gap, None))
+    return out
+
+
+def _export_edge(edge: Any, eid: int, faces: List[int]) -> Dict[str, Any]:
+    first, last = _range_of(edge)
+    curve = None
+    if not _degenerated(edge):
+        c = _curve_of(edge, 0.0, 0.0)  # location applied; OCP returns only the curve
+        if c is not None:
+            c, first, last = _curve_on_range(c, first, last, 3)
+            curve = _curve_json(c, 3)
+    return {"id": eid, "curve": curve, "range": [first, last], "faces": faces}
+
+
+# --------------------------------------------------------------------------------------------
+# inputs
+
+
+def to_topods(shape: Any) -> Any:
+    """A `TopoDS_Shape` from OCP itself, a cadquery / build123d `Shape` (`.wrapped`), or a
+    cadquery `Workplane` (its objects' shapes, as one compound)."""
+    if isinstance(shape, TopoDS_Shape):
+        return shape
+    wrapped = getattr(shape, "wrapped", None)
+    if isinstance(wrapped, TopoDS_Shape):
+        return wrapped
+    vals = getattr(shape, "vals", None)
+    if callable(vals):  # cadquery Workplane
+        shapes = [to_topods(v) for v in vals() if isinstance(getattr(v, "wrapped", None), TopoDS_Shape)]
+        if len(shapes) == 1:
+            return shapes[0]
+        comp = TopoDS_Compound()
+        b = BRep_Builder()
+        b.MakeCompound(comp)
+        for s in shapes:
+            b.Add(comp, s)
+        return comp
+    raise TypeError(f"not an OCP shape: {type(shape).__name__}")
+
+
+_XSTEP_UNITS = {"mm": "MM", "cm": "CM", "m": "M", "in": "INCH"}
+
+
+def read_file(path: str, units: str = "mm") -> Any:
+    """A `TopoDS_Shape` from a STEP (.step/.stp), IGES (.iges/.igs) or OpenCASCADE (.brep/.brp)
+    file. STEP and IGES are converted to `units`; a .brep file has no unit (taken as `units`).
+    IGES surface models stay unsewn (a compound of faces)."""
+    ext = os.path.splitext(path)[1].lower()
+    if not os.path.isfile(path):
+        raise FileNotFoundError(path)
+    if ext in (".step", ".stp", ".iges", ".igs"):
+        from OCP.IFSelect import IFSelect_RetDone
+        from OCP.Interface import Interface_Static
+
+        if ext in (".step", ".stp"):
+            from OCP.STEPControl import STEPControl_Reader
+
+            reader = STEPControl_Reader()
+        else:
+            from OCP.IGESControl import IGESControl_Reader
+
+            reader = IGESControl_Reader()
+        # The reader's target unit (set after the reader exists: creating it initialises the
+        # static parameters).
+        # (The parameter is process-wide: put the previous value back afterwards.)
+        previous = _static(Interface_Static, "CVal")("xstep.cascade.unit")
+        _static(Interface_Static, "SetCVal")("xstep.cascade.unit", _XSTEP_UNITS[units])
+        try:
+            if reader.ReadFile(path) != IFSelect_RetDone:
+                raise ExportError(f"{path}: not readable as {ext[1:].upper()}")
+            reader.TransferRoots()
+            shape = reader.OneShape()
+        finally:
+            if previous:
+                _static(Interface_Static, "SetCVal")("xstep.cascade.unit", previous)
+    elif ext in (".brep", ".brp"):
+        shape = TopoDS_Shape()
+        if not _static(BRepTools, "Read")(shape, path, BRep_Builder()):
+            raise ExportError(f"{path}: not readable as an OpenCASCADE .brep file")
+    else:
+        raise ExportError(f"{path}: unknown extension {ext!r} (expected .step/.stp, .iges/.igs, .brep/.brp)")
+    if shape is None or shape.IsNull():
+        raise ExportError(f"{path}: no shape in the file")
+    return shape
