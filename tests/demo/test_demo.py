@@ -84,8 +84,20 @@ def test_demo_writes_stats_and_valid_usd(tmp_path):
     assert max(abs(p[2] - q[2]) for p, q in zip(a, b)) > 0.01
     assert "24 frames at level 2, one topology phase" in run.stdout
 
+    # The bottle (OCCT's bottle.brep: 71 faces) tessellated at 0.1 mm: one GeomSubset per face,
+    # every face with triangles.
+    bottle = out / "bottle.usda"
+    assert validate_stage(bottle) == []
+    stage = Usd.Stage.Open(str(bottle))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Root/bottle"))
+    subsets = UsdGeom.Subset.GetAllGeomSubsets(mesh)
+    assert len(subsets) == 71
+    assert all(len(s.GetIndicesAttr().Get()) > 0 for s in subsets)
+    assert set(mesh.GetFaceVertexCountsAttr().Get()) == {3}
+    assert "tessellate: 71 faces" in run.stdout
+
     # The socket is gone after the demo's daemon shut down: nothing left in the output folder
     # but the results.
     assert sorted(p.name for p in out.iterdir()) == [
-        "spot.usda", "spot_cage.usda", "spot_lods.usda", "spot_stats.json", "spot_subdiv.usda",
-        "spot_subdiv_anim.usda"]
+        "bottle.usda", "spot.usda", "spot_cage.usda", "spot_lods.usda", "spot_stats.json",
+        "spot_subdiv.usda", "spot_subdiv_anim.usda"]

@@ -5,7 +5,8 @@
 //! and 5 % of its vertices, as a USD variant set `LOD`); then sends Spot's quad cage and asks
 //! for its Catmull–Clark surface (the refined mesh, the cage marked `catmullClark`, and a
 //! 24-frame animation refined with one topology phase), and writes everything to the output
-//! folder. A later stage (B-Rep) extends this list.
+//! folder; and OpenCASCADE's bottle as B-Rep faces (exported by `python -m tessd.brep`),
+//! tessellated to 0.1 mm into a USD file with one GeomSubset per face.
 
 use anyhow::{Context, Result, bail};
 use serde_json::json;
@@ -20,6 +21,9 @@ pub const SPOT_OBJ: &[u8] = include_bytes!("../data/spot_triangulated.obj");
 
 /// Spot's control mesh (quads, a few triangles and pentagons), with UVs: a subdivision cage.
 pub const SPOT_CAGE_OBJ: &[u8] = include_bytes!("../data/spot_control_mesh.obj");
+
+/// OpenCASCADE's bottle (OCCT `data/occ/bottle.brep`), 71 faces in the tessd-brep format.
+pub const BOTTLE_JSON: &[u8] = include_bytes!("../../tessellate/tests/data/bottle.json");
 
 /// Frames of the demo's animation.
 const FRAMES: usize = 24;
@@ -147,6 +151,7 @@ pub fn run(out: &Path) -> Result<()> {
         lods_path.display()
     );
     subdivision(&mut client, &out)?;
+    tessellation(&mut client, &out)?;
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);
     println!("tessd demo: done, results in {}", out.display());
@@ -217,6 +222,32 @@ fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
         r["topology_ms"].as_f64().unwrap_or(0.0),
         r["apply_ms_per_frame"].as_f64().unwrap_or(0.0),
         anim.display()
+    );
+    Ok(())
+}
+
+/// The bottle's B-Rep faces, checked (`brep.load`) and tessellated to 0.1 mm.
+fn tessellation(client: &mut Client, out: &Path) -> Result<()> {
+    let doc: serde_json::Value = serde_json::from_slice(BOTTLE_JSON)?;
+    let (loaded, _) = client.call("brep.load", json!({"brep": doc}), &[], |_| {})?;
+    println!(
+        "  brep.load: bottle, {} faces, {}",
+        loaded["faces"].as_array().map_or(0, Vec::len),
+        loaded["stats"]["faces_by_surface"]
+    );
+    let usd = out.join("bottle.usda");
+    let (r, _) = client.call(
+        "tessellate",
+        json!({"brep": doc, "tolerance": "0.1mm", "output": usd, "name": "bottle"}),
+        &[],
+        |_| {},
+    )?;
+    println!(
+        "  tessellate: {} faces -> {} triangles at 0.1 mm in {:.0} ms -> {}",
+        r["faces"],
+        r["triangles"],
+        r["time_ms"].as_f64().unwrap_or(0.0),
+        usd.display()
     );
     Ok(())
 }

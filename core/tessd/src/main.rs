@@ -190,6 +190,24 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Tessellate a B-Rep exchange document (docs/brep-format.md): each face's surface to the
+    /// chordal tolerance, trimmed by its loops, shared edges discretised once (watertight).
+    Tessellate {
+        /// B-Rep JSON document (`python -m tessd.brep export`).
+        input: PathBuf,
+        /// Output mesh: a USD stage (.usda, a GeomSubset per face) or OBJ, PLY, STL, OFF.
+        output: PathBuf,
+        /// Chordal tolerance: a length with a unit (0.1mm, 0.01in, 1cm, 0.001m) or a plain
+        /// number in the document's units.
+        #[arg(long)]
+        tolerance: String,
+        /// The largest angle, radians, between neighbouring facets' normals (default 0.5).
+        #[arg(long)]
+        angle: Option<f64>,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Run the main job on built-in sample data, through a real daemon, into ./tessd-demo/.
     Demo {
         /// Output folder.
@@ -407,6 +425,32 @@ fn run(cli: Cli) -> Result<()> {
             });
             report_or_json(run_local("compare", params)?, json, |r| {
                 print_compare(&r.result)
+            })
+        }
+        Command::Tessellate {
+            input,
+            output,
+            tolerance,
+            angle,
+            json,
+        } => {
+            let params = serde_json::json!({
+                "input": input,
+                "output": output,
+                "tolerance": tolerance,
+                "angle": angle,
+            });
+            report_or_json(run_local("tessellate", params)?, json, |r| {
+                let r = &r.result;
+                println!(
+                    "tessellate: {} faces, {} triangles (tolerance {} {}) -> {} ({:.1} ms)",
+                    r["faces"],
+                    r["triangles"],
+                    r["tolerance"],
+                    r["units"].as_str().unwrap_or(""),
+                    output.display(),
+                    r["time_ms"].as_f64().unwrap_or(0.0)
+                );
             })
         }
         Command::Demo { out } => tessd::demo::run(&out),

@@ -12,6 +12,7 @@ pub mod mesh_convert;
 pub mod mesh_stats;
 pub mod simplify;
 pub mod subdivide;
+pub mod tessellate;
 
 use tessd_ipc::registry::Registry;
 
@@ -25,6 +26,7 @@ pub fn registry() -> Registry {
         .register("compare", compare::run)
         .register("subdivide", subdivide::run)
         .register("brep.load", brep_load::run)
+        .register("tessellate", tessellate::run)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [

@@ -1,0 +1,214 @@
+//! Step 2: each face's loops as closed (u, v) polylines whose points carry their 3D position.
+//! A trim on a shared edge reuses the edge's samples: mapped into this face's (u, v) by the
+//! trim's own pcurve at the same parameter when the pcurve and the 3D curve share their
+//! parametrisation (OCP's "same parameter"), else by projecting each 3D sample onto the pcurve
+//! (Gauss-Newton on |S(c(t)) − P|²). Trims without an edge are sampled to the tolerance on
+//! their own; short ones (the exporter's gap closers) add no point.
+
+use crate::Options;
+use crate::edges::{EdgeSamples, EdgeTable, sample_chordal, snap_radius, trim_point};
+use tessd_brep::vector::Vector;
+use tessd_brep::{Curve2, Face, Trim};
+
+/// A boundary point: its (u, v) on the face and its 3D position (for points of shared edges,
+/// the edge's sample, exactly).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundaryPoint {
+    /// (u, v) on this face.
+    pub uv: [f64; 2],
+    /// The 3D position.
+    pub p: [f64; 3],
+}
+
+/// A closed polyline (the last point connects back to the first).
+pub type Polyline = Vec<BoundaryPoint>;
+
+/// The loops of `face` as closed polylines, outer first; the `bounds` rectangle for a face
+/// without loops.
+pub fn face_loops(face: &Face, edges: &EdgeTable, options: &Options) -> Vec<Polyline> {
+    if face.loops.is_empty() {
+        let [u0, u1, v0, v1] = face.bounds;
+        let corners = [[u0, v0], [u1, v0], [u1, v1], [u0, v1]];
+        let mut out = Vec::new();
+        for k in 0..4 {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            let len = b.sub(a).norm();
+            let trim = Trim {
+                curve: Curve2::Line {
+                    origin: a,
+                    dir: b.sub(a).scale(1.0 / len),
+                },
+                range: [0.0, len],
+                edge: None,
+            };
+            let pts = free_trim(face, &trim, options);
+            out.extend_from_slice(&pts[..pts.len() - 1]);
+        }
+        return vec![out];
+    }
+    face.loops
+        .iter()
+        .map(|lp| {
+            let mut out: Polyline = Vec::new();
+            for trim in &lp.trims {
+                let pts = match trim.edge.and_then(|id| edges.get(&id)) {
+                    Some(EdgeSamples::Curve { params, points }) => {
+                        shared_trim(face, trim, params, points)
+                    }
+                    Some(EdgeSamples::Point(p)) => degenerate_trim(trim, *p),
+                    None => {
+                        let pts = free_trim(face, trim, options);
+                        let len: f64 = pts.windows(2).map(|w| w[1].p.sub(w[0].p).norm()).sum();
+                        if len < 2.0 * snap_radius(options) {
+                            continue;
+                        }
+                        pts
+                    }
+                };
+                out.extend_from_slice(&pts[..pts.len().saturating_sub(1)]);
+            }
+            dedup(out)
+        })
+        .filter(|p| p.len() >= 3)
+        .collect()
+}
+
+/// Drops consecutive points with equal (u, v) (and the closing duplicate).
+fn dedup(pts: Polyline) -> Polyline {
+    let mut out: Polyline = Vec::with_capacity(pts.len());
+    for q in pts {
+        if out.last().is_none_or(|l| l.uv != q.uv) {
+            out.push(q);
+        }
+    }
+    while out.len() > 1 && out.first().map(|f| f.uv) == out.last().map(|l| l.uv) {
+        out.pop();
+    }
+    out
+}
+
+/// A trim without a shared edge, sampled on its own along S(c(t)).
+fn free_trim(face: &Face, trim: &Trim, options: &Options) -> Vec<BoundaryPoint> {
+    let [t0, t1] = trim.range;
+    let f = |t: f64| trim_point(face, &trim.curve, t);
+    let min = trim.curve.segments(t0, t1).max(1);
+    sample_chordal(&f, t0, t1, min, options.tolerance, options.angle)
+        .into_iter()
+        .map(|t| {
+            let uv = trim.curve.point(t);
+            BoundaryPoint {
+                uv,
+                p: face.surface.point(uv[0], uv[1]),
+            }
+        })
+        .collect()
+}
+
+/// A trim on a degenerate edge: (u, v) samples along the trim (enough for well-shaped
+/// triangles in (u, v)), every one at the edge's single point.
+fn degenerate_trim(trim: &Trim, p: [f64; 3]) -> Vec<BoundaryPoint> {
+    let [t0, t1] = trim.range;
+    let n = trim.curve.segments(t0, t1).max(16);
+    (0..=n)
+        .map(|k| {
+            let t = if k == n {
+                t1
+            } else {
+                t0 + (t1 - t0) * k as f64 / n as f64
+            };
+            BoundaryPoint {
+                uv: trim.curve.point(t),
+                p,
+            }
+        })
+        .collect()
+}
+
+/// A trim on a shared edge: the edge's samples in the trim's walking order, each with its
+/// (u, v) on this face.
+fn shared_trim(
+    face: &Face,
+    trim: &Trim,
+    params: &[f64],
+    points: &[[f64; 3]],
+) -> Vec<BoundaryPoint> {
+    let [t0, t1] = trim.range;
+    let (e0, e1) = (params[0], params[params.len() - 1]);
+    let span = (e1 - e0).abs().max((t1 - t0).abs());
+    let same = ((t0.min(t1) - e0.min(e1)).abs() < 1e-9 * span)
+        && ((t0.max(t1) - e0.max(e1)).abs() < 1e-9 * span);
+    // Whether the trim walks the edge in its own direction: by the ranges when the pcurve
+    // shares the edge's parameter, else by which end (or, for a closed edge, which way from
+    // its start) the trim's surface points follow.
+    let forward = if same {
+        (t1 - t0) * (e1 - e0) > 0.0
+    } else {
+        let last = points.len() - 1;
+        let start = trim_point(face, &trim.curve, t0);
+        let (d0, d1) = (start.sub(points[0]).norm(), start.sub(points[last]).norm());
+        if (d0 - d1).abs() > 1e-9 * (d0 + d1) && points[0] != points[last] {
+            d0 < d1
+        } else {
+            let near = trim_point(face, &trim.curve, t0 + 0.01 * (t1 - t0));
+            let a = points[1.min(last)];
+            let b = points[last.saturating_sub(1)];
+            near.sub(a).norm() <= near.sub(b).norm()
+        }
+    };
+    let order: Vec<usize> = if forward {
+        (0..params.len()).collect()
+    } else {
+        (0..params.len()).rev().collect()
+    };
+    let n = order.len();
+    order
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| {
+            let t = if k == 0 {
+                t0
+            } else if k + 1 == n {
+                t1
+            } else if same {
+                params[i]
+            } else {
+                let guess = t0 + (t1 - t0) * (params[i] - e0) / (e1 - e0);
+                let guess = if forward {
+                    guess
+                } else {
+                    t0 + (t1 - t0) * (e1 - params[i]) / (e1 - e0)
+                };
+                project(face, &trim.curve, points[i], guess, t0, t1)
+            };
+            BoundaryPoint {
+                uv: trim.curve.point(t),
+                p: points[i],
+            }
+        })
+        .collect()
+}
+
+/// The parameter of the pcurve whose surface point is nearest `p`, from `guess`, within the
+/// trim's range.
+fn project(face: &Face, curve: &Curve2, p: [f64; 3], guess: f64, t0: f64, t1: f64) -> f64 {
+    let (lo, hi) = (t0.min(t1), t0.max(t1));
+    let mut t = guess.clamp(lo, hi);
+    for _ in 0..12 {
+        let (uv, duv) = curve.eval(t);
+        let sp = face.surface.eval(uv[0], uv[1]);
+        let j = sp.du.scale(duv[0]).add(sp.dv.scale(duv[1]));
+        let r = sp.point.sub(p);
+        let jj = j.dot(j);
+        if jj.is_nan() || jj <= 0.0 {
+            break;
+        }
+        let step = r.dot(j) / jj;
+        let next = (t - step).clamp(lo, hi);
+        if (next - t).abs() <= 1e-14 * (hi - lo).max(1.0) {
+            t = next;
+            break;
+        }
+        t = next;
+    }
+    t
+}

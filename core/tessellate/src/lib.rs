@@ -1,0 +1,197 @@
+//! Trimmed tessellation of a B-Rep document (docs/brep-format.md): each face's basis surface
+//! tessellated to a chordal tolerance and an angle, trimmed by its loops, with shared edges
+//! discretised once so that neighbouring faces meet without cracks.
+//!
+//! One step per module: [`edges`] (each shared edge sampled once along its 3D curve),
+//! [`boundary`] (each face's loops as (u, v) polylines reusing those samples), [`interior`]
+//! (a curvature-driven grid of interior points), [`cdt`] (constrained Delaunay triangulation,
+//! trimming and refinement). [`tessellate`] runs them, in parallel over faces, into one
+//! [`Mesh`] with a face group per B-Rep face, named `face<id>`.
+//!
+//! ```
+//! let doc = tessd_brep::Document::from_json(r#"{
+//!     "format": "tessd-brep", "version": 1, "units": "mm",
+//!     "faces": [{"id": 0, "surface": {"type": "plane", "origin": [0, 0, 0],
+//!                "x_dir": [1, 0, 0], "y_dir": [0, 1, 0]}, "bounds": [0, 1, 0, 1]}]
+//! }"#).unwrap();
+//! let out = tessd_tessellate::tessellate(&doc, &tessd_tessellate::Options::new(0.01)).unwrap();
+//! assert_eq!(out.mesh.group_names, ["face0"]);
+//! assert!(out.stats.triangles >= 2);
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod boundary;
+pub mod cdt;
+pub mod edges;
+pub mod interior;
+
+use std::time::Instant;
+use tessd_brep::{Document, ValidationError};
+use tessd_mesh::Mesh;
+
+/// Tessellation settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// The largest distance between the mesh and the surface (chordal error), world units.
+    pub tolerance: f64,
+    /// The largest turn, in radians, between neighbouring samples' chords, and between a
+    /// triangle's normal and the surface's.
+    pub angle: f64,
+}
+
+impl Options {
+    /// The default angle (0.5 rad, OCP's default angular deflection).
+    pub const DEFAULT_ANGLE: f64 = 0.5;
+
+    /// Options with `tolerance` and the default angle.
+    pub fn new(tolerance: f64) -> Options {
+        Options {
+            tolerance,
+            angle: Options::DEFAULT_ANGLE,
+        }
+    }
+}
+
+/// Why a document cannot be tessellated.
+#[derive(Debug)]
+pub enum TessellateError {
+    /// The document does not validate.
+    Invalid(ValidationError),
+    /// A tolerance or angle that is not a positive finite number.
+    Options(String),
+}
+
+impl std::fmt::Display for TessellateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TessellateError::Invalid(e) => write!(f, "{e}"),
+            TessellateError::Options(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for TessellateError {}
+
+/// Counts and timings of one tessellation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Faces of the document.
+    pub faces: usize,
+    /// Faces that produced no triangle.
+    pub empty_faces: Vec<u64>,
+    /// Triangles of the mesh.
+    pub triangles: usize,
+    /// Vertices of the mesh (per face: edge vertices appear once per face using them).
+    pub vertices: usize,
+    /// Shared edges discretised.
+    pub edges: usize,
+    /// Points inserted by refinement.
+    pub refined_points: usize,
+    /// Wall time, milliseconds.
+    pub time_ms: f64,
+}
+
+/// A tessellation: the mesh and its stats.
+#[derive(Clone, Debug)]
+pub struct Tessellation {
+    /// Triangles, a face group per B-Rep face (in document order), named `face<id>`.
+    pub mesh: Mesh,
+    /// The (u, v) of each mesh vertex on its face's surface (parallel to `mesh.positions`).
+    pub uvs: Vec<[f64; 2]>,
+    /// Counts and timings.
+    pub stats: Stats,
+}
+
+/// Tessellates every face of `doc`.
+///
+/// # Errors
+/// [`TessellateError::Options`] for a tolerance or angle that is not positive and finite,
+/// [`TessellateError::Invalid`] for a document that does not validate.
+pub fn tessellate(doc: &Document, options: &Options) -> Result<Tessellation, TessellateError> {
+    tessellate_with_progress(doc, options, &|_, _| {})
+}
+
+/// [`tessellate`], calling `progress(done, total)` as faces complete (from any thread).
+///
+/// # Errors
+/// As [`tessellate`].
+pub fn tessellate_with_progress(
+    doc: &Document,
+    options: &Options,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Tessellation, TessellateError> {
+    if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
+        return Err(TessellateError::Options(format!(
+            "the tolerance must be a positive number, got {}",
+            options.tolerance
+        )));
+    }
+    if !(options.angle.is_finite() && options.angle > 0.0) {
+        return Err(TessellateError::Options(format!(
+            "the angle must be a positive number of radians, got {}",
+            options.angle
+        )));
+    }
+    doc.validate().map_err(TessellateError::Invalid)?;
+    let start = Instant::now();
+    let edges = edges::discretise(doc, options);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let total = doc.faces.len();
+    let one = |face: &tessd_brep::Face| {
+        let loops = boundary::face_loops(face, &edges, options);
+        let b = interior::uv_box(&loops);
+        let scale = interior::metric_scale(face, b);
+        let points = interior::grid(face, &loops, options);
+        let t = cdt::triangulate(face, &loops, &points, scale, options);
+        let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress(n, total);
+        t
+    };
+    #[cfg(feature = "parallel")]
+    let faces: Vec<cdt::FaceTriangles> = {
+        use rayon::prelude::*;
+        doc.faces.par_iter().map(one).collect()
+    };
+    #[cfg(not(feature = "parallel"))]
+    let faces: Vec<cdt::FaceTriangles> = doc.faces.iter().map(one).collect();
+
+    let mut mesh = Mesh::default();
+    let mut uvs = Vec::new();
+    let mut stats = Stats {
+        faces: total,
+        edges: edges.len(),
+        ..Stats::default()
+    };
+    for (g, (face, t)) in doc.faces.iter().zip(&faces).enumerate() {
+        mesh.group_names.push(format!("face{}", face.id));
+        stats.refined_points += t.refined;
+        let base = mesh.positions.len() as u32;
+        mesh.positions
+            .extend(t.points.iter().map(|p| p.map(|c| c as f32)));
+        uvs.extend_from_slice(&t.uvs);
+        let mut count = 0;
+        for tri in &t.triangles {
+            let ps = tri.map(|i| mesh.positions[(base + i) as usize]);
+            // Triangles collapsed in 3D (at a pole, along a degenerate edge) are dropped.
+            if ps[0] == ps[1] || ps[1] == ps[2] || ps[2] == ps[0] {
+                continue;
+            }
+            let corners = if face.reversed {
+                [tri[0], tri[2], tri[1]]
+            } else {
+                *tri
+            };
+            mesh.push_face(&corners.map(|i| base + i));
+            mesh.face_groups.push(g as u32);
+            count += 1;
+        }
+        if count == 0 {
+            stats.empty_faces.push(face.id);
+        }
+    }
+    stats.triangles = mesh.face_count();
+    stats.vertices = mesh.vertex_count();
+    stats.time_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok(Tessellation { mesh, uvs, stats })
+}

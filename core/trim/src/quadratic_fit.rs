@@ -1,0 +1,355 @@
+//! Sampling a trim curve and fitting a quadratic B-spline to the samples by least squares
+//! (paper 000, section 3.1: "we discretise each input curve and fit a uniform degree-2
+//! B-spline"). The end points are interpolated so loops stay closed, and the end tangents
+//! follow the input curve's, so that where two input curves meet with C1 continuity, so do
+//! their approximations.
+
+use crate::bezier::{P2, Quadratic, dist};
+use tessd_brep::Trim;
+
+/// Points of a trim at parameters `s ∈ [0, 1]` along its range (`t = t0 + s (t1 − t0)`, so a
+/// reversed range walks the curve backwards), with the end derivatives in s.
+#[derive(Clone, Debug)]
+pub struct Samples {
+    /// The parameters, increasing from 0 to 1.
+    pub params: Vec<f64>,
+    /// The points C(t(s)).
+    pub points: Vec<P2>,
+    /// dC/ds at s = 0.
+    pub start_tangent: P2,
+    /// dC/ds at s = 1.
+    pub end_tangent: P2,
+}
+
+impl Samples {
+    /// `count + 1` evenly spaced samples of `trim` (count ≥ 1).
+    pub fn of(trim: &Trim, count: usize) -> Samples {
+        let [t0, t1] = trim.range;
+        let count = count.max(1);
+        let params: Vec<f64> = (0..=count).map(|i| i as f64 / count as f64).collect();
+        let points = params
+            .iter()
+            .map(|&s| trim.curve.point(t0 + s * (t1 - t0)))
+            .collect();
+        let d = |t: f64| {
+            let (_, d) = trim.curve.eval(t);
+            [d[0] * (t1 - t0), d[1] * (t1 - t0)]
+        };
+        Samples {
+            params,
+            points,
+            start_tangent: d(t0),
+            end_tangent: d(t1),
+        }
+    }
+
+    /// Whether every sample is finite.
+    pub fn is_finite(&self) -> bool {
+        self.points.iter().flatten().all(|c| c.is_finite())
+    }
+}
+
+/// A clamped quadratic B-spline on [0, 1] with simple interior knots: breakpoints
+/// `0 = b0 < b1 < … < bL = 1` and `L + 2` poles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuadSpline {
+    /// The breakpoints, from 0 to 1.
+    pub breaks: Vec<f64>,
+    /// The control points.
+    pub poles: Vec<P2>,
+}
+
+impl QuadSpline {
+    /// The full knot vector `[0, 0, 0, b1, …, b(L−1), 1, 1, 1]`.
+    pub fn knots(&self) -> Vec<f64> {
+        knot_vector(&self.breaks)
+    }
+
+    /// The spline at `s`.
+    pub fn point(&self, s: f64) -> P2 {
+        let knots = self.knots();
+        let (j, n) = basis(&knots, self.poles.len(), s);
+        let mut p = [0.0; 2];
+        for (k, w) in n.iter().enumerate() {
+            let q = self.poles[j - 2 + k];
+            p[0] += w * q[0];
+            p[1] += w * q[1];
+        }
+        p
+    }
+
+    /// The Bézier pieces, one per knot span (section 3.1, "decomposed into connected quadratic
+    /// Bézier curves"): the middle control point of span i is pole i + 1, and the junction at
+    /// breakpoint i divides poles i, i + 1 in the ratio of the neighbouring span lengths,
+    /// which is where the C1 spline's two pieces meet.
+    pub fn beziers(&self) -> Vec<Quadratic> {
+        let l = self.breaks.len() - 1;
+        let h: Vec<f64> = self.breaks.windows(2).map(|w| w[1] - w[0]).collect();
+        let junction = |i: usize| -> P2 {
+            if i == 0 {
+                return self.poles[0];
+            }
+            if i == l {
+                return self.poles[l + 1];
+            }
+            let (a, b) = (self.poles[i], self.poles[i + 1]);
+            let w = h[i - 1] / (h[i - 1] + h[i]);
+            [a[0] + (b[0] - a[0]) * w, a[1] + (b[1] - a[1]) * w]
+        };
+        (0..l)
+            .map(|i| Quadratic::new(junction(i), self.poles[i + 1], junction(i + 1)))
+            .collect()
+    }
+}
+
+/// `[0, 0, 0, b1, …, b(L−1), 1, 1, 1]`.
+pub fn knot_vector(breaks: &[f64]) -> Vec<f64> {
+    let mut k = vec![0.0, 0.0];
+    k.extend_from_slice(breaks);
+    k.push(1.0);
+    k.push(1.0);
+    k
+}
+
+/// The span j (poles j−2 ..= j are non-zero) and the three non-zero quadratic B-spline basis
+/// functions at `s` (Cox–de Boor).
+pub fn basis(knots: &[f64], poles: usize, s: f64) -> (usize, [f64; 3]) {
+    // Largest j in [2, poles − 1] with knots[j] ≤ s.
+    let (mut lo, mut hi) = (2, poles - 1);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if knots[mid] <= s {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    let j = lo;
+    let mut n = [1.0, 0.0, 0.0];
+    let mut left = [0.0; 3];
+    let mut right = [0.0; 3];
+    for d in 1..=2 {
+        left[d] = s - knots[j + 1 - d];
+        right[d] = knots[j + d] - s;
+        let mut saved = 0.0;
+        for r in 0..d {
+            let den = right[r + 1] + left[d - r];
+            let temp = if den != 0.0 { n[r] / den } else { 0.0 };
+            n[r] = saved + right[r + 1] * temp;
+            saved = left[d - r] * temp;
+        }
+        n[d] = saved;
+    }
+    (j, n)
+}
+
+/// Evenly spaced breakpoints for `spans` spans (the uniform B-spline).
+pub fn uniform_breaks(spans: usize) -> Vec<f64> {
+    (0..=spans).map(|i| i as f64 / spans as f64).collect()
+}
+
+/// The least-squares quadratic B-spline on `breaks` through the first and last samples,
+/// then with its second and last-but-one poles moved onto the input's end tangents (C1
+/// across trims where the input is C1). A banded (width 2) Cholesky solves the normal
+/// equations.
+pub fn fit(samples: &Samples, breaks: &[f64]) -> QuadSpline {
+    let knots = knot_vector(breaks);
+    let n = breaks.len() + 1;
+    let first = samples.points[0];
+    let last = *samples.points.last().expect("samples");
+    let mut poles = vec![first; n];
+    poles[n - 1] = last;
+    let unknowns = n - 2;
+    if unknowns > 0 {
+        // Band storage: a[i][k] = A[i][i − 2 + k], k = 0..=2 (lower part).
+        let mut a = vec![[0.0f64; 3]; unknowns];
+        let mut rhs = vec![[0.0f64; 2]; unknowns];
+        for (&s, &p) in samples.params.iter().zip(&samples.points) {
+            let (j, w) = basis(&knots, n, s);
+            let mut r = p;
+            for (k, &wk) in w.iter().enumerate() {
+                let idx = j - 2 + k;
+                if idx == 0 || idx == n - 1 {
+                    r[0] -= wk * poles[idx][0];
+                    r[1] -= wk * poles[idx][1];
+                }
+            }
+            for (k, &wk) in w.iter().enumerate() {
+                let idx = j - 2 + k;
+                if idx == 0 || idx == n - 1 {
+                    continue;
+                }
+                let row = idx - 1;
+                rhs[row][0] += wk * r[0];
+                rhs[row][1] += wk * r[1];
+                for (l, &wl) in w.iter().enumerate().take(k + 1) {
+                    let col_idx = j - 2 + l;
+                    if col_idx == 0 || col_idx == n - 1 {
+                        continue;
+                    }
+                    let col = col_idx - 1;
+                    a[row][2 + col - row] += wk * wl;
+                }
+            }
+        }
+        let trace: f64 = a.iter().map(|r| r[2]).sum::<f64>() / unknowns as f64;
+        for r in &mut a {
+            r[2] += 1e-12 * trace.max(1e-300);
+        }
+        let x = band_solve(&mut a, &rhs);
+        poles[1..(unknowns + 1)].copy_from_slice(&x);
+    }
+    let mut spline = QuadSpline {
+        breaks: breaks.to_vec(),
+        poles,
+    };
+    follow_end_tangents(&mut spline, samples.start_tangent, samples.end_tangent);
+    spline
+}
+
+/// Cholesky of a symmetric positive definite band matrix (half width 2, lower band stored as
+/// `a[i][k] = A[i][i−2+k]`), then the two triangular solves, for two right-hand sides.
+fn band_solve(a: &mut [[f64; 3]], rhs: &[[f64; 2]]) -> Vec<P2> {
+    let n = a.len();
+    for i in 0..n {
+        for k in 0..3 {
+            let j = i + k;
+            if j < 2 {
+                continue;
+            }
+            let j = j - 2; // column
+            let mut sum = a[i][k];
+            // Σ over c in max(i,j)-2 ..< j of L[i][c] L[j][c]
+            let c0 = i.saturating_sub(2);
+            for c in c0..j {
+                let lic = a[i][c + 2 - i];
+                let ljc = a[j][c + 2 - j];
+                sum -= lic * ljc;
+            }
+            if j == i {
+                a[i][2] = sum.max(1e-300).sqrt();
+            } else {
+                a[i][k] = sum / a[j][2];
+            }
+        }
+    }
+    let mut y = vec![[0.0; 2]; n];
+    for i in 0..n {
+        let mut s = rhs[i];
+        for c in i.saturating_sub(2)..i {
+            let l = a[i][c + 2 - i];
+            s[0] -= l * y[c][0];
+            s[1] -= l * y[c][1];
+        }
+        y[i] = [s[0] / a[i][2], s[1] / a[i][2]];
+    }
+    let mut x = vec![[0.0; 2]; n];
+    for i in (0..n).rev() {
+        let mut s = y[i];
+        for (r, xr) in x.iter().enumerate().take((i + 3).min(n)).skip(i + 1) {
+            let l = a[r][i + 2 - r];
+            s[0] -= l * xr[0];
+            s[1] -= l * xr[1];
+        }
+        x[i] = [s[0] / a[i][2], s[1] / a[i][2]];
+    }
+    x
+}
+
+fn unit(d: P2) -> Option<P2> {
+    let len = d[0].hypot(d[1]);
+    (len > 0.0 && len.is_finite()).then(|| [d[0] / len, d[1] / len])
+}
+
+/// Moves the second pole onto the start tangent line and the last-but-one onto the end
+/// tangent line (a single span: its middle pole to where the two tangent lines meet), when
+/// that keeps them ahead of / behind the end points.
+pub fn follow_end_tangents(spline: &mut QuadSpline, start: P2, end: P2) {
+    let n = spline.poles.len();
+    let (Some(d0), Some(d1)) = (unit(start), unit(end)) else {
+        return;
+    };
+    let p0 = spline.poles[0];
+    let pn = spline.poles[n - 1];
+    if n == 3 {
+        // p0 + a d0 = pn − b d1
+        let det = d0[0] * (-d1[1]) - (-d1[0]) * d0[1];
+        let r = [pn[0] - p0[0], pn[1] - p0[1]];
+        if det.abs() > 1e-12 {
+            let a = (r[0] * (-d1[1]) - (-d1[0]) * r[1]) / det;
+            let b = (d0[0] * r[1] - d0[1] * r[0]) / det;
+            if a > 0.0 && b > 0.0 {
+                spline.poles[1] = [p0[0] + a * d0[0], p0[1] + a * d0[1]];
+            }
+        }
+        return;
+    }
+    let q = spline.poles[1];
+    let a = (q[0] - p0[0]) * d0[0] + (q[1] - p0[1]) * d0[1];
+    if a > 0.0 {
+        spline.poles[1] = [p0[0] + a * d0[0], p0[1] + a * d0[1]];
+    }
+    let q = spline.poles[n - 2];
+    let b = (pn[0] - q[0]) * d1[0] + (pn[1] - q[1]) * d1[1];
+    if b > 0.0 {
+        spline.poles[n - 2] = [pn[0] - b * d1[0], pn[1] - b * d1[1]];
+    }
+}
+
+/// The largest distance between the spline at the sample parameters and the samples (the
+/// parametric error, an upper bound of the distance between the curves there).
+pub fn max_error(spline: &QuadSpline, samples: &Samples) -> f64 {
+    let knots = spline.knots();
+    let n = spline.poles.len();
+    samples
+        .params
+        .iter()
+        .zip(&samples.points)
+        .map(|(&s, &p)| {
+            let (j, w) = basis(&knots, n, s);
+            let mut q = [0.0; 2];
+            for (k, wk) in w.iter().enumerate() {
+                let c = spline.poles[j - 2 + k];
+                q[0] += wk * c[0];
+                q[1] += wk * c[1];
+            }
+            dist(p, q)
+        })
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn basis_is_a_partition_of_unity_and_fit_reproduces_a_parabola() {
+        let breaks = uniform_breaks(5);
+        let knots = knot_vector(&breaks);
+        for i in 0..=20 {
+            let (_, n) = basis(&knots, 7, i as f64 / 20.0);
+            assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        }
+        // A parabola is a quadratic spline: the fit is exact.
+        let params: Vec<f64> = (0..=50).map(|i| i as f64 / 50.0).collect();
+        let points: Vec<P2> = params.iter().map(|&s| [s, s * s]).collect();
+        let samples = Samples {
+            params,
+            points,
+            start_tangent: [1.0, 0.0],
+            end_tangent: [1.0, 2.0],
+        };
+        let sp = fit(&samples, &breaks);
+        assert!(
+            max_error(&sp, &samples) < 1e-9,
+            "{}",
+            max_error(&sp, &samples)
+        );
+        for b in sp.beziers() {
+            for i in 0..=4 {
+                let p = b.point(i as f64 / 4.0);
+                assert!((p[1] - p[0] * p[0]).abs() < 1e-9);
+            }
+        }
+    }
+}
