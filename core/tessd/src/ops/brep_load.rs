@@ -25,8 +25,7 @@ pub fn brep_error(e: ValidationError) -> OpError {
 /// (its first error, with the count of the others).
 pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let mut value = document_value(&mut request)?;
-    resolve_array_refs(&mut value, &request.arrays)?;
+    let value = request_document(&mut request)?;
     ctx.progress(0.3, "parse", "")?;
     let doc = Document::from_value(&value).map_err(brep_error)?;
     drop(value);
@@ -54,6 +53,17 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     });
     ctx.progress(1.0, "done", "")?;
     Ok(Response::json(result))
+}
+
+/// The request's document as JSON, its payload array references resolved (shared by the ops
+/// that take a B-Rep document: `brep.load`, `tessellate`).
+///
+/// # Errors
+/// As [`document_value`] and [`resolve_array_refs`].
+pub fn request_document(request: &mut Request) -> Result<Value, OpError> {
+    let mut value = document_value(request)?;
+    resolve_array_refs(&mut value, &request.arrays)?;
+    Ok(value)
 }
 
 /// The document as JSON: the file `input` (resolved against the request's folder) or the

@@ -6,12 +6,12 @@
 //!
 //! Parameters are described in docs/protocol.md ("tessellate").
 
-use super::brep_load::{brep_error, resolve_array_refs};
+use super::brep_load::{brep_error, request_document};
 use super::common::{check_mesh_output, stem, write_mesh_file};
 use super::mesh_arrays::{mesh_to_arrays, output_path};
 use serde_json::{Value, json};
 use tessd_brep::{Document, Units};
-use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::error::OpError;
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_tessellate::{Options, TessellateError};
@@ -75,8 +75,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     if let Some(path) = output.as_deref() {
         check_mesh_output(path)?;
     }
-    let mut value = document_value(&mut request)?;
-    resolve_array_refs(&mut value, &request.arrays)?;
+    let value = request_document(&mut request)?;
     let doc = Document::from_value(&value).map_err(brep_error)?;
     drop(value);
     let tolerance = match request.params.get("tolerance") {
@@ -153,42 +152,10 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     }
 }
 
-/// The document as JSON: the file `input` (resolved against the request's folder) or the
-/// object `brep`, exactly one of them.
-fn document_value(request: &mut Request) -> Result<Value, OpError> {
-    let inline = request.params.remove("brep").filter(|v| !v.is_null());
-    match (request.str_param("input")?, inline) {
-        (Some(_), Some(_)) => Err(OpError::request(
-            "give the document as `input` (a path) or `brep` (inline), not both",
-        )),
-        (Some(path), None) => {
-            let path = request.resolve(path);
-            let text = std::fs::read_to_string(&path).map_err(|e| {
-                OpError::new(
-                    ErrorCode::Io,
-                    format!("cannot read {}: {e}", path.display()),
-                )
-            })?;
-            serde_json::from_str(&text).map_err(|e| {
-                OpError::new(
-                    ErrorCode::InvalidBrep,
-                    format!("{}: not JSON: {e}", path.display()),
-                )
-            })
-        }
-        (None, Some(v @ Value::Object(_))) => Ok(v),
-        (None, Some(_)) => Err(OpError::request(
-            "`brep` must be the document as a JSON object",
-        )),
-        (None, None) => Err(OpError::request(
-            "`input` (a path to a B-Rep JSON document) or `brep` (the document inline) is required",
-        )),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use tessd_ipc::error::ErrorCode;
 
     #[test]
     fn lengths() {
