@@ -58,6 +58,19 @@ def new_object(created, name, mesh, source, collections=None):
     return obj
 
 
+def result_object(created, src, arrays, suffix, replace, swaps):
+    """The result of one source object: with `replace`, `src` itself, its new mesh queued in
+    `swaps` for the caller to swap in once nothing can fail any more; else a new object
+    `<name><suffix>` beside it. Either way with the source's materials and UV map name."""
+    name = src.name if replace else src.name + suffix
+    mesh = created.add(convert.mesh_from_arrays(name, arrays, materials=materials_of(src),
+                                                uv_name=uv_name_of(src)))
+    if replace:
+        swaps.append((src, mesh))
+        return src
+    return new_object(created, name, mesh, src)
+
+
 def select_only(context, objects):
     for o in context.selected_objects:
         o.select_set(False)

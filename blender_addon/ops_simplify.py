@@ -121,15 +121,8 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
             if req.result.get("output_faces", 0) == 0:
                 raise UserError("tessd simplify: nothing is left of %s (%s); choose a finer "
                                 "goal" % (src.name, req.result.get("note") or "every face collapsed"))
-            name = src.name if self.replace else src.name + "_simplified"
-            mesh = created.add(convert.mesh_from_arrays(
-                name, req.arrays_out, materials=common.materials_of(src),
-                uv_name=common.uv_name_of(src)))
-            if self.replace:
-                swaps.append((src, mesh))
-                results.append(src)
-            else:
-                results.append(common.new_object(created, name, mesh, src))
+            results.append(common.result_object(created, src, req.arrays_out, "_simplified",
+                                                self.replace, swaps))
             if self.show_partition and "cells_min" in req.arrays_out:
                 part = created.add(convert.partition_mesh(
                     src.name + "_partition", req.arrays_out["cells_min"], req.arrays_out["cells_max"]))

@@ -161,17 +161,10 @@ class TESSD_OT_subdivide(JobOperator, bpy.types.Operator):
         caches = {r.object_name: r.cache for r in requests if getattr(r, "cache", None)}
         for req in (r for r in requests if not getattr(r, "cache", None)):
             src = common.get_object(req.object_name)
-            name = src.name if self.replace else src.name + "_subdiv"
-            mesh = created.add(convert.mesh_from_arrays(
-                name, req.arrays_out, materials=common.materials_of(src),
-                uv_name=common.uv_name_of(src)))
-            if self.replace:
-                swaps.append((src, mesh))
-                results.append(src)
-                continue
-            obj = common.new_object(created, name, mesh, src)
+            obj = common.result_object(created, src, req.arrays_out, "_subdiv", self.replace,
+                                       swaps)
             results.append(obj)
-            if src.name in caches:
+            if not self.replace and src.name in caches:
                 self._add_cache(created, obj, caches[src.name], src.name)
         for src, mesh in swaps:
             src.data = mesh
