@@ -182,15 +182,7 @@ pub fn parse_amount(what: &str, v: &Value) -> Result<Amount, OpError> {
                 Some(d) => (d.trim_end(), true),
                 None => (s, false),
             };
-            // Rust also parses "inf" and "NaN": only plain decimal numbers are accepted.
-            let plain = !digits.is_empty()
-                && digits
-                    .chars()
-                    .all(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E'));
-            if !plain {
-                return Err(bad());
-            }
-            (digits.parse::<f64>().map_err(|_| bad())?, percent)
+            (plain_number(digits).ok_or_else(bad)?, percent)
         }
         _ => return Err(bad()),
     };
@@ -212,6 +204,16 @@ pub fn parse_amount(what: &str, v: &Value) -> Result<Amount, OpError> {
     } else {
         Amount::Absolute(x)
     })
+}
+
+/// `text` as a number when it is a plain decimal (digits, sign, point, exponent): Rust's `parse`
+/// also accepts `"inf"` and `"NaN"`, which no parameter wants.
+pub fn plain_number(text: &str) -> Option<f64> {
+    let plain = !text.is_empty()
+        && text
+            .chars()
+            .all(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E'));
+    if plain { text.parse().ok() } else { None }
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 //! Parameters are described in docs/protocol.md ("tessellate").
 
 use super::brep_load::{brep_error, request_document};
-use super::common::{check_mesh_output, stem, write_mesh_file};
+use super::common::{check_mesh_output, plain_number, stem, write_mesh_file};
 use super::mesh_arrays::{mesh_to_arrays, output_path};
 use serde_json::{Value, json};
 use tessd_brep::{Document, Units};
@@ -36,14 +36,7 @@ pub fn parse_length(what: &str, v: &Value, units: Units) -> Result<f64, OpError>
                 .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
                 .unwrap_or(s.len());
             let (digits, unit) = (s[..split].trim(), s[split..].trim());
-            let plain = !digits.is_empty()
-                && digits
-                    .chars()
-                    .all(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E'));
-            if !plain {
-                return Err(bad());
-            }
-            let x: f64 = digits.parse().map_err(|_| bad())?;
+            let x = plain_number(digits).ok_or_else(bad)?;
             let metres = match unit {
                 "" => units.meters_per_unit(),
                 "mm" => Units::Millimetres.meters_per_unit(),
