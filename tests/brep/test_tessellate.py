@@ -74,10 +74,16 @@ def is_closed(doc):
     return bool(curved) and all(uses[e] == 2 for e in curved)
 
 
-# Parts where single faces' mesh areas are still off by more than 0.5 % (0.6 to 7 %: bottle.brep
-# faces 2 and 6, degree-12 B-spline thread flanks; CrankArm face 9; the countersunk screw's face 8;
-# featuretype face 55; freecad_drilling1_body face 46). Known, under investigation: the
-# meshes' vertices are on the surface and their normals agree with it, yet the area differs.
+# Parts where single faces' mesh areas are still off by more than 0.5 % at this tolerance (2e-4 of
+# the part's size) and angle: bottle.brep faces 2 and 4 (-2.8 %, -0.7 %: degree-12 B-spline thread
+# flanks of ~1 mm radius), the countersunk screw's face 8 (-2.1 %), planes with many circular holes
+# in featuretype (-0.64 %) and freecad_drilling1_body (-0.69 %), CrankArm faces 9/10/21/25
+# (+0.83 %). The negative ones are the inscribed mesh's own deficit where the curvature radius is
+# near the tolerance (they converge: bottle face 2 is -0.57 % at 0.01, +0.11 % at 0.001, -0.001 %
+# at 1e-4); the boundary samples turn by up to 2 × angle, which alone costs (2·0.1)²/6 = 0.67 % on
+# a disc. Fixed: fins (slivers flat in (u, v) but upright in 3D along straight pcurves of curved
+# surfaces) that put bottle face 6 at +6.9 %, now +0.8 %. Held to 3 % per face until the rest is
+# fixed, so that such a regression still fails.
 AREA_KNOWN_OFF = {"bottle.brep", "CrankArm.brep", "M6-1x12-countersunk-screw.step",
                   "featuretype.step", "freecad_drilling1_body.brep"}
 
@@ -102,10 +108,9 @@ def test_shared_part_tessellation(daemon, name):
             continue
         rel = abs(mine - theirs) / theirs
         worst = max(worst, rel)
-        # The goal is 0.5 % per face; the parts of AREA_KNOWN_OFF (a known defect: single faces
-        # off by up to 7 %) are held to 10 % per face until it is fixed, so that a regression
-        # still fails; their whole-part area is held to 0.5 % below, as everyone's.
-        limit = 0.10 if name in AREA_KNOWN_OFF else 0.005
+        # The goal is 0.5 % per face; the parts of AREA_KNOWN_OFF (single faces off by up to
+        # 2.8 %) are held to 3 %; their whole-part area is held to 0.5 % below, as everyone's.
+        limit = 0.03 if name in AREA_KNOWN_OFF else 0.005
         assert rel < limit, f"{name}: face {doc['faces'][i]['id']}: area {mine} vs OCP {theirs}"
     assert abs(areas.sum() - total) / total < 0.005
     opened = open_edges(arrays)

@@ -90,7 +90,7 @@ pub fn triangulate(
         if cdt.num_vertices() >= MAX_VERTICES {
             break;
         }
-        let wanted = refinement_points(face, &cdt, &inside, options);
+        let wanted = refinement_points(face, &cdt, &inside, scale, options);
         if wanted.is_empty() {
             break;
         }
@@ -161,8 +161,39 @@ fn classify(cdt: &Cdt) -> Vec<bool> {
     inside
 }
 
+type FaceRef<'a> = spade::handles::FaceHandle<'a, InnerTag, Vertex, (), spade::CdtEdge<()>, ()>;
+
+/// A candidate point closer than this fraction of a constraint edge's length to that edge (in
+/// scaled (u, v)) is not inserted.
+const NEAR: f64 = 0.25;
+
+/// Whether the scaled point `p` lies within [`NEAR`] of one of `f`'s constraint edges. Such a
+/// point is a fin in the making: the edge's samples are fixed (neighbouring faces share them),
+/// so the point cannot split it, and the sliver between them — flat in (u, v), upright in 3D
+/// where the edge is a straight pcurve on a curved surface (a helix on a cylinder) — adds area
+/// that covers no surface (7 % on the thread of OCCT's bottle).
+fn near_constraint(f: &FaceRef<'_>, p: Point2<f64>) -> bool {
+    f.adjacent_edges().iter().any(|e| {
+        if !e.is_constraint_edge() {
+            return false;
+        }
+        let (a, b) = (e.from().position(), e.to().position());
+        let (dx, dy) = (b.x - a.x, b.y - a.y);
+        let len2 = dx * dx + dy * dy;
+        let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / len2).clamp(0.0, 1.0);
+        let (ex, ey) = (a.x + t * dx - p.x, a.y + t * dy - p.y);
+        ex * ex + ey * ey < NEAR * NEAR * len2
+    })
+}
+
 /// The (u, v) points that the inside triangles want inserted.
-fn refinement_points(face: &Face, cdt: &Cdt, inside: &[bool], options: &Options) -> Vec<[f64; 2]> {
+fn refinement_points(
+    face: &Face,
+    cdt: &Cdt,
+    inside: &[bool],
+    scale: [f64; 2],
+    options: &Options,
+) -> Vec<[f64; 2]> {
     let mut out = Vec::new();
     let tol = options.tolerance;
     for f in cdt.inner_faces() {
@@ -170,6 +201,7 @@ fn refinement_points(face: &Face, cdt: &Cdt, inside: &[bool], options: &Options)
             continue;
         }
         let [a, b, c] = f.vertices().map(|v| *v.data());
+        let scaled = |uv: [f64; 2]| Point2::new(uv[0] * scale[0], uv[1] * scale[1]);
         let cuv = a.uv.add(b.uv).add(c.uv).scale(1.0 / 3.0);
         let cp = a.p.add(b.p).add(c.p).scale(1.0 / 3.0);
         let sp = face.surface.eval(cuv[0], cuv[1]);
@@ -192,7 +224,9 @@ fn refinement_points(face: &Face, cdt: &Cdt, inside: &[bool], options: &Options)
             want = cosang.acos() > options.angle && edge_max > 4.0 * tol;
         }
         if want {
-            out.push(cuv);
+            if !near_constraint(&f, scaled(cuv)) {
+                out.push(cuv);
+            }
             continue;
         }
         for e in f.adjacent_edges() {
@@ -207,7 +241,7 @@ fn refinement_points(face: &Face, cdt: &Cdt, inside: &[bool], options: &Options)
             let muv = p.uv.add(q.uv).scale(0.5);
             let mp = p.p.add(q.p).scale(0.5);
             let s = face.surface.point(muv[0], muv[1]);
-            if s.is_finite() && s.sub(mp).norm() > tol {
+            if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(&f, scaled(muv)) {
                 out.push(muv);
             }
         }

@@ -13,6 +13,7 @@ pub mod mesh_stats;
 pub mod simplify;
 pub mod subdivide;
 pub mod tessellate;
+pub mod trim_classify;
 
 use tessd_ipc::registry::Registry;
 
@@ -27,6 +28,7 @@ pub fn registry() -> Registry {
         .register("subdivide", subdivide::run)
         .register("brep.load", brep_load::run)
         .register("tessellate", tessellate::run)
+        .register("trim.classify", trim_classify::run)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [
