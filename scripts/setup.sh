@@ -8,16 +8,21 @@ cd "$(dirname "$0")/.."
 PY=${PYTHON:-python3.11}
 command -v "$PY" >/dev/null || PY=python3
 
+# Installs those of the given Debian packages that are missing (as root, or through sudo).
+apt_install() {
+  local missing=() p
+  for p in "$@"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+  if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup: installing ${missing[*]}"
+    local SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
+}
+
 # System packages the tests need (none are needed by the build itself yet).
 APT_PACKAGES=(mesa-vulkan-drivers libvulkan1)
-missing=()
-for p in "${APT_PACKAGES[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}"
-  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}"
-fi
+apt_install "${APT_PACKAGES[@]}"
 
 # Python venvs, pinned; each is rebuilt only when its requirements file changes.
 #   .venv        tests: usd-core, numpy, pytest            (python/requirements-test.txt)
@@ -39,10 +44,15 @@ make_venv() {
   fi
 }
 make_venv .venv python/requirements-test.txt
-# `setup.sh --demo` skips the peer tools and the CAD venv (the demo needs none of them).
+# `setup.sh --demo` skips the peer tools, the CAD venv and FreeCAD (the demo needs none of them).
 if [ "${1:-}" != "--demo" ]; then
   make_venv .venv-bench bench/requirements-bench.txt
   make_venv .venv-cad python/requirements-cad.txt
+  # FreeCAD 0.20's Python modules (FreeCAD.so, Part.so in /usr/lib/freecad-python3/lib; not the
+  # GUI) for the FreeCAD exporter's tests (tests/brep_freecad), which the system python3 they
+  # are built for runs, with its pytest and numpy.
+  FREECAD_APT_PACKAGES=(libfreecad-python3-0.20 python3-pytest python3-numpy)
+  apt_install "${FREECAD_APT_PACKAGES[@]}"
 fi
 
 echo "setup: building tessd (release)"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine (scripts/setup.sh) and runs every test: Rust (cargo test) and Python
-# (pytest against the real daemon, real usd-core; the B-Rep exporter against real OCP).
+# (pytest against the real daemon, real usd-core; the B-Rep exporters against real OCP and FreeCAD).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -9,8 +9,11 @@ export TESSD_SHARED_DATA="${TESSD_SHARED_DATA:-$PWD/../shared/data}"
 echo "== cargo test"
 cargo test --workspace --release
 echo "== pytest (daemon, USD, demo, simplification)"
-.venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep
+.venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
+  --ignore=tests/brep_freecad
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
 echo "== pytest (B-Rep export on real OpenCASCADE: cadquery / OCP 7.9)"
 .venv-cad/bin/python -m pytest tests/brep -q -p no:cacheprovider
+echo "== pytest (B-Rep export from FreeCAD 0.20, system python)"
+PYTHONPATH=python:tests /usr/bin/python3 -m pytest tests/brep_freecad -q -p no:cacheprovider

@@ -2,29 +2,47 @@
 
     from tessd.brep import export_shape
     doc = export_shape(cadquery_or_build123d_or_OCP_shape, units="mm", source="part")
+    doc = export_shape(freecad_part_shape)  # inside FreeCAD (or its Python modules)
     json.dump(doc, f)
 
 or from the command line: `python -m tessd.brep export PART.step OUT.json [--units mm]`
-(STEP, IGES, OpenCASCADE .brep). Needs OCP (cadquery-ocp; the CAD venv `.venv-cad`); OCP is
-imported only when something is exported, so `import tessd.brep` works without it.
+(STEP, IGES, OpenCASCADE .brep). OCP shapes need OCP (cadquery-ocp; the CAD venv `.venv-cad`),
+FreeCAD shapes go through FreeCAD's own Part API (freecad.py); either is imported only when
+something is exported, so `import tessd.brep` works without them.
 """
 
 from __future__ import annotations
 
+import sys
 from typing import Any, Dict, Optional
 
-FORMAT = "tessd-brep"
-VERSION = 1
+from .document import FORMAT, VERSION
+
+
+def _is_freecad(shape: Any) -> bool:
+    """A FreeCAD `Part` object (Part.Shape, Part.Solid, ...) or a document object with a
+    `Part.Shape` (its type's module says so: nothing of FreeCAD is imported to ask)."""
+    def from_part(obj: Any) -> bool:
+        mod = type(obj).__module__ or ""
+        return mod == "Part" or mod.startswith("Part.")
+
+    return from_part(shape) or ("Part" in sys.modules and from_part(getattr(shape, "Shape", None)))
 
 
 def export_shape(shape: Any, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
     """The format's document (a JSON-ready dict) for `shape`: an OCP `TopoDS_Shape`, a cadquery
-    or build123d shape (anything with a `.wrapped` `TopoDS_Shape`) or a cadquery `Workplane`.
+    or build123d shape (anything with a `.wrapped` `TopoDS_Shape`), a cadquery `Workplane`, or
+    a FreeCAD `Part.Shape` (or document object; FreeCAD's millimetres are scaled to `units`).
     Every face of the shape is exported (solids, open shells, loose faces alike)."""
-    mod = type(shape).__module__ or ""
-    if mod == "Part" or mod.startswith("Part."):
-        raise NotImplementedError("FreeCAD Part.Shape export is not implemented yet")
-    from . import ocp
+    if _is_freecad(shape):
+        from . import freecad
+
+        return freecad.export_shape(shape, units=units, source=source)
+    try:
+        from . import ocp
+    except ImportError as e:
+        raise TypeError(f"not a FreeCAD Part.Shape ({type(shape).__name__}), and OCP, needed for "
+                        f"OCP / cadquery / build123d shapes, is not importable: {e}") from e
 
     return ocp.export_topods(ocp.to_topods(shape), units=units, source=source)
 

@@ -20,6 +20,9 @@ How the OCP model maps onto the format:
   mirrored about u = π (exact: lines, circles, ellipses and B-splines mirror into their own kind
   with the same parameter), its loops are re-reversed and `reversed` flips (the mirrored
   parametrisation has the opposite ∂S/∂u × ∂S/∂v). S(2π - u, v) is then OCP's S(u, v) exactly.
+
+What needs no OCP (the loops' assembly from the trims, bounds, gap bridges, the document) is in
+document.py, shared with freecad.py (FreeCAD's Part API: the same walk, the same document).
 """
 
 from __future__ import annotations
@@ -77,21 +80,28 @@ from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
-FORMAT = "tessd-brep"
-VERSION = 1
-UNITS = ("mm", "cm", "m", "in")
+from .document import (  # FORMAT, VERSION, UNITS, ExportError: also this module's names
+    FORMAT,  # noqa: F401
+    UNITS,  # noqa: F401
+    VERSION,  # noqa: F401
+    ExportError,
+    Trim,
+    check_units,
+    edge_json,
+    face_json,
+    knot_span_range,
+    new_document,
+    note_edge_face,
+    outer_first,
+    same_parameter,
+)
 
-TWO_PI = 2.0 * math.pi
 # The mirror that turns OCP's u into 2π - u (the axis u = π).
 _MIRROR_U = gp_Ax2d(gp_Pnt2d(math.pi, 0.0), gp_Dir2d(0.0, 1.0))
 # Approximation tolerance (absolute, in the curve's units) for curves whose exact B-spline would
 # change the parameter (hyperbolas) or that have none (offset curves): they are approximated on
 # their own parameter instead.
 _APPROX_TOL = 1e-9
-# Gaps between consecutive trims above this fraction of the bounds' size get a bridging segment.
-_GAP_BRIDGE = 1e-8
-# Samples per trim taken to make sure `bounds` holds every trim (see _face_bounds).
-_BOUNDS_SAMPLES = 16
 
 
 def _static(cls: Any, name: str) -> Any:
@@ -114,10 +124,6 @@ _outer_wire = _static(BRepTools, "OuterWire")
 _curve2d_to_bspline = _static(Geom2dConvert, "CurveToBSplineCurve")
 _curve_to_bspline = _static(GeomConvert, "CurveToBSplineCurve")
 _surface_to_bspline = _static(GeomConvert, "SurfaceToBSplineSurface")
-
-
-class ExportError(ValueError):
-    """A shape the exporter cannot write; the message names the face / edge."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -197,16 +203,14 @@ def _curve_on_range(c: Any, t0: float, t1: float, dim: int) -> Tuple[Any, float,
     exact = _exact_curve(c, dim)
     if exact is not None:
         if isinstance(exact, (Geom_BSplineCurve, Geom2d_BSplineCurve)):
-            lo, hi = exact.FirstParameter(), exact.LastParameter()
-            if exact.IsPeriodic():
-                if t0 >= lo - 1e-12 * (hi - lo) and t1 <= hi + 1e-12 * (hi - lo):
-                    return exact, max(t0, lo), min(t1, hi)
-                # A periodic trim running over the knot span: its non-periodic segment.
-                seg = (_curve_to_bspline if dim == 3 else _curve2d_to_bspline)(
-                    (Geom_TrimmedCurve if dim == 3 else Geom2d_TrimmedCurve)(exact, t0, t1))
-                return seg, seg.FirstParameter(), seg.LastParameter()
-            # OCP ranges may overshoot the knot span by rounding; the format refuses that.
-            return exact, max(t0, lo), min(t1, hi)
+            span = knot_span_range(t0, t1, exact.FirstParameter(), exact.LastParameter(),
+                                   exact.IsPeriodic())
+            if span is not None:
+                return exact, span[0], span[1]
+            # A periodic trim running over the knot span: its non-periodic segment.
+            seg = (_curve_to_bspline if dim == 3 else _curve2d_to_bspline)(
+                (Geom_TrimmedCurve if dim == 3 else Geom2d_TrimmedCurve)(exact, t0, t1))
+            return seg, seg.FirstParameter(), seg.LastParameter()
         return exact, t0, t1
     trimmed = (Geom_TrimmedCurve if dim == 3 else Geom2d_TrimmedCurve)(c, t0, t1)
     try:
@@ -230,15 +234,8 @@ def _curve_on_range(c: Any, t0: float, t1: float, dim: int) -> Tuple[Any, float,
 
 def _same_parameter(c: Any, bs: Any, t0: float, t1: float, tol: float = 1e-12) -> bool:
     """Whether `bs` is `c` on [t0, t1] point for point at the same parameter (sampled)."""
-    if abs(bs.FirstParameter() - t0) > 1e-12 * (1 + abs(t0)) or \
-            abs(bs.LastParameter() - t1) > 1e-12 * (1 + abs(t1)):
-        return False
-    scale = 1.0 + max(abs(x) for x in _xyz_any(c.Value(t0)) + _xyz_any(c.Value(t1)))
-    for k in range(1, 16):
-        t = t0 + (t1 - t0) * k / 16
-        if c.Value(t).Distance(bs.Value(t)) > tol * scale:
-            return False
-    return True
+    return same_parameter(lambda t: _xyz_any(c.Value(t)), lambda t: _xyz_any(bs.Value(t)), t0, t1,
+                          (bs.FirstParameter(), bs.LastParameter()), tol)
 
 
 def _xyz_any(p: Any) -> List[float]:
@@ -348,17 +345,23 @@ def _wire_edges(wire: Any, face: Any) -> List[Any]:
     return chained if len(chained) == len(stored) else stored
 
 
-class _Trim:
-    __slots__ = ("curve", "t0", "t1", "edge")
+class _Pcurve:
+    """An OCP 2D curve as document.Trim wants it."""
 
-    def __init__(self, curve: Any, t0: float, t1: float, edge: Optional[int]) -> None:
-        self.curve, self.t0, self.t1, self.edge = curve, t0, t1, edge
+    __slots__ = ("c",)
+
+    def __init__(self, c: Any) -> None:
+        self.c = c
+
+    def uv(self, t: float) -> Tuple[float, float]:
+        p = self.c.Value(t)
+        return p.X(), p.Y()
 
     def json(self) -> Dict[str, Any]:
-        return {"curve": _curve_json(self.curve, 2), "range": [self.t0, self.t1], "edge": self.edge}
+        return _curve_json(self.c, 2)
 
 
-def _trim(edge: Any, face: Any, mirror: bool, edge_id: Optional[int], where: str) -> _Trim:
+def _trim(edge: Any, face: Any, mirror: bool, edge_id: Optional[int], where: str) -> Trim:
     c = _pcurve_of(edge, face, 0.0, 0.0)  # OCP returns only the curve...
     if c is None:
         raise ExportError(f"{where}: edge {edge_id} has no pcurve on the face")
@@ -368,25 +371,7 @@ def _trim(edge: Any, face: Any, mirror: bool, edge_id: Optional[int], where: str
         c = c.Mirrored(_MIRROR_U)  # same kind, same parameter; u → 2π - u
     if edge.Orientation() == TopAbs_REVERSED:
         first, last = last, first
-    return _Trim(c, first, last, edge_id)
-
-
-def _face_bounds(face: Any, mirror: bool, loops: List[List[_Trim]], where: str) -> List[float]:
-    """OCP's UVBounds, widened (if at all) to hold sampled points of every exported trim."""
-    u0, u1, v0, v1 = _uv_bounds(face)
-    if mirror:
-        u0, u1 = TWO_PI - u1, TWO_PI - u0
-    for loop in loops:
-        for tr in loop:
-            for k in range(_BOUNDS_SAMPLES + 1):
-                p = tr.curve.Value(tr.t0 + (tr.t1 - tr.t0) * k / _BOUNDS_SAMPLES)
-                u, v = p.X(), p.Y()
-                u0, u1, v0, v1 = min(u0, u), max(u1, u), min(v0, v), max(v1, v)
-    b = [u0, u1, v0, v1]
-    if not all(math.isfinite(x) for x in b):
-        raise ExportError(f"{where}: unbounded parameter range {b} (a face without trims on an "
-                          "infinite surface)")
-    return b
+    return Trim(_Pcurve(c), first, last, edge_id)
 
 
 # --------------------------------------------------------------------------------------------
@@ -395,8 +380,7 @@ def _face_bounds(face: Any, mirror: bool, loops: List[List[_Trim]], where: str) 
 
 def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
     """A `tessd-brep` v1 document (a dict ready for `json.dump`) from a `TopoDS_Shape`."""
-    if units not in UNITS:
-        raise ValueError(f"units must be one of {UNITS}, not {units!r}")
+    check_units(units)
     if shape is None or shape.IsNull():
         raise ExportError("empty shape")
     face_map = TopTools_IndexedMapOfShape()
@@ -414,12 +398,7 @@ def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None) -
     for eid in range(1, edge_map.Extent() + 1):
         edges.append(_export_edge(_edge(edge_map.FindKey(eid)), eid, edge_faces.get(eid, [])))
 
-    doc: Dict[str, Any] = {"format": FORMAT, "version": VERSION, "units": units}
-    if source is not None:
-        doc["source"] = source
-    doc["faces"] = faces
-    doc["edges"] = edges
-    return doc
+    return new_document(units, source, faces, edges)
 
 
 def _export_face(face: Any, fid: int, edge_map: Any, edge_faces: Dict[int, List[int]]) -> Dict[str, Any]:
@@ -451,76 +430,22 @@ def _export_face(face: Any, fid: int, edge_map: Any, edge_faces: Dict[int, List[
         return next((i for new, i in renamed if new.IsSame(e)), None)
 
     outer = _outer_wire(work)
-    wires = []
+    explored = []
     exp = TopExp_Explorer(work, TopAbs_WIRE)
     while exp.More():
-        w = _wire(exp.Current())
-        if not outer.IsNull() and w.IsSame(outer):
-            wires.insert(0, w)
-        else:
-            wires.append(w)
+        explored.append(_wire(exp.Current()))
         exp.Next()
+    wires = outer_first(explored, lambda w: not outer.IsNull() and w.IsSame(outer))
 
-    loops: List[List[_Trim]] = []
+    wire_trims: List[List[Trim]] = []
     for li, w in enumerate(wires):
         trims = []
         for e in _wire_edges(w, work):
             eid = edge_id(e)
             trims.append(_trim(e, work, mirror, eid, f"{where} loop {li}"))
-            if eid is not None:
-                lst = edge_faces.setdefault(eid, [])
-                if fid not in lst:
-                    lst.append(fid)
-        if not trims:
-            continue
-        if mirror:  # the mirror turned the loop around: walk it the other way
-            trims = [_Trim(t.curve, t.t1, t.t0, t.edge) for t in reversed(trims)]
-        loops.append(trims)
-
-    # OuterWire compares bounding boxes; where that picks a hole (its box as large as the outer
-    # loop's), the signed areas decide: the outer loop is the counter-clockwise one.
-    if len(loops) > 1 and _signed_area(loops[0]) < 0:
-        ccw = [i for i, lp in enumerate(loops) if _signed_area(lp) > 0]
-        if len(ccw) == 1:
-            loops.insert(0, loops.pop(ccw[0]))
-    bounds = _face_bounds(work, mirror, loops, where)
-    size = math.hypot(bounds[1] - bounds[0], bounds[3] - bounds[2])
-    loops = [_bridge_gaps(loop, size) for loop in loops]
-    return {
-        "id": fid,
-        "reversed": reversed_ != mirror,
-        "surface": surf,
-        "bounds": bounds,
-        "loops": [{"edges": [t.json() for t in loop]} for loop in loops],
-    }
-
-
-def _signed_area(loop: List[_Trim], samples: int = 16) -> float:
-    pts = []
-    for tr in loop:
-        for k in range(samples):
-            p = tr.curve.Value(tr.t0 + (tr.t1 - tr.t0) * k / samples)
-            pts.append((p.X(), p.Y()))
-    return 0.5 * sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(pts, pts[1:] + pts[:1]))
-
-
-def _bridge_gaps(loop: List[_Trim], size: float) -> List[_Trim]:
-    """The loop with a straight (u, v) segment (no edge) across every gap between consecutive
-    trims above `_GAP_BRIDGE` × the bounds' size. Real data has such gaps (pcurves that meet only
-    within the vertex tolerance: up to ~1e-5 of the bounds in the shared data), and the format
-    wants loops closed within 1e-7 of the bounds."""
-    if size <= 0:
-        return loop
-    out: List[_Trim] = []
-    for i, tr in enumerate(loop):
-        out.append(tr)
-        nxt = loop[(i + 1) % len(loop)]
-        a, b = tr.curve.Value(tr.t1), nxt.curve.Value(nxt.t0)
-        gap = a.Distance(b)
-        if gap > _GAP_BRIDGE * size:
-            line = Geom2d_Line(a, gp_Dir2d(b.X() - a.X(), b.Y() - a.Y()))
-            out.append(_Trim(line, 0.0, gap, None))
-    return out
+            note_edge_face(edge_faces, eid, fid)
+        wire_trims.append(trims)
+    return face_json(fid, reversed_, mirror, surf, wire_trims, _uv_bounds(work), where)
 
 
 def _export_edge(edge: Any, eid: int, faces: List[int]) -> Dict[str, Any]:
@@ -531,7 +456,7 @@ def _export_edge(edge: Any, eid: int, faces: List[int]) -> Dict[str, Any]:
         if c is not None:
             c, first, last = _curve_on_range(c, first, last, 3)
             curve = _curve_json(c, 3)
-    return {"id": eid, "curve": curve, "range": [first, last], "faces": faces}
+    return edge_json(eid, curve, first, last, faces)
 
 
 # --------------------------------------------------------------------------------------------
