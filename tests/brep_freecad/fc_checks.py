@@ -19,7 +19,7 @@ import math
 import random
 import time
 from collections import Counter
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import FreeCAD
 import Part
@@ -38,125 +38,103 @@ TRIM_SAMPLES = 8
 TIMINGS: List[Tuple[str, int, int, float, float, Dict[str, Any]]] = []
 
 
-# ------------------------------------------------------------------------------------------
-# vectors
-
-
-def add(a, b):
-    return [x + y for x, y in zip(a, b)]
-
-
-def sub(a, b):
-    return [x - y for x, y in zip(a, b)]
-
-
-def mul(a, k):
-    return [x * k for x in a]
-
-
-def dot(a, b):
-    return sum(x * y for x, y in zip(a, b))
-
-
-def cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def norm(a):
-    return math.sqrt(dot(a, a))
-
-
-def dist(a, b):
-    return norm(sub(a, b))
-
-
 def vec(v: Any) -> List[float]:
     return [v.x, v.y, v.z]
 
 
+def dist(a: Sequence[float], b: Sequence[float]) -> float:
+    return math.dist(a, b)
+
+
 # ------------------------------------------------------------------------------------------
-# the document's own geometry
+# the document's own geometry: each analytic type as a point in its frame's coordinates
+
+
+def _in_frame(origin, x, y, local):
+    """origin + a·x + b·y (+ c·(x × y) in 3D) for local = (a, b[, c])."""
+    if len(origin) == 2:
+        return [origin[i] + local[0] * x[i] + local[1] * y[i] for i in range(2)]
+    o, vx, vy = V(*origin), V(*x), V(*y)
+    return vec(o + vx * local[0] + vy * local[1] + vx.cross(vy) * local[2])
+
+
+_SURFACE_LOCAL = {  # (u, v) → coordinates in the surface's frame, the format's table
+    "plane": lambda s, u, v: (u, v, 0.0),
+    "cylinder": lambda s, u, v: (s["radius"] * math.cos(u), s["radius"] * math.sin(u), v),
+    "cone": lambda s, u, v: ((s["radius"] + v * math.sin(s["semi_angle"])) * math.cos(u),
+                             (s["radius"] + v * math.sin(s["semi_angle"])) * math.sin(u),
+                             v * math.cos(s["semi_angle"])),
+    "sphere": lambda s, u, v: (s["radius"] * math.cos(v) * math.cos(u),
+                               s["radius"] * math.cos(v) * math.sin(u), s["radius"] * math.sin(v)),
+    "torus": lambda s, u, v: ((s["major_radius"] + s["minor_radius"] * math.cos(v)) * math.cos(u),
+                              (s["major_radius"] + s["minor_radius"] * math.cos(v)) * math.sin(u),
+                              s["minor_radius"] * math.sin(v)),
+}
+_CURVE_LOCAL = {  # t → coordinates in the curve's axes (x_dir, y_dir)
+    "circle": lambda c, t: (c["radius"] * math.cos(t), c["radius"] * math.sin(t), 0.0),
+    "ellipse": lambda c, t: (c["major_radius"] * math.cos(t), c["minor_radius"] * math.sin(t), 0.0),
+}
 
 
 class Evaluator:
-    """S(u, v) and C(t) from the document's data alone (B-splines rebuilt in FreeCAD)."""
+    """S(u, v) and C(t) from the document's data alone: the analytic types from the format's
+    formulas, B-splines rebuilt in FreeCAD, revolutions turned by FreeCAD's `Rotation` (which
+    checks the format's sense of rotation: counter-clockwise about `axis_dir`)."""
 
     def __init__(self) -> None:
         self._cache: Dict[int, Any] = {}
 
-    def _bspline_curve(self, c: Dict[str, Any]) -> Any:
-        key = id(c)
+    def _rebuilt(self, d: Dict[str, Any]) -> Any:
+        key = id(d)
         if key not in self._cache:
-            dim = len(c["poles"][0])
-            obj = Part.BSplineCurve() if dim == 3 else Part.Geom2d.BSplineCurve2d()
-            poles = [V(*p) if dim == 3 else V2(*p) for p in c["poles"]]
-            args = [poles, c["mults"], c["knots"], c["periodic"], c["degree"]]
-            if c["weights"] is not None:
-                args.append(c["weights"])
+            if "degree" in d:  # a curve
+                dim = len(d["poles"][0])
+                obj = Part.BSplineCurve() if dim == 3 else Part.Geom2d.BSplineCurve2d()
+                args = [[V(*p) if dim == 3 else V2(*p) for p in d["poles"]], d["mults"],
+                        d["knots"], d["periodic"], d["degree"]]
+            else:
+                obj = Part.BSplineSurface()
+                args = [[[V(*p) for p in row] for row in d["poles"]], d["mults_u"], d["mults_v"],
+                        d["knots_u"], d["knots_v"], d["periodic_u"], d["periodic_v"],
+                        d["degree_u"], d["degree_v"]]
+            if d["weights"] is not None:
+                args.append(d["weights"])
             obj.buildFromPolesMultsKnots(*args)
-            self._cache[key] = (obj, c)  # keep c alive: the key is its id
+            self._cache[key] = (obj, d)  # keep d alive: the key is its id
         return self._cache[key][0]
 
     def curve(self, c: Dict[str, Any], t: float) -> List[float]:
-        ty = c["type"]
-        if ty == "line":
-            return add(c["origin"], mul(c["dir"], t))
-        if ty == "circle":
-            r = c["radius"]
-            return add(c["center"], add(mul(c["x_dir"], r * math.cos(t)), mul(c["y_dir"], r * math.sin(t))))
-        if ty == "ellipse":
-            return add(c["center"], add(mul(c["x_dir"], c["major_radius"] * math.cos(t)),
-                                        mul(c["y_dir"], c["minor_radius"] * math.sin(t))))
-        if ty == "bspline":
-            p = self._bspline_curve(c).value(t)
-            return [p.x, p.y, p.z] if len(c["poles"][0]) == 3 else [p.x, p.y]
-        raise AssertionError(f"unknown curve type {ty}")
+        kind = c["type"]
+        if kind in _CURVE_LOCAL:
+            return _in_frame(c["center"], c["x_dir"], c["y_dir"], _CURVE_LOCAL[kind](c, t))
+        if kind == "line":
+            return [o + t * d for o, d in zip(c["origin"], c["dir"])]
+        assert kind == "bspline", f"unknown curve type {kind}"
+        p = self._rebuilt(c).value(t)
+        return [p.x, p.y, p.z] if len(c["poles"][0]) == 3 else [p.x, p.y]
 
     def surface(self, s: Dict[str, Any], u: float, v: float) -> List[float]:
-        ty = s["type"]
-        if ty in ("plane",) + ANALYTIC_PERIODIC:
-            o, x, y = s["origin"], s["x_dir"], s["y_dir"]
-            z = cross(x, y)
-            radial = add(mul(x, math.cos(u)), mul(y, math.sin(u)))
-            if ty == "plane":
-                return add(o, add(mul(x, u), mul(y, v)))
-            if ty == "cylinder":
-                return add(o, add(mul(radial, s["radius"]), mul(z, v)))
-            if ty == "cone":
-                a = s["semi_angle"]
-                return add(o, add(mul(radial, s["radius"] + v * math.sin(a)), mul(z, v * math.cos(a))))
-            if ty == "sphere":
-                r = s["radius"]
-                return add(o, add(mul(radial, r * math.cos(v)), mul(z, r * math.sin(v))))
-            R, r = s["major_radius"], s["minor_radius"]
-            return add(o, add(mul(radial, R + r * math.cos(v)), mul(z, r * math.sin(v))))
-        if ty == "revolution":
-            p = sub(self.curve(s["curve"], v), s["axis_origin"])
-            k = s["axis_dir"]
-            c, sn = math.cos(u), math.sin(u)  # Rodrigues: rotation by u about k (right hand)
-            rot = add(add(mul(p, c), mul(cross(k, p), sn)), mul(k, dot(k, p) * (1 - c)))
-            return add(s["axis_origin"], rot)
-        if ty == "extrusion":
-            return add(self.curve(s["curve"], u), mul(s["direction"], v))
-        if ty == "bspline":
-            key = id(s)
-            if key not in self._cache:
-                obj = Part.BSplineSurface()
-                args = [[[V(*p) for p in row] for row in s["poles"]], s["mults_u"], s["mults_v"],
-                        s["knots_u"], s["knots_v"], s["periodic_u"], s["periodic_v"],
-                        s["degree_u"], s["degree_v"]]
-                if s["weights"] is not None:
-                    args.append(s["weights"])
-                obj.buildFromPolesMultsKnots(*args)
-                self._cache[key] = (obj, s)
-            return vec(self._cache[key][0].value(u, v))
-        raise AssertionError(f"unknown surface type {ty}")
+        kind = s["type"]
+        if kind in _SURFACE_LOCAL:
+            return _in_frame(s["origin"], s["x_dir"], s["y_dir"], _SURFACE_LOCAL[kind](s, u, v))
+        if kind == "revolution":
+            o = V(*s["axis_origin"])
+            turn = FreeCAD.Rotation(V(*s["axis_dir"]), math.degrees(u))
+            return vec(o + turn.multVec(V(*self.curve(s["curve"], v)) - o))
+        if kind == "extrusion":
+            return vec(V(*self.curve(s["curve"], u)) + V(*s["direction"]) * v)
+        assert kind == "bspline", f"unknown surface type {kind}"
+        return vec(self._rebuilt(s).value(u, v))
 
-    def normal(self, s: Dict[str, Any], u: float, v: float, h: float) -> List[float]:
-        """∂S/∂u × ∂S/∂v by central differences (step h in the parameters)."""
-        du = sub(self.surface(s, u + h, v), self.surface(s, u - h, v))
-        dv = sub(self.surface(s, u, v + h), self.surface(s, u, v - h))
-        return cross(du, dv)
+    def normal(self, s: Dict[str, Any], u: float, v: float, h: float) -> Optional[Any]:
+        """The unit ∂S/∂u × ∂S/∂v by central differences (step h in the parameters), a Vector;
+        None where S is degenerate (a pole, an apex)."""
+        du = V(*self.surface(s, u + h, v)) - V(*self.surface(s, u - h, v))
+        dv = V(*self.surface(s, u, v + h)) - V(*self.surface(s, u, v - h))
+        n = du.cross(dv)
+        if n.Length <= 1e-6 * du.Length * dv.Length:
+            return None
+        return n * (1.0 / n.Length)
 
 
 # ------------------------------------------------------------------------------------------
@@ -180,9 +158,9 @@ def indirect_frame(surface: Any) -> bool:
     v = 0.0
     if isinstance(surface, Part.Cone) and surface.Radius <= 0:
         v = 1.0 if surface.SemiAngle > 0 else -1.0
-    x = sub(vec(surface.value(0.0, v)), vec(surface.value(math.pi, v)))
-    y = sub(vec(surface.value(math.pi / 2, v)), vec(surface.value(3 * math.pi / 2, v)))
-    return dot(cross(x, y), vec(surface.Axis)) < 0
+    x = surface.value(0.0, v) - surface.value(math.pi, v)
+    y = surface.value(math.pi / 2, v) - surface.value(3 * math.pi / 2, v)
+    return x.cross(y).dot(surface.Axis) < 0
 
 
 def expected_type(face: Any) -> str:
@@ -220,7 +198,7 @@ def check_against_freecad(doc: Dict[str, Any], shape: Any, ev: Optional[Evaluato
     assert [f["id"] for f in doc["faces"]] == list(range(1, len(faces) + 1))
     assert [e["id"] for e in doc["edges"]] == list(range(1, len(edges) + 1))
     stats: Dict[str, Any] = {"surface": 0.0, "trim": 0.0, "vertex": 0.0, "mirrored": 0,
-                             "converted": 0, "bridges": 0, "seams": 0}
+                             "converted": 0, "bridges": 0, "seams": 0, "normals": 0}
     for f in doc["faces"]:
         where = f"face {f['id']}"
         face = faces[f["id"] - 1]
@@ -257,9 +235,10 @@ def check_against_freecad(doc: Dict[str, Any], shape: Any, ev: Optional[Evaluato
             if uf is None:
                 continue
             n = ev.normal(s, u, v, 1e-6 * bsize)
-            theirs = vec(face.normalAt(uf, vf))
-            if norm(n) > 1e-12 * size * size and norm(theirs) > 0.5:
-                cos = dot(n, theirs) / norm(n) * (-1 if f["reversed"] else 1)
+            theirs = face.normalAt(uf, vf)  # with the face's orientation
+            if n is not None and theirs.Length > 0.5:
+                cos = n.dot(theirs) * (-1 if f["reversed"] else 1)
+                stats["normals"] += 1
                 assert cos > 0.99, \
                     f"{where}: normal {n} against FreeCAD's {theirs} (reversed {f['reversed']})"
         _check_loops(f, face, edges, s, ev, size, stats, where)

@@ -191,3 +191,20 @@ def test_no_cad_kernel_on_import():
     env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
     r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
+
+
+def test_chaining_in_uv():
+    """Trims whose order does not close in (u, v) (a wire FreeCAD's explorer ordered without
+    the face) are chained from the first by their ends; closed loops stay as they are."""
+    from tessd.brep.document import Line2d, Trim
+    from tessd.brep.freecad import _chained
+
+    corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+    square = []
+    for i, a in enumerate(corners):
+        b = corners[(i + 1) % 4]
+        d = (b[0] - a[0], b[1] - a[1])
+        square.append(Trim(Line2d(a, d), 0.0, 1.0, i + 1))
+    assert _chained(square, math.sqrt(2)) == square
+    shuffled = [square[0], square[2], square[1], square[3]]
+    assert [t.edge for t in _chained(shuffled, math.sqrt(2))] == [1, 2, 3, 4]

@@ -1,6 +1,7 @@
 """The FreeCAD exporter against the OCP one on the same files: every shared STEP / IGES / .brep
 file and every built part (written by FreeCAD as .brep, then read back by both) is exported by
-`.venv-cad/bin/python -m tessd.brep export` (OCP 7.9, a subprocess: the CAD venv's Python) and by
+`.venv-cad/bin/python -m tessd.brep export` (OCP 7.9, a subprocess: the CAD venv's Python; the
+built parts through the CLI's main() in one such process) and by
 python/tessd/brep/freecad.py here (FreeCAD 0.20's OCCT 7.6). The two documents must agree: faces,
 surface type and `reversed` per face, loops and trims per loop (with their edge ids), then every
 number (frames, radii, poles, knots, bounds, trim curves and ranges, edges) within 1e-9 relative
@@ -31,8 +32,7 @@ REL = 1e-9
 
 @pytest.fixture(scope="module")
 def ocp_docs(tmp_path_factory):
-    """name → (the file both exporters read, OCP's document), the OCP exports run two at a time
-    (the machine's cores)."""
+    """name → (the file both exporters read, OCP's document)."""
     if not CAD_PYTHON.exists():
         pytest.skip(f"no CAD venv ({CAD_PYTHON}): scripts/setup.sh makes it")
     d = tmp_path_factory.mktemp("ocp")
@@ -42,15 +42,22 @@ def ocp_docs(tmp_path_factory):
         exported(name)[0].exportBrep(str(inputs[name]))
     env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
 
-    def run(name):
-        out = d / f"{name}.ocp.json"
-        r = subprocess.run([str(CAD_PYTHON), "-m", "tessd.brep", "export", str(inputs[name]), str(out)],
-                           env=env, capture_output=True, text=True, timeout=300)
-        assert r.returncode == 0, f"{name}: OCP export failed: {r.stderr}"
-        return name, (inputs[name], json.loads(out.read_text()))
+    def run(names):
+        """The CLI on each shared file; on the built parts, its main() in one process (one
+        OCP start-up: they are many and small)."""
+        jobs = [[str(inputs[n]), str(d / f"{n}.ocp.json")] for n in names]
+        if len(names) == 1:
+            cmd = [str(CAD_PYTHON), "-m", "tessd.brep", "export", *jobs[0]]
+        else:
+            cmd = [str(CAD_PYTHON), "-c", "import sys; from tessd.brep.__main__ import main; "
+                   f"sys.exit(max(main(['export', *job]) for job in {jobs!r}))"]
+        r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, f"{names}: OCP export failed: {r.stderr}"
+        return [(n, (inputs[n], json.loads((d / f"{n}.ocp.json").read_text()))) for n in names]
 
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        return dict(pool.map(run, CASES))
+    with ThreadPoolExecutor(max_workers=2) as pool:  # the machine's two cores
+        batches = pool.map(run, [sorted(PARTS)] + [[n] for n in FILES])
+        return dict(item for batch in batches for item in batch)
 
 
 def _numbers_agree(a, b, path, worst):
