@@ -35,8 +35,9 @@ use tessd_mesh::Mesh;
 pub struct Options {
     /// The largest distance between the mesh and the surface (chordal error), world units.
     pub tolerance: f64,
-    /// The largest turn, in radians, between neighbouring samples' chords, and between a
-    /// triangle's normal and the surface's.
+    /// The angular deflection in radians, as OCP's BRepMesh means it: the largest angle between
+    /// an edge chord and the curve at its ends (so neighbouring chords turn by up to twice
+    /// this), and between a triangle's normal and the surface's at its centroid.
     pub angle: f64,
 }
 
@@ -141,7 +142,7 @@ pub fn tessellate_with_progress(
     let one = |face: &tessd_brep::Face| {
         let loops = boundary::face_loops(face, &edges, options);
         let b = interior::uv_box(&loops);
-        let scale = interior::metric_scale(face, b);
+        let scale = interior::delaunay_scale(face, b, options);
         let points = interior::grid(face, &loops, options);
         let t = cdt::triangulate(face, &loops, &points, scale, options);
         let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
