@@ -381,6 +381,20 @@ pub fn eval_curve<P: Vector>(
     Some((c, da.sub(c.scale(dw)).scale(1.0 / w)))
 }
 
+/// Whether the poles (and weights) match the knot vectors' pole counts.
+pub fn surface_fits(
+    ku: &KnotVector,
+    kv: &KnotVector,
+    poles: &[Vec<[f64; 3]>],
+    weights: Option<&[Vec<f64>]>,
+) -> bool {
+    poles.len() == ku.pole_count()
+        && poles.iter().all(|row| row.len() == kv.pole_count())
+        && weights.is_none_or(|ws| {
+            ws.len() == poles.len() && ws.iter().all(|row| row.len() == kv.pole_count())
+        })
+}
+
 /// A point of a (rational) tensor-product B-spline surface and its two partial derivatives
 /// `(S, ∂S/∂u, ∂S/∂v)`, or `None` when the poles or weights do not match the knot vectors.
 pub fn eval_surface(
@@ -391,14 +405,19 @@ pub fn eval_surface(
     u: f64,
     v: f64,
 ) -> Option<([f64; 3], [f64; 3], [f64; 3])> {
-    if poles.len() != ku.pole_count() || poles.iter().any(|row| row.len() != kv.pole_count()) {
-        return None;
-    }
-    if let Some(ws) = weights
-        && (ws.len() != poles.len() || ws.iter().any(|row| row.len() != kv.pole_count()))
-    {
-        return None;
-    }
+    surface_fits(ku, kv, poles, weights)
+        .then(|| eval_surface_unchecked(ku, kv, poles, weights, u, v))
+}
+
+/// [`eval_surface`] for poles and weights already checked with [`surface_fits`].
+pub fn eval_surface_unchecked(
+    ku: &KnotVector,
+    kv: &KnotVector,
+    poles: &[Vec<[f64; 3]>],
+    weights: Option<&[Vec<f64>]>,
+    u: f64,
+    v: f64,
+) -> ([f64; 3], [f64; 3], [f64; 3]) {
     let bu = ku.basis(u);
     let bv = kv.basis(v);
     let zero = [0.0; 3];
@@ -406,10 +425,12 @@ pub fn eval_surface(
     let (mut w, mut wu, mut wv) = (0.0, 0.0, 0.0);
     for ku_ in 0..bu.count {
         let i = bu.pole(ku_);
+        let row = &poles[i];
+        let wrow = weights.map(|ws| &ws[i]);
         for kv_ in 0..bv.count {
             let j = bv.pole(kv_);
-            let wij = weights.map_or(1.0, |ws| ws[i][j]);
-            let p = poles[i][j];
+            let wij = wrow.map_or(1.0, |r| r[j]);
+            let p = row[j];
             let n = bu.values[ku_] * bv.values[kv_] * wij;
             let nu = bu.derivs[ku_] * bv.values[kv_] * wij;
             let nv = bu.values[ku_] * bv.derivs[kv_] * wij;
@@ -422,9 +443,9 @@ pub fn eval_surface(
         }
     }
     let s = a.scale(1.0 / w);
-    Some((
+    (
         s,
         au.sub(s.scale(wu)).scale(1.0 / w),
         av.sub(s.scale(wv)).scale(1.0 / w),
-    ))
+    )
 }

@@ -271,6 +271,9 @@ pub struct BSplineSurface {
     /// Whether the surface is periodic in v.
     #[serde(default)]
     pub periodic_v: bool,
+    /// The knot vectors built on first evaluation (not part of the format).
+    #[serde(skip)]
+    pub cache: crate::surface::KnotCache,
 }
 
 /// A curve of the parameter plane (a trim's pcurve).

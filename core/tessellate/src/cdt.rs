@@ -10,6 +10,7 @@ use crate::Options;
 use crate::boundary::Polyline;
 use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{ConstrainedDelaunayTriangulation, HasPosition, Point2, Triangulation};
+use std::collections::HashSet;
 use tessd_brep::Face;
 use tessd_brep::vector::{Vector, cross};
 
@@ -86,11 +87,12 @@ pub fn triangulate(
     }
     let mut refined = 0;
     let mut inside = classify(&cdt);
+    let mut checked = Checked::default();
     for _ in 0..PASSES {
         if cdt.num_vertices() >= MAX_VERTICES {
             break;
         }
-        let wanted = refinement_points(face, &cdt, &inside, scale, options);
+        let wanted = refinement_points(face, &cdt, &inside, scale, options, &mut checked);
         if wanted.is_empty() {
             break;
         }
@@ -186,6 +188,15 @@ fn near_constraint(f: &FaceRef<'_>, p: Point2<f64>) -> bool {
     })
 }
 
+/// Triangles and edges that passed every test, by their vertices: they stand unchanged from
+/// pass to pass unless a point lands in them, so they are not evaluated again (the surface
+/// evaluations of the tests are most of the tessellator's time).
+#[derive(Default)]
+struct Checked {
+    triangles: HashSet<[usize; 3]>,
+    edges: HashSet<(usize, usize)>,
+}
+
 /// The (u, v) points that the inside triangles want inserted.
 fn refinement_points(
     face: &Face,
@@ -193,6 +204,7 @@ fn refinement_points(
     inside: &[bool],
     scale: [f64; 2],
     options: &Options,
+    checked: &mut Checked,
 ) -> Vec<[f64; 2]> {
     let mut out = Vec::new();
     let tol = options.tolerance;
@@ -200,51 +212,79 @@ fn refinement_points(
         if !inside[f.fix().index()] {
             continue;
         }
-        let [a, b, c] = f.vertices().map(|v| *v.data());
-        let scaled = |uv: [f64; 2]| Point2::new(uv[0] * scale[0], uv[1] * scale[1]);
-        let cuv = a.uv.add(b.uv).add(c.uv).scale(1.0 / 3.0);
-        let cp = a.p.add(b.p).add(c.p).scale(1.0 / 3.0);
-        let sp = face.surface.eval(cuv[0], cuv[1]);
-        if !sp.point.is_finite() {
+        let mut key = f.vertices().map(|v| v.fix().index());
+        key.sort_unstable();
+        if checked.triangles.contains(&key) {
             continue;
         }
-        let n = cross(b.p.sub(a.p), c.p.sub(a.p));
-        let area2 = n.norm();
-        // Slivers and collapsed triangles (poles) have no reliable normal or centroid.
-        let edge_max = [a.p.sub(b.p), b.p.sub(c.p), c.p.sub(a.p)]
-            .iter()
-            .map(|d| d.norm())
-            .fold(0.0, f64::max);
-        if area2 <= 1e-12 * edge_max * edge_max || edge_max <= 1e-3 * tol {
-            continue;
-        }
-        let mut want = sp.point.sub(cp).norm() > tol;
-        if !want && let Some(sn) = sp.normal() {
-            let cosang = (n.dot(sn) / area2).abs().clamp(0.0, 1.0);
-            want = cosang.acos() > options.angle && edge_max > 4.0 * tol;
-        }
-        if want {
-            if !near_constraint(&f, scaled(cuv)) {
-                out.push(cuv);
-            }
-            continue;
-        }
-        for e in f.adjacent_edges() {
-            if e.is_constraint_edge() {
-                continue;
-            }
-            let [p, q] = [e.from(), e.to()].map(|v| *v.data());
-            // Each interior edge once: from its lower-index end.
-            if e.from().fix().index() > e.to().fix().index() {
-                continue;
-            }
-            let muv = p.uv.add(q.uv).scale(0.5);
-            let mp = p.p.add(q.p).scale(0.5);
-            let s = face.surface.point(muv[0], muv[1]);
-            if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(&f, scaled(muv)) {
-                out.push(muv);
-            }
+        let before = out.len();
+        let edges_ok = triangle_points(face, &f, scale, options, tol, checked, &mut out);
+        if edges_ok && out.len() == before {
+            checked.triangles.insert(key);
         }
     }
     out
+}
+
+/// The points one triangle wants (pushed onto `out`); false when an edge was not checked.
+fn triangle_points(
+    face: &Face,
+    f: &FaceRef<'_>,
+    scale: [f64; 2],
+    options: &Options,
+    tol: f64,
+    checked: &mut Checked,
+    out: &mut Vec<[f64; 2]>,
+) -> bool {
+    let [a, b, c] = f.vertices().map(|v| *v.data());
+    let scaled = |uv: [f64; 2]| Point2::new(uv[0] * scale[0], uv[1] * scale[1]);
+    let cuv = a.uv.add(b.uv).add(c.uv).scale(1.0 / 3.0);
+    let cp = a.p.add(b.p).add(c.p).scale(1.0 / 3.0);
+    let sp = face.surface.eval(cuv[0], cuv[1]);
+    if !sp.point.is_finite() {
+        return true;
+    }
+    let n = cross(b.p.sub(a.p), c.p.sub(a.p));
+    let area2 = n.norm();
+    // Slivers and collapsed triangles (poles) have no reliable normal or centroid.
+    let edge_max = [a.p.sub(b.p), b.p.sub(c.p), c.p.sub(a.p)]
+        .iter()
+        .map(|d| d.norm())
+        .fold(0.0, f64::max);
+    if area2 <= 1e-12 * edge_max * edge_max || edge_max <= 1e-3 * tol {
+        return true;
+    }
+    let mut want = sp.point.sub(cp).norm() > tol;
+    if !want && let Some(sn) = sp.normal() {
+        let cosang = (n.dot(sn) / area2).abs().clamp(0.0, 1.0);
+        want = cosang.acos() > options.angle && edge_max > 4.0 * tol;
+    }
+    if want {
+        if !near_constraint(f, scaled(cuv)) {
+            out.push(cuv);
+        }
+        return true;
+    }
+    let mut all = true;
+    for e in f.adjacent_edges() {
+        if e.is_constraint_edge() {
+            continue;
+        }
+        let (i, j) = (e.from().fix().index(), e.to().fix().index());
+        // Each interior edge once: from its lower-index end.
+        if i > j || checked.edges.contains(&(i, j)) {
+            continue;
+        }
+        let [p, q] = [e.from(), e.to()].map(|v| *v.data());
+        let muv = p.uv.add(q.uv).scale(0.5);
+        let mp = p.p.add(q.p).scale(0.5);
+        let s = face.surface.point(muv[0], muv[1]);
+        if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(f, scaled(muv)) {
+            out.push(muv);
+            all = false;
+        } else {
+            checked.edges.insert((i, j));
+        }
+    }
+    all
 }
