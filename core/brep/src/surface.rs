@@ -41,7 +41,7 @@ fn radial(frame: &Frame, u: f64) -> ([f64; 3], [f64; 3]) {
 /// evaluation (evaluation is the tessellator's inner loop: building them per point cost a
 /// fifth of its time). Equal whatever it holds, so surfaces still compare by their data.
 #[derive(Clone, Default)]
-pub struct KnotCache(std::sync::OnceLock<Option<(KnotVector, KnotVector)>>);
+pub struct KnotCache(Box<std::sync::OnceLock<Option<(KnotVector, KnotVector)>>>);
 
 impl PartialEq for KnotCache {
     fn eq(&self, _: &KnotCache) -> bool {
