@@ -55,6 +55,7 @@ pub fn triangulate(
     loops: &[Polyline],
     interior: &[[f64; 2]],
     scale: [f64; 2],
+    metric: [f64; 2],
     options: &Options,
 ) -> FaceTriangles {
     let mut cdt = Cdt::new();
@@ -92,7 +93,7 @@ pub fn triangulate(
         if cdt.num_vertices() >= MAX_VERTICES {
             break;
         }
-        let wanted = refinement_points(face, &cdt, &inside, scale, options, &mut checked);
+        let wanted = refinement_points(face, &cdt, &inside, metric, options, &mut checked);
         if wanted.is_empty() {
             break;
         }
@@ -166,20 +167,24 @@ fn classify(cdt: &Cdt) -> Vec<bool> {
 type FaceRef<'a> = spade::handles::FaceHandle<'a, InnerTag, Vertex, (), spade::CdtEdge<()>, ()>;
 
 /// A candidate point closer than this fraction of a constraint edge's length to that edge (in
-/// scaled (u, v)) is not inserted.
+/// the 3D metric) is not inserted.
 const NEAR: f64 = 0.25;
 
-/// Whether the scaled point `p` lies within [`NEAR`] of one of `f`'s constraint edges. Such a
+/// Whether the point `uv` lies within [`NEAR`] of one of `f`'s constraint edges, measured with
+/// the 3D `metric` (the Delaunay plane may be squeezed along rulings, where every point is
+/// near the long boundary rows). Such a
 /// point is a fin in the making: the edge's samples are fixed (neighbouring faces share them),
 /// so the point cannot split it, and the sliver between them — flat in (u, v), upright in 3D
 /// where the edge is a straight pcurve on a curved surface (a helix on a cylinder) — adds area
 /// that covers no surface (7 % on the thread of OCCT's bottle).
-fn near_constraint(f: &FaceRef<'_>, p: Point2<f64>) -> bool {
+fn near_constraint(f: &FaceRef<'_>, uv: [f64; 2], metric: [f64; 2]) -> bool {
+    let at = |uv: [f64; 2]| Point2::new(uv[0] * metric[0], uv[1] * metric[1]);
+    let p = at(uv);
     f.adjacent_edges().iter().any(|e| {
         if !e.is_constraint_edge() {
             return false;
         }
-        let (a, b) = (e.from().position(), e.to().position());
+        let (a, b) = (at(e.from().data().uv), at(e.to().data().uv));
         let (dx, dy) = (b.x - a.x, b.y - a.y);
         let len2 = dx * dx + dy * dy;
         let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / len2).clamp(0.0, 1.0);
@@ -202,7 +207,7 @@ fn refinement_points(
     face: &Face,
     cdt: &Cdt,
     inside: &[bool],
-    scale: [f64; 2],
+    metric: [f64; 2],
     options: &Options,
     checked: &mut Checked,
 ) -> Vec<[f64; 2]> {
@@ -218,7 +223,7 @@ fn refinement_points(
             continue;
         }
         let before = out.len();
-        let edges_ok = triangle_points(face, &f, scale, options, tol, checked, &mut out);
+        let edges_ok = triangle_points(face, &f, metric, options, tol, checked, &mut out);
         if edges_ok && out.len() == before {
             checked.triangles.insert(key);
         }
@@ -230,14 +235,13 @@ fn refinement_points(
 fn triangle_points(
     face: &Face,
     f: &FaceRef<'_>,
-    scale: [f64; 2],
+    metric: [f64; 2],
     options: &Options,
     tol: f64,
     checked: &mut Checked,
     out: &mut Vec<[f64; 2]>,
 ) -> bool {
     let [a, b, c] = f.vertices().map(|v| *v.data());
-    let scaled = |uv: [f64; 2]| Point2::new(uv[0] * scale[0], uv[1] * scale[1]);
     let cuv = a.uv.add(b.uv).add(c.uv).scale(1.0 / 3.0);
     let cp = a.p.add(b.p).add(c.p).scale(1.0 / 3.0);
     let sp = face.surface.eval(cuv[0], cuv[1]);
@@ -260,7 +264,7 @@ fn triangle_points(
         want = cosang.acos() > options.angle && edge_max > 4.0 * tol;
     }
     if want {
-        if !near_constraint(f, scaled(cuv)) {
+        if !near_constraint(f, cuv, metric) {
             out.push(cuv);
         }
         return true;
@@ -279,7 +283,7 @@ fn triangle_points(
         let muv = p.uv.add(q.uv).scale(0.5);
         let mp = p.p.add(q.p).scale(0.5);
         let s = face.surface.point(muv[0], muv[1]);
-        if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(f, scaled(muv)) {
+        if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(f, muv, metric) {
             out.push(muv);
             all = false;
         } else {

@@ -69,13 +69,15 @@ pub fn delaunay_scale(face: &Face, b: [f64; 4], options: &Options) -> [f64; 2] {
     const MAX_ANISOTROPY: f64 = 100.0;
     let s = metric_scale(face, b);
     let h = curvature_steps(face, b, options);
-    let (flat_u, flat_v) = (h[0].is_infinite(), h[1].is_infinite());
+    let extent = ((b[1] - b[0]) * s[0]).max((b[3] - b[2]) * s[1]);
+    // The 3D length of one curvature step in each direction; a direction is flat where that
+    // step spans the whole face (rounding gives a cylinder's rulings a tiny curvature).
+    let l = [h[0] * s[0], h[1] * s[1]];
+    let (flat_u, flat_v) = (!(l[0] < extent), !(l[1] < extent));
     if flat_u == flat_v {
         return s;
     }
-    let extent = ((b[1] - b[0]) * s[0]).max((b[3] - b[2]) * s[1]);
-    // The 3D length of one curvature step across the rulings.
-    let step = if flat_u { h[1] * s[1] } else { h[0] * s[0] };
+    let step = if flat_u { l[1] } else { l[0] };
     let ratio = (extent / step).clamp(1.0, MAX_ANISOTROPY);
     if !ratio.is_finite() {
         return s;

@@ -144,7 +144,8 @@ pub fn tessellate_with_progress(
         let b = interior::uv_box(&loops);
         let scale = interior::delaunay_scale(face, b, options);
         let points = interior::grid(face, &loops, options);
-        let t = cdt::triangulate(face, &loops, &points, scale, options);
+        let metric = interior::metric_scale(face, b);
+        let t = cdt::triangulate(face, &loops, &points, scale, metric, options);
         let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         progress(n, total);
         t
