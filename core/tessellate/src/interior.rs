@@ -73,7 +73,8 @@ pub fn delaunay_scale(face: &Face, b: [f64; 4], options: &Options) -> [f64; 2] {
     // The 3D length of one curvature step in each direction; a direction is flat where that
     // step spans the whole face (rounding gives a cylinder's rulings a tiny curvature).
     let l = [h[0] * s[0], h[1] * s[1]];
-    let (flat_u, flat_v) = (!(l[0] < extent), !(l[1] < extent));
+    let flat = |x: f64| x >= extent || x.is_nan();
+    let (flat_u, flat_v) = (flat(l[0]), flat(l[1]));
     if flat_u == flat_v {
         return s;
     }
