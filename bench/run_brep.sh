@@ -16,7 +16,7 @@
 #   bash bench/run_brep.sh [extra `bench-brep run` options, e.g. --eps 0.1 --tols 0.1]
 #
 # Raw results: bench/results/brep_raw.jsonl (deleted first). Exported JSON and shapes go to
-# $BENCH_WORK (default /tmp/tessd-bench-brep). About 8 min on 2 cores, most of it the
+# $BENCH_WORK (default /tmp/tessd-bench-brep). About 6 min on 2 cores (13 under heavy load), most of it the
 # 41-m-long hammer.iges at 0.01 mm (each tessellation child is killed after TESS_TIMEOUT s,
 # default 90, and reported as such).
 set -euo pipefail
@@ -30,7 +30,14 @@ start=$(date +%s)
 load_start=$(cut -d' ' -f1-3 /proc/loadavg)
 
 cargo build --release -q -p tessd-bench-brep
+# The code measured: the commit, and whether the crates it times had uncommitted changes.
+changed=$(git status --porcelain -- core/brep core/trim core/tessellate | wc -l)
+source_note="commit $(git rev-parse --short HEAD)$( [ "$changed" -gt 0 ] && echo " plus uncommitted changes to $changed file(s) of core/brep, core/trim, core/tessellate (diff sha1 $(git diff HEAD -- core/brep core/trim core/tessellate | sha1sum | cut -c1-10), kept in \$BENCH_WORK/source.diff)" || echo ", no local changes to core/brep, core/trim, core/tessellate")."
 rm -rf "$WORK"
+mkdir -p "$WORK"
+# Run a private copy: the shared target/ may be rebuilt by other jobs during the run.
+cp target/release/bench-brep "$WORK/bench-brep"
+git diff HEAD -- core/brep core/trim core/tessellate > "$WORK/source.diff"
 PYTHONPATH="$PWD/python" "$CAD" bench/brep/peer_ocp.py export --data "$DATA/brep" --work "$WORK"
 
 mkdir -p bench/results
@@ -39,12 +46,12 @@ rm -f "$JSONL"
 # One part at a time, tessd then OCP, so that load from other jobs hits both alike.
 mapfile -t PARTS < <(python3 -c 'import json,sys; [print(p["name"]) for p in json.load(open(sys.argv[1]))]' "$WORK/parts.json")
 for part in "${PARTS[@]}"; do
-    target/release/bench-brep run --manifest "$WORK/parts.json" --jsonl "$JSONL" --only "$part" \
+    "$WORK/bench-brep" run --manifest "$WORK/parts.json" --jsonl "$JSONL" --only "$part" \
         --tess-timeout "$TESS_TIMEOUT" --budget 2 --min-repeat 3 --max-repeat 9 --slow-s 3 "$@"
     PYTHONPATH="$PWD/python" "$CAD" bench/brep/peer_ocp.py mesh --manifest "$WORK/parts.json" \
         --jsonl "$JSONL" --only "$part" --budget 2 --min-repeat 3 --max-repeat 9 --slow-s 3
 done
 "$PY" bench/brep/report.py --jsonl "$JSONL" --manifest "$WORK/parts.json" --out bench/results \
     --wall-s "$(( $(date +%s) - start ))" --load-start "$load_start" \
-    --load-end "$(cut -d' ' -f1-3 /proc/loadavg)"
+    --load-end "$(cut -d' ' -f1-3 /proc/loadavg)" --source-note "$source_note"
 echo "B-Rep benchmark: $(( $(date +%s) - start )) s"

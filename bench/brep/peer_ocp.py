@@ -14,7 +14,7 @@ and PYTHONPATH=python (the exporter `tessd.brep`).
 `export` writes, under WORK: `json/<part>.json` (the document, `tessd.brep` exporter, units mm),
 `shapes/<part>.brep` for the cadquery parts (so that `mesh` re-reads exactly the exported
 shape), and `parts.json` (the manifest: name, kind, source, paths, face count, export time or
-the error). The parts: every .step/.stp/.iges/.igs/.brep/.brp file in DIR, the cadquery parts of
+the error, and the faces whose edges OCP tolerates more than 0.01 mm off the surface). The parts: every .step/.stp/.iges/.igs/.brep/.brp file in DIR, the cadquery parts of
 tests/brep/test_brep_export.py (its `PARTS` dict, imported) and `plate_540_holes` built here
 (a plate with 540 through holes, the "face with hundreds of trims" case of the paper's
 figure 1).
@@ -82,6 +82,30 @@ def restore_stdout(saved):
     os.close(saved)
 
 
+def loose_edges(shape, above=0.01, most=6):
+    """The faces whose edges OCP tolerates farthest off the surface (`BRep_Tool.Tolerance` of
+    the edges, the data's own gap), above `above` (mm): [[face id, largest edge tolerance], ..],
+    the largest first, at most `most` of them. A mesh cannot be closer to the surface than its
+    boundary is."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    fmap = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_FACE, fmap)
+    out = []
+    for i in range(1, fmap.Extent() + 1):
+        emap = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(fmap.FindKey(i), TopAbs_EDGE, emap)
+        tol = max((BRep_Tool.Tolerance_s(TopoDS.Edge_s(emap.FindKey(k))) for k in range(1, emap.Extent() + 1)),
+                  default=0.0)
+        if tol > above:
+            out.append([i, tol])
+    return sorted(out, key=lambda ft: -ft[1])[:most]
+
+
 def export(args):
     from OCP.BRepTools import BRepTools
 
@@ -107,6 +131,7 @@ def export(args):
             out.write_text(text)
             entry.update(json=str(out), faces=len(doc["faces"]), edges=len(doc.get("edges") or []),
                          units=doc["units"], export_ms=1000 * (t1 - t0), json_bytes=len(text))
+            entry["loose_faces"] = loose_edges(shape)
             if kind == "cadquery":
                 BRepTools.Write_s(shape, str(shape_path))
         except Exception as e:  # noqa: BLE001 - reported, the run goes on

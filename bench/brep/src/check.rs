@@ -20,6 +20,8 @@ pub struct Cracks {
     pub collapsed_triangles: usize,
     /// Up to four open edges, as their two end points.
     pub examples: Vec<[[f32; 3]; 2]>,
+    /// Up to four non-manifold edges: their end points and the face groups using them.
+    pub nonmanifold_examples: Vec<([[f32; 3]; 2], Vec<u32>)>,
 }
 
 /// Welds `t`'s positions and counts its edges' uses.
@@ -40,11 +42,12 @@ pub fn cracks(t: &Tessellation) -> Cracks {
         })
         .collect();
     let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut groups: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
     let mut out = Cracks {
         welded_vertices: pos.len(),
         ..Cracks::default()
     };
-    for f in mesh.faces() {
+    for (i, f) in mesh.faces().enumerate() {
         let w: Vec<u32> = f.iter().map(|&v| welded[v as usize]).collect();
         let n = w.len();
         if (0..n).any(|k| w[k] == w[(k + 1) % n]) || (n == 3 && w[0] == w[2]) {
@@ -54,6 +57,10 @@ pub fn cracks(t: &Tessellation) -> Cracks {
         for k in 0..n {
             let (a, b) = (w[k], w[(k + 1) % n]);
             *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            groups
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push(mesh.face_groups[i]);
         }
     }
     for (&(a, b), &n) in &uses {
@@ -64,6 +71,12 @@ pub fn cracks(t: &Tessellation) -> Cracks {
             }
         } else if n > 2 {
             out.nonmanifold_edges += 1;
+            if out.nonmanifold_examples.len() < 4 {
+                out.nonmanifold_examples.push((
+                    [pos[a as usize], pos[b as usize]],
+                    groups.remove(&(a, b)).unwrap_or_default(),
+                ));
+            }
         }
     }
     out
@@ -85,6 +98,8 @@ pub struct Deviation {
     pub over: usize,
     /// The face id of the largest.
     pub worst_face: Option<u64>,
+    /// The (u, v) of the worst triangle's corners.
+    pub worst_uvs: Vec<[f64; 2]>,
 }
 
 /// Gauss–Newton steps of the projection.
@@ -136,6 +151,7 @@ pub fn deviation(doc: &tessd_brep::Document, t: &Tessellation, tol: f64) -> Devi
         if d > out.max {
             out.max = d;
             out.worst_face = Some(face.id);
+            out.worst_uvs = f.iter().map(|&v| t.uvs[v as usize]).collect();
         }
         out.over += usize::from(d > tol);
         all.push(d);

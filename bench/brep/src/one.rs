@@ -394,6 +394,7 @@ fn tessellation(doc: &Document, tol_mm: f64, tol: f64, threads: usize, s: &Setti
             rec["deviation_p99"] = json!(d.p99);
             rec["deviation_over_tol"] = json!(d.over);
             rec["deviation_worst_face"] = json!(d.worst_face);
+            rec["deviation_worst_uvs"] = json!(d.worst_uvs);
             rec["time_ms"] = json!(median(&runs));
             rec["runs_ms"] = json!(runs);
             rec["warmup_ms"] = json!(warm_ms);
@@ -409,6 +410,15 @@ fn tessellation(doc: &Document, tol_mm: f64, tol: f64, threads: usize, s: &Setti
             rec["nonmanifold_edges"] = json!(c.nonmanifold_edges);
             rec["collapsed_triangles"] = json!(c.collapsed_triangles);
             rec["open_edge_examples"] = json!(c.examples);
+            rec["nonmanifold_examples"] = json!(
+                c.nonmanifold_examples
+                    .iter()
+                    .map(|(e, g)| json!({"edge": e, "faces": g
+                        .iter()
+                        .map(|&k| doc.faces[k as usize].id)
+                        .collect::<Vec<_>>()}))
+                    .collect::<Vec<_>>()
+            );
             rec["mesh_valid"] = json!(out.mesh.validate().err().map(|e| e.to_string()));
         }
         Err(e) => rec["error"] = json!(e),
