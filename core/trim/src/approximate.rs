@@ -4,7 +4,8 @@
 //!
 //! The tolerance `eps_uv` is shared out: half for the spline against the samples, a quarter
 //! for flattening, the rest for the curve between samples (checked at the midpoints between
-//! samples, and reported). Lines and degree-1 B-splines become segments directly.
+//! samples, and reported). Lines and degree-1 B-splines become segments directly; other
+//! B-splines are split at their corners (knots of multiplicity ≥ the degree) first.
 
 use crate::bezier::{P2, Quadratic, dist};
 use crate::knot_removal::remove_knots;
@@ -31,25 +32,31 @@ pub struct TrimApprox {
 #[error("the curve does not evaluate to finite points over its range")]
 pub struct NotFinite;
 
-fn degree_one_breaks(trim: &Trim) -> Option<Vec<f64>> {
+/// The trim's range split at the B-spline's interior knots of multiplicity ≥ its degree,
+/// where the curve is only C0 (a corner, in general), in the trim's direction; `None` for
+/// other curves or when there is no such knot. For degree 1 these are all the knots.
+fn corner_breaks(trim: &Trim) -> Option<Vec<f64>> {
     let Curve::Bspline(b) = &trim.curve else {
         return None;
     };
-    if b.degree != 1 {
-        return None;
-    }
     let [t0, t1] = trim.range;
     let (lo, hi) = (t0.min(t1), t0.max(t1));
-    let mut ts = vec![t0];
     let mut inner: Vec<f64> = b
         .knots
         .iter()
-        .copied()
-        .filter(|&k| k > lo + 1e-12 * (hi - lo) && k < hi - 1e-12 * (hi - lo))
+        .zip(&b.mults)
+        .filter(|&(&k, &m)| {
+            m as usize >= b.degree && k > lo + 1e-12 * (hi - lo) && k < hi - 1e-12 * (hi - lo)
+        })
+        .map(|(&k, _)| k)
         .collect();
+    if inner.is_empty() && b.degree > 1 {
+        return None;
+    }
     if t1 < t0 {
         inner.reverse();
     }
+    let mut ts = vec![t0];
     ts.extend(inner);
     ts.push(t1);
     Some(ts)
@@ -61,9 +68,16 @@ fn degree_one_breaks(trim: &Trim) -> Option<Vec<f64>> {
 /// [`NotFinite`] when the curve evaluates to NaN or infinity.
 pub fn approximate_trim(trim: &Trim, eps_uv: f64) -> Result<TrimApprox, NotFinite> {
     let [t0, t1] = trim.range;
+    let corners = corner_breaks(trim);
     let straight = match &trim.curve {
         Curve::Line { .. } => Some(vec![t0, t1]),
-        _ => degree_one_breaks(trim),
+        Curve::Bspline(b) if b.degree == 1 => corners,
+        _ => {
+            if let Some(ts) = corners {
+                return approximate_between_corners(trim, &ts, eps_uv);
+            }
+            None
+        }
     };
     if let Some(ts) = straight {
         let pts: Vec<P2> = ts.iter().map(|&t| trim.curve.point(t)).collect();
@@ -103,6 +117,33 @@ pub fn approximate_trim(trim: &Trim, eps_uv: f64) -> Result<TrimApprox, NotFinit
     Ok(TrimApprox { pieces, max_error })
 }
 
+/// A B-spline trim with corners (C0 knots) approximated one C1 stretch at a time, between
+/// the parameters `ts`: section 3.1's spline is C1 and the paper keeps C1 only where the
+/// input is C1. A fit across a corner would round it with a cluster of short spans, their
+/// junctions closer together than the quadtree can separate (depth-13 failures, section 8);
+/// split, the corner is a single junction.
+fn approximate_between_corners(
+    trim: &Trim,
+    ts: &[f64],
+    eps_uv: f64,
+) -> Result<TrimApprox, NotFinite> {
+    let mut out = TrimApprox {
+        pieces: Vec::new(),
+        max_error: 0.0,
+    };
+    for w in ts.windows(2) {
+        let part = Trim {
+            curve: trim.curve.clone(),
+            range: [w[0], w[1]],
+            edge: trim.edge,
+        };
+        let a = approximate_trim(&part, eps_uv)?;
+        out.pieces.extend(a.pieces);
+        out.max_error = out.max_error.max(a.max_error);
+    }
+    Ok(out)
+}
+
 /// The largest parametric distance between the pieces and the curve at the samples and the
 /// midpoints between them.
 fn measure(trim: &Trim, spline: &QuadSpline, pieces: &[Quadratic], samples: &Samples) -> f64 {
@@ -135,9 +176,10 @@ fn measure(trim: &Trim, spline: &QuadSpline, pieces: &[Quadratic], samples: &Sam
 }
 
 /// The approximated loops of a face, in (u, v): the face's loops, or its bounds rectangle
-/// (counter-clockwise) when it has none. Each loop is closed: small gaps between trims are
-/// closed by moving the next piece's start, larger ones bridged by a segment. Also returns
-/// the largest measured error.
+/// (counter-clockwise) when it has none. Pieces below the tolerance are dropped (see
+/// [`drop_tiny`]). Each loop is closed: small gaps between trims are closed by moving the
+/// next piece's start, larger ones bridged by a segment. Also returns the largest measured
+/// error.
 ///
 /// # Errors
 /// `(loop, trim)` of a trim that does not evaluate.
@@ -163,7 +205,7 @@ pub fn approximate_loops(face: &Face, eps_uv: f64) -> Result<LoopsApprox, (usize
             worst = worst.max(a.max_error);
             pieces.extend(a.pieces);
         }
-        pieces.retain(|q| dist(q.p[0], q.p[2]) + dist(q.p[0], q.p[1]) > 1e-12 * size);
+        let pieces = drop_tiny(pieces, (TINY * eps_uv).max(1e-12 * size));
         loops.push(close(pieces, eps_uv));
     }
     Ok(LoopsApprox {
@@ -179,6 +221,63 @@ pub struct LoopsApprox {
     pub loops: Vec<Vec<Quadratic>>,
     /// The largest measured error of their trims.
     pub max_error: f64,
+}
+
+/// Pieces whose control points all lie within `TINY · eps_uv` of the previous kept piece's
+/// end are dropped from a loop (the next piece then starts where the previous kept one ends).
+pub const TINY: f64 = 1.0 / 16.0;
+
+/// Drops the pieces of a closed loop that stay within `delta` of the end of the last piece
+/// kept before them; a loop lying entirely within a `delta` box goes altogether.
+///
+/// Such pieces come from trims far shorter than the tolerance (CAD edges of a few
+/// nanometres, often doubling back on their neighbours). Kept, each adds two junctions closer
+/// together than any quadtree cell can separate: the cell around them holds three curves at
+/// every depth, a depth-13 failure of paper 000's table 4 (section 8, figure 14: junctions
+/// are not placed to suit the subdivision). Dropping them moves the loop by at most `delta`
+/// (the next piece's start, see `close`), within the tolerance. The walk starts at the
+/// largest piece, which is always kept, and keeps the remaining pieces in loop order.
+pub fn drop_tiny(pieces: Vec<Quadratic>, delta: f64) -> Vec<Quadratic> {
+    let extent = |q: &Quadratic| {
+        dist(q.p[0], q.p[1])
+            .max(dist(q.p[1], q.p[2]))
+            .max(dist(q.p[0], q.p[2]))
+    };
+    let Some(start) =
+        (0..pieces.len()).max_by(|&i, &j| extent(&pieces[i]).total_cmp(&extent(&pieces[j])))
+    else {
+        return pieces;
+    };
+    let mut b = pieces[0].control_box();
+    for q in &pieces {
+        let c = q.control_box();
+        b = [
+            b[0].min(c[0]),
+            b[1].max(c[1]),
+            b[2].min(c[2]),
+            b[3].max(c[3]),
+        ];
+    }
+    if (b[1] - b[0]).hypot(b[3] - b[2]) <= delta {
+        return Vec::new();
+    }
+    let n = pieces.len();
+    let mut keep = vec![false; n];
+    keep[start] = true;
+    let mut anchor = pieces[start].p[2];
+    for k in 1..n {
+        let i = (start + k) % n;
+        if pieces[i].p.iter().all(|&p| dist(p, anchor) <= delta) {
+            continue;
+        }
+        keep[i] = true;
+        anchor = pieces[i].p[2];
+    }
+    pieces
+        .into_iter()
+        .zip(keep)
+        .filter_map(|(q, k)| k.then_some(q))
+        .collect()
 }
 
 fn close(pieces: Vec<Quadratic>, eps_uv: f64) -> Vec<Quadratic> {

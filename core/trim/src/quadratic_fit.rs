@@ -5,7 +5,7 @@
 //! their approximations.
 
 use crate::bezier::{P2, Quadratic, dist};
-use tessd_brep::Trim;
+use tessd_brep::{Curve, Trim};
 
 /// Points of a trim at parameters `s ∈ [0, 1]` along its range (`t = t0 + s (t1 − t0)`, so a
 /// reversed range walks the curve backwards), with the end derivatives in s.
@@ -22,7 +22,7 @@ pub struct Samples {
 }
 
 impl Samples {
-    /// `count + 1` evenly spaced samples of `trim` (count ≥ 1).
+    /// `count + 1` evenly spaced samples of `trim` (count ≥ 1), and its end derivatives.
     pub fn of(trim: &Trim, count: usize) -> Samples {
         let [t0, t1] = trim.range;
         let count = count.max(1);
@@ -31,15 +31,15 @@ impl Samples {
             .iter()
             .map(|&s| trim.curve.point(t0 + s * (t1 - t0)))
             .collect();
-        let d = |t: f64| {
-            let (_, d) = trim.curve.eval(t);
+        let d = |t: f64, inwards: f64| {
+            let (_, d) = trim.curve.eval(inside_corner(trim, t, inwards));
             [d[0] * (t1 - t0), d[1] * (t1 - t0)]
         };
         Samples {
             params,
             points,
-            start_tangent: d(t0),
-            end_tangent: d(t1),
+            start_tangent: d(t0, t1 - t0),
+            end_tangent: d(t1, t0 - t1),
         }
     }
 
@@ -47,6 +47,26 @@ impl Samples {
     pub fn is_finite(&self) -> bool {
         self.points.iter().flatten().all(|c| c.is_finite())
     }
+}
+
+/// `t`, or, where `t` is an interior knot of a B-spline of multiplicity ≥ its degree (a
+/// corner, where a trim is split, see `approximate`), `t` moved a hair in the direction of
+/// `inwards`: the derivative at the knot itself may be the other segment's.
+fn inside_corner(trim: &Trim, t: f64, inwards: f64) -> f64 {
+    let Curve::Bspline(b) = &trim.curve else {
+        return t;
+    };
+    let n = b.knots.len();
+    let span = (b.knots[n - 1] - b.knots[0]).abs();
+    let corner = b.knots[1..n - 1]
+        .iter()
+        .zip(&b.mults[1..n - 1])
+        .any(|(&k, &m)| m as usize >= b.degree && (k - t).abs() <= 1e-12 * span);
+    if !corner {
+        return t;
+    }
+    let step = (1e-12 * span).max(8.0 * f64::EPSILON * t.abs());
+    t + step * inwards.signum()
 }
 
 /// A clamped quadratic B-spline on [0, 1] with simple interior knots: breakpoints
@@ -272,11 +292,12 @@ pub fn follow_end_tangents(spline: &mut QuadSpline, start: P2, end: P2) {
     let p0 = spline.poles[0];
     let pn = spline.poles[n - 1];
     if n == 3 {
-        // p0 + a d0 = pn − b d1
-        let det = d0[0] * (-d1[1]) - (-d1[0]) * d0[1];
+        // p0 + a d0 = pn − b d1, i.e. a d0 + b d1 = pn − p0 (Cramer's rule), with a, b > 0:
+        // the middle pole behind pn along d1, ahead of p0 along d0.
+        let det = d0[0] * d1[1] - d1[0] * d0[1];
         let r = [pn[0] - p0[0], pn[1] - p0[1]];
         if det.abs() > 1e-12 {
-            let a = (r[0] * (-d1[1]) - (-d1[0]) * r[1]) / det;
+            let a = (r[0] * d1[1] - d1[0] * r[1]) / det;
             let b = (d0[0] * r[1] - d0[1] * r[0]) / det;
             if a > 0.0 && b > 0.0 {
                 spline.poles[1] = [p0[0] + a * d0[0], p0[1] + a * d0[1]];
@@ -321,6 +342,37 @@ pub fn max_error(spline: &QuadSpline, samples: &Samples) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One span (the fewest knot removal can leave): its middle pole is where the two end
+    /// tangents meet, so pieces of consecutive trims meet with the input's tangents — at a
+    /// tangent cusp too, where a tilted end tangent makes the approximations cross.
+    #[test]
+    fn a_single_span_follows_both_end_tangents() {
+        let (r, a0, a1) = (2.0, 0.3f64, 0.9f64);
+        let params: Vec<f64> = (0..=64).map(|i| i as f64 / 64.0).collect();
+        let at = |s: f64| a0 + s * (a1 - a0);
+        let points: Vec<P2> = params
+            .iter()
+            .map(|&s| [r * at(s).cos(), r * at(s).sin()])
+            .collect();
+        let tangent = |a: f64| [-r * a.sin() * (a1 - a0), r * a.cos() * (a1 - a0)];
+        let samples = Samples {
+            params,
+            points,
+            start_tangent: tangent(a0),
+            end_tangent: tangent(a1),
+        };
+        let sp = fit(&samples, &uniform_breaks(1));
+        let [p0, p1, p2] = [sp.poles[0], sp.poles[1], sp.poles[2]];
+        let cross = |a: P2, b: P2| a[0] * b[1] - a[1] * b[0];
+        let d0 = [p1[0] - p0[0], p1[1] - p0[1]];
+        let d1 = [p2[0] - p1[0], p2[1] - p1[1]];
+        assert!(cross(d0, tangent(a0)).abs() < 1e-12, "{d0:?}");
+        assert!(cross(d1, tangent(a1)).abs() < 1e-12, "{d1:?}");
+        // ahead of p0, behind p2
+        assert!(d0[0] * tangent(a0)[0] + d0[1] * tangent(a0)[1] > 0.0);
+        assert!(d1[0] * tangent(a1)[0] + d1[1] * tangent(a1)[1] > 0.0);
+    }
 
     #[test]
     fn basis_is_a_partition_of_unity_and_fit_reproduces_a_parabola() {

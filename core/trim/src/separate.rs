@@ -85,15 +85,16 @@ pub fn separating_line(
                     let (olo, ohi) = range(own, l);
                     let (xlo, xhi) = range(other, l);
                     let flip = |l: [f64; 3]| [-l[0], -l[1], -l[2]];
-                    // own on the positive side, other on the negative side, or the reverse
-                    let line = if olo >= -tol && xhi <= tol {
-                        Some(l)
-                    } else if ohi <= tol && xlo >= -tol {
-                        Some(flip(l))
-                    } else {
-                        None
-                    };
-                    if let Some(l) = line {
+                    // Own on the positive side and other on the negative side, or the
+                    // reverse. Both hold when every control point lies on the line (a
+                    // piece reduced to the point where it touches the cell, at a junction):
+                    // then the orientation is free and only the end-tangent rays decide, so
+                    // both are tried.
+                    let orientations = [
+                        (olo >= -tol && xhi <= tol).then_some(l),
+                        (ohi <= tol && xlo >= -tol).then_some(flip(l)),
+                    ];
+                    for l in orientations.into_iter().flatten() {
                         // `l` is ≥ 0 on `own`
                         let l = if own_is_a { l } else { flip(l) };
                         if rays_stay_out(l, rays_a, 1.0, tol) && rays_stay_out(l, rays_b, -1.0, tol)
@@ -116,4 +117,38 @@ pub fn separating_line(
         pb = halve(&pb);
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// hammer.iges face 37 at ε = 0.1 mm: a line leaves a junction that lies on the top
+    /// edge of the cell, and the piece arriving there from above only touches the cell at its
+    /// end, a slight kink away from the line. Every control point of that piece's part lies
+    /// on the line through the junction, so the line may face either way; only one way keeps
+    /// the arriving piece's end tangent out of its own side.
+    #[test]
+    fn a_piece_touching_the_cell_at_its_end_takes_either_side() {
+        let p = [2.244204147, 0.8499997720000001];
+        let a = Quadratic::segment(p, [2.244201742003995, 0.8456631564694607]);
+        let b = Quadratic::new(
+            [2.235351278840194, 0.9480585678054261],
+            [2.244416406508326, 0.898430826180249],
+            p,
+        );
+        let rays_a = [(p, [a.p[0][0] - a.p[2][0], a.p[0][1] - a.p[2][1]])];
+        let rays_b = [(p, [p[0] - b.p[1][0], p[1] - b.p[1][1]])];
+        let h = 3.2e-4;
+        for rb in [[1.0, 1.0], [0.99, 1.0]] {
+            let l = separating_line(&a, [0.0, 0.0478], &rays_a, &b, rb, &rays_b, h);
+            let l = l.unwrap_or_else(|| panic!("no line for {rb:?}"));
+            let side = |q: [f64; 2]| l[0] * q[0] + l[1] * q[1] + l[2];
+            for k in 0..=10 {
+                let t = k as f64 / 10.0;
+                assert!(side(a.sub(0.0, 0.0478).point(t)) >= -1e-12);
+                assert!(side(b.sub(rb[0], rb[1]).point(t)) <= 1e-12);
+            }
+        }
+    }
 }
