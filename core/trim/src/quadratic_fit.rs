@@ -56,11 +56,17 @@ fn inside_corner(trim: &Trim, t: f64, inwards: f64) -> f64 {
     let Curve::Bspline(b) = &trim.curve else {
         return t;
     };
-    let n = b.knots.len();
-    let span = (b.knots[n - 1] - b.knots[0]).abs();
-    let corner = b.knots[1..n - 1]
+    let (Some(first), Some(last)) = (b.knots.first(), b.knots.last()) else {
+        return t;
+    };
+    let span = (last - first).abs();
+    let interior = b.knots.len().saturating_sub(2);
+    let corner = b
+        .knots
         .iter()
-        .zip(&b.mults[1..n - 1])
+        .zip(&b.mults)
+        .skip(1)
+        .take(interior)
         .any(|(&k, &m)| m as usize >= b.degree && (k - t).abs() <= 1e-12 * span);
     if !corner {
         return t;
