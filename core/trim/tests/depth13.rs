@@ -13,43 +13,12 @@
 //! The fourth cause, a junction on a cell edge where one piece only touches the cell at its
 //! end (hammer.iges face 37), is tested in `separate.rs`.
 
+mod common;
+
+use common::{Rng, exact_inside, line, plane};
 use std::f64::consts::PI;
-use tessd_brep::{BSplineCurve, Curve, Face, Frame, Loop, Surface, Trim};
+use tessd_brep::{BSplineCurve, Curve, Face, Loop, Trim};
 use tessd_trim::{NodeKind, TrimStructure};
-
-/// xorshift64*: a reproducible stream of numbers in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-fn plane() -> Surface {
-    Surface::Plane {
-        frame: Frame {
-            origin: [0.0, 0.0, 0.0],
-            x_dir: [1.0, 0.0, 0.0],
-            y_dir: [0.0, 1.0, 0.0],
-        },
-    }
-}
-
-fn line(a: [f64; 2], b: [f64; 2]) -> Trim {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let len = d[0].hypot(d[1]);
-    Trim {
-        curve: Curve::Line {
-            origin: a,
-            dir: [d[0] / len, d[1] / len],
-        },
-        range: [0.0, len],
-        edge: None,
-    }
-}
 
 /// A clockwise arc (`y_dir` = `x_dir` turned −90°) of the ellipse at `center` with semi-axes
 /// `a` along u and `b` along v, from angle `from` to `to` (walked with t increasing).
@@ -91,25 +60,6 @@ fn face(bounds: [f64; 4], trims: Vec<Trim>) -> Face {
         bounds,
         loops: vec![Loop { trims }],
     }
-}
-
-/// Even-odd over the polygon, and the distance to it.
-fn exact(poly: &[[f64; 2]], p: [f64; 2]) -> (bool, f64) {
-    let mut inside = false;
-    let mut dist = f64::INFINITY;
-    for k in 0..poly.len() {
-        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-        if (a[1] > p[1]) != (b[1] > p[1])
-            && p[0] < a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
-        {
-            inside = !inside;
-        }
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let l2 = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
-        let s = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
-        dist = dist.min((p[0] - a[0] - s * d[0]).hypot(p[1] - a[1] - s * d[1]));
-    }
-    (inside, dist)
 }
 
 /// Builds `face` at `eps`; asserts no failed leaf, and that random points of the bounds and
@@ -156,7 +106,7 @@ fn check(name: &str, face: &Face, eps: f64, spots: &[[f64; 2]]) -> TrimStructure
     }
     let mut wrong = Vec::new();
     for p in points {
-        let (inside, d) = exact(&poly, p);
+        let (inside, d) = exact_inside(std::slice::from_ref(&poly), p, false);
         if t.classify(p[0], p[1]) != inside && d > eps_uv {
             wrong.push((p, d));
         }

@@ -4,6 +4,9 @@
 //! face, each failed leaf: its (u, v) box, depth, the curves crossing it (loop, trim, piece,
 //! control points) and why the leaf rule failed. `TESSD_TRIM_FACES=13,14` restricts the faces.
 
+mod common;
+
+use common::exact_inside;
 use tessd_brep::{Document, Face};
 use tessd_trim::approximate::approximate_trim;
 use tessd_trim::{NodeKind, Quadratic, TrimStructure};
@@ -252,27 +255,6 @@ fn diagnose_tangents() {
             }
         }
     }
-}
-
-/// Even-odd over the loops sampled densely, and the distance to the sampled loops.
-fn exact_inside(polys: &[Vec<[f64; 2]>], p: [f64; 2], empty: bool) -> (bool, f64) {
-    let mut inside = empty;
-    let mut dist = f64::INFINITY;
-    for poly in polys {
-        for k in 0..poly.len() {
-            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-            if (a[1] > p[1]) != (b[1] > p[1])
-                && p[0] < a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
-            {
-                inside = !inside;
-            }
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let l2 = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
-            let s = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
-            dist = dist.min((p[0] - a[0] - s * d[0]).hypot(p[1] - a[1] - s * d[1]));
-        }
-    }
-    (inside, dist)
 }
 
 /// Classification of every face against even-odd on its exact trims (2048 samples each):

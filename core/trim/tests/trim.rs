@@ -2,6 +2,9 @@
 //! approximation's distance to exact curves, Loop–Blinn signs, quadtree invariants, the
 //! packed layout, a counted depth-13 failure, and a real exported document.
 
+mod common;
+
+use common::{Rng, exact_inside, line, plane};
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 use tessd_brep::{BSplineCurve, Curve, Document, Face, Frame, Loop, Surface, Trim};
 use tessd_trim::approximate::{approximate_loops, approximate_trim};
@@ -9,40 +12,6 @@ use tessd_trim::classify::{TrimSource, classify};
 use tessd_trim::implicit::{Implicit, ImplicitKind};
 use tessd_trim::quadtree::NONE;
 use tessd_trim::{MAX_DEPTH, NodeKind, Quadratic, TrimStructure};
-
-/// xorshift64*: a reproducible stream of numbers in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-fn plane() -> Surface {
-    Surface::Plane {
-        frame: Frame {
-            origin: [0.0, 0.0, 0.0],
-            x_dir: [1.0, 0.0, 0.0],
-            y_dir: [0.0, 1.0, 0.0],
-        },
-    }
-}
-
-fn line(a: [f64; 2], b: [f64; 2]) -> Trim {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let len = d[0].hypot(d[1]);
-    Trim {
-        curve: Curve::Line {
-            origin: a,
-            dir: [d[0] / len, d[1] / len],
-        },
-        range: [0.0, len],
-        edge: None,
-    }
-}
 
 fn square() -> Loop {
     let c = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
@@ -725,22 +694,7 @@ fn compare_with_polygons(face: &Face, t: &TrimStructure) -> (usize, usize) {
     let (mut n, mut wrong) = (0, 0);
     for _ in 0..2000 {
         let p = [u0 + (u1 - u0) * rng.next(), v0 + (v1 - v0) * rng.next()];
-        let mut inside = face.loops.is_empty();
-        let mut dist = f64::INFINITY;
-        for poly in &polys {
-            for k in 0..poly.len() {
-                let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-                if (a[1] > p[1]) != (b[1] > p[1])
-                    && p[0] < a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
-                {
-                    inside = !inside;
-                }
-                let d = [b[0] - a[0], b[1] - a[1]];
-                let l2 = (d[0] * d[0] + d[1] * d[1]).max(1e-300);
-                let s = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
-                dist = dist.min((p[0] - a[0] - s * d[0]).hypot(p[1] - a[1] - s * d[1]));
-            }
-        }
+        let (inside, dist) = exact_inside(&polys, p, face.loops.is_empty());
         n += 1;
         if t.classify(p[0], p[1]) != inside && dist > t.tolerance.eps_uv + 1e-3 * size {
             wrong += 1;
