@@ -366,7 +366,9 @@ impl Quadtree {
             .iter()
             .rposition(|&n| n > 0)
             .unwrap_or(0) as u32;
-        for k in 0..=deepest.max(1) {
+        // Below the deepest leaf the level-k triangles still subdivide the leaves (up to
+        // TRIANGLE_LEVELS), so a shallow tree may reach the 40 % there: search that far too.
+        for k in 0..=(deepest + TRIANGLE_LEVELS).min(MAX_DEPTH) {
             let f = self.classifiable_at(k);
             self.classifiable.push(f);
             if f >= K_FRACTION {

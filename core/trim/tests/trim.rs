@@ -506,6 +506,30 @@ fn faces_without_loops_are_their_bounds() {
     assert!(TrimStructure::build(&face, f64::NAN).is_err());
 }
 
+/// A rectangle bounded by four lines makes a shallow tree (four depth-1 leaves); its level k_i
+/// lies below the deepest leaf, where the triangles still subdivide the leaves (section 6).
+#[test]
+fn a_shallow_tree_finds_its_triangle_level() {
+    let (a, b, c, d) = ([0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]);
+    let face = Face {
+        id: 4,
+        reversed: false,
+        surface: plane(),
+        bounds: [0.0, 4.0, 0.0, 3.0],
+        loops: vec![Loop {
+            trims: vec![line(a, b), line(b, c), line(c, d), line(d, a)],
+        }],
+    };
+    let t = TrimStructure::build(&face, 0.01).unwrap();
+    let k = t.stats.k_i.expect("the 40 % level of a rectangle");
+    assert!(
+        t.tree.classifiable[k as usize] >= 0.4,
+        "{:?}",
+        t.tree.classifiable
+    );
+    assert!(t.tree.classifiable[..k as usize].iter().all(|&f| f < 0.4));
+}
+
 #[test]
 fn bottle_document_builds_at_both_tolerances() {
     let text = include_str!("data/bottle.json");
