@@ -396,21 +396,9 @@ pub fn surface_fits(
 }
 
 /// A point of a (rational) tensor-product B-spline surface and its two partial derivatives
-/// `(S, ∂S/∂u, ∂S/∂v)`, or `None` when the poles or weights do not match the knot vectors.
+/// `(S, ∂S/∂u, ∂S/∂v)`, for poles and weights that [`surface_fits`] accepted (checked once per
+/// surface, not per point).
 pub fn eval_surface(
-    ku: &KnotVector,
-    kv: &KnotVector,
-    poles: &[Vec<[f64; 3]>],
-    weights: Option<&[Vec<f64>]>,
-    u: f64,
-    v: f64,
-) -> Option<([f64; 3], [f64; 3], [f64; 3])> {
-    surface_fits(ku, kv, poles, weights)
-        .then(|| eval_surface_unchecked(ku, kv, poles, weights, u, v))
-}
-
-/// [`eval_surface`] for poles and weights already checked with [`surface_fits`].
-pub fn eval_surface_unchecked(
     ku: &KnotVector,
     kv: &KnotVector,
     poles: &[Vec<[f64; 3]>],

@@ -2,7 +2,7 @@
 //! ∂S/∂v, and the unit normal, in OCP's parametrisations (docs/brep-format.md, "Surfaces");
 //! a face's normal is the surface's turned over when the face is `reversed`.
 
-use crate::bspline::{KnotVector, eval_surface_unchecked, surface_fits};
+use crate::bspline::{KnotVector, eval_surface, surface_fits};
 use crate::model::{BSplineSurface, Face, Frame, Surface};
 use crate::vector::{Vector, combine, cross};
 
@@ -59,8 +59,7 @@ impl BSplineSurface {
     /// `(S, ∂S/∂u, ∂S/∂v)`, or `None` for a surface [`crate::validate`] refuses.
     pub fn eval(&self, u: f64, v: f64) -> Option<SurfacePoint> {
         let (ku, kv) = self.knot_vectors()?;
-        let (point, du, dv) =
-            eval_surface_unchecked(ku, kv, &self.poles, self.weights.as_deref(), u, v);
+        let (point, du, dv) = eval_surface(ku, kv, &self.poles, self.weights.as_deref(), u, v);
         Some(SurfacePoint { point, du, dv })
     }
 
