@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::exact_inside;
+use common::{exact_inside, sampled_loops};
 use tessd_brep::{Document, Face};
 use tessd_trim::approximate::approximate_trim;
 use tessd_trim::{NodeKind, Quadratic, TrimStructure};
@@ -272,21 +272,7 @@ fn diagnose_classification() {
             let (mut n, mut wrong, mut faces) = (0usize, 0usize, 0usize);
             for face in &doc.faces {
                 let t = TrimStructure::build(face, eps).unwrap();
-                let polys: Vec<Vec<[f64; 2]>> = face
-                    .loops
-                    .iter()
-                    .map(|l| {
-                        l.trims
-                            .iter()
-                            .flat_map(|tr| {
-                                let [t0, t1] = tr.range;
-                                (0..2048).map(move |i| {
-                                    tr.curve.point(t0 + (t1 - t0) * i as f64 / 2048.0)
-                                })
-                            })
-                            .collect()
-                    })
-                    .collect();
+                let polys = sampled_loops(face, 2048);
                 let [u0, u1, v0, v1] = face.bounds;
                 let size = (u1 - u0).hypot(v1 - v0);
                 let mut pts = Vec::new();

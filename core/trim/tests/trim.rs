@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Rng, exact_inside, line, plane};
+use common::{Rng, exact_inside, line, plane, sampled_loops};
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 use tessd_brep::{BSplineCurve, Curve, Document, Face, Frame, Loop, Surface, Trim};
 use tessd_trim::approximate::{approximate_loops, approximate_trim};
@@ -699,19 +699,7 @@ fn world_tolerance_holds_on_a_cylinder() {
 /// (256 points per trim); counts the disagreements farther than the (u, v) tolerance plus the
 /// polygons' own sampling error from the polygons.
 fn compare_with_polygons(face: &Face, t: &TrimStructure) -> (usize, usize) {
-    let polys: Vec<Vec<[f64; 2]>> = face
-        .loops
-        .iter()
-        .map(|l| {
-            l.trims
-                .iter()
-                .flat_map(|tr| {
-                    let [t0, t1] = tr.range;
-                    (0..256).map(move |i| tr.curve.point(t0 + (t1 - t0) * i as f64 / 256.0))
-                })
-                .collect()
-        })
-        .collect();
+    let polys = sampled_loops(face, 256);
     let [u0, u1, v0, v1] = face.bounds;
     let size = (u1 - u0).hypot(v1 - v0);
     let mut rng = Rng(face.id + 17);

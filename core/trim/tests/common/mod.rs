@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use tessd_brep::{Curve, Frame, Surface, Trim};
+use tessd_brep::{Curve, Face, Frame, Surface, Trim};
 
 /// xorshift64*: a reproducible stream of numbers in [0, 1).
 pub struct Rng(pub u64);
@@ -63,4 +63,22 @@ pub fn exact_inside(polys: &[Vec<[f64; 2]>], p: [f64; 2], empty: bool) -> (bool,
         }
     }
     (inside, dist)
+}
+
+/// Each loop of `face` as a closed polygon of `per_trim` points per trim, sampled straight
+/// from the exact trim curves (the even-odd reference's input).
+pub fn sampled_loops(face: &Face, per_trim: usize) -> Vec<Vec<[f64; 2]>> {
+    face.loops
+        .iter()
+        .map(|l| {
+            l.trims
+                .iter()
+                .flat_map(|tr| {
+                    let [t0, t1] = tr.range;
+                    (0..per_trim)
+                        .map(move |i| tr.curve.point(t0 + (t1 - t0) * i as f64 / per_trim as f64))
+                })
+                .collect()
+        })
+        .collect()
 }
