@@ -25,12 +25,11 @@ from tessd.brep import export_shape
 from tessd.brep import ocp as brep_ocp
 
 from OCP.BRepAdaptor import BRepAdaptor_Curve2d
-from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 from OCP.BRepClass import BRepClass_FaceClassifier
 from OCP.BRepTools import BRepTools
 from OCP.gp import gp_Pnt2d
 from OCP.IntTools import IntTools_FClass2d
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_IN, TopAbs_ON, TopAbs_OUT
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_IN, TopAbs_ON, TopAbs_OUT
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopTools import TopTools_IndexedMapOfShape
 from OCP.TopoDS import TopoDS_Shape
@@ -48,16 +47,9 @@ OCP_IN, OCP_OUT, OCP_ON = 1, 0, 2
 
 
 def document_face(face):
-    """The forward face whose (u, v) the exported document uses and whether the exporter mirrored
-    u (u_doc = 2π − u_ocp), as tessd.brep.ocp does it: faces without an exact format type are
-    OCP's NURBS conversion."""
-    ff = brep_ocp._face(face.Oriented(TopAbs_FORWARD))
-    surf, mirror = brep_ocp._surface(ff)
-    if surf is None:
-        conv = BRepBuilderAPI_NurbsConvert(ff, True)
-        ff = brep_ocp._face(brep_ocp._face(conv.Shape()).Oriented(TopAbs_FORWARD))
-        surf, mirror = brep_ocp._surface(ff)
-    return ff, mirror
+    """The face and mirror flag of the document's (u, v), as the exporter chose them."""
+    work, _surf, mirror, _conv = brep_ocp.document_face(face)
+    return work, mirror
 
 
 def faces_of(shape):

@@ -401,27 +401,38 @@ def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None) -
     return new_document(units, source, faces, edges)
 
 
+def document_face(face: Any) -> Tuple[Any, Optional[Dict[str, Any]], bool, Any]:
+    """The forward face whose (u, v) the exported document uses, its SURFACE, whether u is
+    mirrored (u_doc = 2π − u_ocp) and the `BRepBuilderAPI_NurbsConvert` that made it (None when
+    the face has an exact format type and is used as it is). Shared with the tests that compare
+    our (u, v) answers with OCP's on the same face."""
+    ff = _face(face.Oriented(TopAbs_FORWARD))
+    surf, mirror = _surface(ff)
+    if surf is not None:
+        return ff, surf, mirror, None
+    # No exact format type: OCP's NURBS conversion of the face (pcurves included).
+    conv = BRepBuilderAPI_NurbsConvert(ff, True)
+    work = _face(_face(conv.Shape()).Oriented(TopAbs_FORWARD))
+    surf, mirror = _surface(work)
+    return work, surf, mirror, conv
+
+
 def _export_face(face: Any, fid: int, edge_map: Any, edge_faces: Dict[int, List[int]]) -> Dict[str, Any]:
     where = f"face {fid}"
     reversed_ = face.Orientation() == TopAbs_REVERSED
     ff = _face(face.Oriented(TopAbs_FORWARD))
-    surf, mirror = _surface(ff)
-
-    work = ff
+    work, surf, mirror, conv = document_face(face)
     # OCP edge of `work` → edge id (ids are the original shape's edges).
     renamed: Optional[List[Tuple[Any, int]]] = None
-    if surf is None:  # no exact format type: OCP's NURBS conversion of the face (pcurves included)
-        conv = BRepBuilderAPI_NurbsConvert(ff, True)
-        work = _face(_face(conv.Shape()).Oriented(TopAbs_FORWARD))
+    if conv is not None:
         renamed = []
         exp = TopExp_Explorer(ff, TopAbs_EDGE)
         while exp.More():
             orig = exp.Current()
             renamed.append((conv.ModifiedShape(orig), edge_map.FindIndex(orig)))
             exp.Next()
-        surf, mirror = _surface(work)
-        if surf is None:
-            raise ExportError(f"{where}: NurbsConvert gave no B-spline surface")
+    if surf is None:
+        raise ExportError(f"{where}: NurbsConvert gave no B-spline surface")
 
     def edge_id(e: Any) -> Optional[int]:
         if renamed is None:
