@@ -146,8 +146,24 @@ fn array_ref(map: &Map<String, Value>) -> Option<String> {
     }
 }
 
-/// Array `name` as f64 values with its shape, from any numeric dtype.
+/// Array `name` as f64 values with its shape, from any numeric dtype, every element finite.
 fn array_f64(name: &str, arrays: &Arrays) -> Result<(Vec<f64>, Vec<u64>), OpError> {
+    let (data, shape) = array_as_f64(name, arrays)?;
+    if let Some(i) = data.iter().position(|x| !x.is_finite()) {
+        return Err(OpError::new(
+            ErrorCode::InvalidBrep,
+            format!("array {name:?}: element {i} is not finite"),
+        ));
+    }
+    Ok((data, shape))
+}
+
+/// Array `name` as f64 values with its shape, from f64, f32 or a 32-bit or smaller integer
+/// dtype (shared with `trim.classify`, which checks its points itself).
+///
+/// # Errors
+/// `invalid_request` for a missing array or another dtype.
+pub fn array_as_f64(name: &str, arrays: &Arrays) -> Result<(Vec<f64>, Vec<u64>), OpError> {
     let desc = arrays.desc(name).ok_or_else(|| {
         OpError::request(format!(
             "the document refers to array {name:?}, which the request does not carry"
@@ -177,12 +193,6 @@ fn array_f64(name: &str, arrays: &Arrays) -> Result<(Vec<f64>, Vec<u64>), OpErro
             )));
         }
     };
-    if let Some(i) = data.iter().position(|x| !x.is_finite()) {
-        return Err(OpError::new(
-            ErrorCode::InvalidBrep,
-            format!("array {name:?}: element {i} is not finite"),
-        ));
-    }
     Ok((data, shape))
 }
 

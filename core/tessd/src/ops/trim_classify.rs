@@ -6,7 +6,7 @@
 //!
 //! Parameters are described in docs/protocol.md ("trim.classify").
 
-use super::brep_load::{brep_error, request_document};
+use super::brep_load::{array_as_f64, brep_error, request_document};
 use super::tessellate::parse_length;
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -152,17 +152,13 @@ fn read_points(request: &Request, faces: usize) -> Result<(Vec<[f64; 2]>, usize)
     let desc = request.arrays.desc("uv").ok_or_else(|| {
         OpError::request("array `uv` (the points, [faces, points, 2]) is required")
     })?;
-    let shape = desc.shape.clone();
-    let data: Vec<f64> = match desc.dtype {
-        DType::F64 => typed::<f64>(request)?,
-        DType::F32 => typed::<f32>(request)?,
-        other => {
-            return Err(OpError::request(format!(
-                "array `uv` must be f64 or f32, got {}",
-                other.name()
-            )));
-        }
-    };
+    if !matches!(desc.dtype, DType::F64 | DType::F32) {
+        return Err(OpError::request(format!(
+            "array `uv` must be f64 or f32, got {}",
+            desc.dtype.name()
+        )));
+    }
+    let (data, shape) = array_as_f64("uv", &request.arrays)?;
     let points = match shape.as_slice() {
         [f, n, 2] if *f as usize == faces => *n as usize,
         [n, 2] if faces == 1 => *n as usize,
@@ -174,15 +170,4 @@ fn read_points(request: &Request, faces: usize) -> Result<(Vec<[f64; 2]>, usize)
     };
     let rows = data.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
     Ok((rows, points))
-}
-
-fn typed<T: tessd_ipc::arrays::Element + Into<f64>>(
-    request: &Request,
-) -> Result<Vec<f64>, OpError> {
-    let (data, _) = request
-        .arrays
-        .get::<T>("uv")
-        .ok_or_else(|| OpError::request("no array `uv`"))?
-        .map_err(OpError::request)?;
-    Ok(data.iter().map(|&x| x.into()).collect())
 }
