@@ -109,7 +109,7 @@ pub struct Basis {
     poles: usize,
     /// `N_{first+k}(t)`.
     pub values: [f64; MAX_DEGREE + 1],
-    /// `N'_{first+k}(t)`.
+    /// `N'_{first+k}(t)` (zero when only the values were asked for).
     pub derivs: [f64; MAX_DEGREE + 1],
 }
 
@@ -117,6 +117,22 @@ impl Basis {
     /// The pole index of the `k`-th non-zero function (wrapping for periodic vectors).
     pub fn pole(&self, k: usize) -> usize {
         (self.first + k) % self.poles.max(1)
+    }
+
+    /// The pole indices of all `count` non-zero functions (one division-free pass, for the
+    /// inner loops of surface evaluation).
+    pub fn pole_indices(&self) -> [usize; MAX_DEGREE + 1] {
+        let n = self.poles.max(1);
+        let mut out = [0; MAX_DEGREE + 1];
+        let mut i = self.first % n;
+        for o in out.iter_mut().take(self.count) {
+            *o = i;
+            i += 1;
+            if i == n {
+                i = 0;
+            }
+        }
+        out
     }
 }
 
@@ -298,6 +314,11 @@ impl KnotVector {
 
     /// The non-zero basis functions at `t` and their derivatives.
     pub fn basis(&self, t: f64) -> Basis {
+        self.basis_with(t, true)
+    }
+
+    /// The non-zero basis functions at `t`, with their derivatives when `derivs` (else zeros).
+    pub fn basis_with(&self, t: f64, derivs: bool) -> Basis {
         let p = self.degree;
         let (s, t) = self.span(t);
         let k = &self.flat;
@@ -324,7 +345,11 @@ impl KnotVector {
         // with prev[r] = N_{s−p+1+r, p−1}.
         let mut d = [0.0; MAX_DEGREE + 1];
         let first = s - p;
-        for (r, dr) in d.iter_mut().enumerate().take(p + 1) {
+        for (r, dr) in d
+            .iter_mut()
+            .enumerate()
+            .take(if derivs { p + 1 } else { 0 })
+        {
             let i = first + r;
             let mut v = 0.0;
             if r >= 1 {
@@ -367,10 +392,10 @@ pub fn eval_curve<P: Vector>(
         return None;
     }
     let b = kv.basis(t);
+    let idx = b.pole_indices();
     let (mut a, mut da) = (P::zero(), P::zero());
     let (mut w, mut dw) = (0.0, 0.0);
-    for k in 0..b.count {
-        let i = b.pole(k);
+    for (k, &i) in idx[..b.count].iter().enumerate() {
         let wi = weights.map_or(1.0, |ws| ws[i]);
         a = a.add(poles[i].scale(b.values[k] * wi));
         da = da.add(poles[i].scale(b.derivs[k] * wi));
@@ -379,6 +404,37 @@ pub fn eval_curve<P: Vector>(
     }
     let c = a.scale(1.0 / w);
     Some((c, da.sub(c.scale(dw)).scale(1.0 / w)))
+}
+
+/// A point of a (rational) tensor-product B-spline surface without its derivatives (a third of
+/// the sums of [`eval_surface`]), for poles and weights that [`surface_fits`] accepted.
+pub fn eval_surface_point(
+    ku: &KnotVector,
+    kv: &KnotVector,
+    poles: &[Vec<[f64; 3]>],
+    weights: Option<&[Vec<f64>]>,
+    u: f64,
+    v: f64,
+) -> [f64; 3] {
+    let bu = ku.basis_with(u, false);
+    let bv = kv.basis_with(v, false);
+    let (iu, iv) = (bu.pole_indices(), bv.pole_indices());
+    let mut a = [0.0; 3];
+    let mut w = 0.0;
+    for (ku_, &i) in iu[..bu.count].iter().enumerate() {
+        let row = &poles[i];
+        let wrow = weights.map(|ws| &ws[i]);
+        let mut ra = [0.0; 3];
+        let mut rw = 0.0;
+        for (kv_, &j) in iv[..bv.count].iter().enumerate() {
+            let n = bv.values[kv_] * wrow.map_or(1.0, |r| r[j]);
+            ra = ra.add(row[j].scale(n));
+            rw += n;
+        }
+        a = a.add(ra.scale(bu.values[ku_]));
+        w += rw * bu.values[ku_];
+    }
+    a.scale(1.0 / w)
 }
 
 /// Whether the poles (and weights) match the knot vectors' pole counts.
@@ -408,15 +464,14 @@ pub fn eval_surface(
 ) -> ([f64; 3], [f64; 3], [f64; 3]) {
     let bu = ku.basis(u);
     let bv = kv.basis(v);
+    let (iu, iv) = (bu.pole_indices(), bv.pole_indices());
     let zero = [0.0; 3];
     let (mut a, mut au, mut av) = (zero, zero, zero);
     let (mut w, mut wu, mut wv) = (0.0, 0.0, 0.0);
-    for ku_ in 0..bu.count {
-        let i = bu.pole(ku_);
+    for (ku_, &i) in iu[..bu.count].iter().enumerate() {
         let row = &poles[i];
         let wrow = weights.map(|ws| &ws[i]);
-        for kv_ in 0..bv.count {
-            let j = bv.pole(kv_);
+        for (kv_, &j) in iv[..bv.count].iter().enumerate() {
             let wij = wrow.map_or(1.0, |r| r[j]);
             let p = row[j];
             let n = bu.values[ku_] * bv.values[kv_] * wij;

@@ -17,8 +17,8 @@ impl<P: Vector> BSplineCurve<P> {
 
     /// `(C(t), C'(t))`, or `None` for a curve [`crate::validate`] refuses.
     pub fn eval(&self, t: f64) -> Option<(P, P)> {
-        let kv = self.knot_vector().ok()?;
-        eval_curve(&kv, &self.poles, self.weights.as_deref(), t)
+        let kv = self.cache.get_or_init(|| self.knot_vector().ok())?;
+        eval_curve(kv, &self.poles, self.weights.as_deref(), t)
     }
 }
 

@@ -362,4 +362,7 @@ pub struct BSplineCurve<P> {
     /// Whether the curve is periodic (poles wrap around; first and last multiplicities equal).
     #[serde(default)]
     pub periodic: bool,
+    /// The knot vector built on first evaluation (not part of the format).
+    #[serde(skip)]
+    pub cache: crate::surface::KnotCache<crate::bspline::KnotVector>,
 }

@@ -2,7 +2,7 @@
 //! ∂S/∂v, and the unit normal, in OCP's parametrisations (docs/brep-format.md, "Surfaces");
 //! a face's normal is the surface's turned over when the face is `reversed`.
 
-use crate::bspline::{KnotVector, eval_surface, surface_fits};
+use crate::bspline::{KnotVector, eval_surface, eval_surface_point, surface_fits};
 use crate::model::{BSplineSurface, Face, Frame, Surface};
 use crate::vector::{Vector, combine, cross};
 
@@ -37,19 +37,39 @@ fn radial(frame: &Frame, u: f64) -> ([f64; 3], [f64; 3]) {
     )
 }
 
-/// A B-spline surface's knot vectors, checked against its poles once and kept for every
-/// evaluation (evaluation is the tessellator's inner loop: building them per point cost a
-/// fifth of its time). Equal whatever it holds, so surfaces still compare by their data.
-#[derive(Clone, Default)]
-pub struct KnotCache(Box<std::sync::OnceLock<Option<(KnotVector, KnotVector)>>>);
+/// A B-spline's checked knot vectors (a surface's pair, a curve's one), built on the first
+/// evaluation and kept for every later one (evaluation is the tessellator's inner loop, and
+/// validation's: building them per point cost a fifth, resp. half, of their time). Equal
+/// whatever it holds, so B-splines still compare by their data; a clone starts empty, so a
+/// copy whose knots are then edited does not keep the original's.
+pub struct KnotCache<T = (KnotVector, KnotVector)>(Box<std::sync::OnceLock<Option<T>>>);
 
-impl PartialEq for KnotCache {
-    fn eq(&self, _: &KnotCache) -> bool {
+impl<T> Default for KnotCache<T> {
+    fn default() -> Self {
+        KnotCache(Box::default())
+    }
+}
+
+impl<T> KnotCache<T> {
+    /// The cached value, built by `init` the first time.
+    pub fn get_or_init(&self, init: impl FnOnce() -> Option<T>) -> Option<&T> {
+        self.0.get_or_init(init).as_ref()
+    }
+}
+
+impl<T> Clone for KnotCache<T> {
+    fn clone(&self) -> Self {
+        KnotCache::default()
+    }
+}
+
+impl<T> PartialEq for KnotCache<T> {
+    fn eq(&self, _: &KnotCache<T>) -> bool {
         true
     }
 }
 
-impl std::fmt::Debug for KnotCache {
+impl<T> std::fmt::Debug for KnotCache<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("KnotCache")
     }
@@ -63,11 +83,22 @@ impl BSplineSurface {
         Some(SurfacePoint { point, du, dv })
     }
 
+    /// `S(u, v)` alone (no derivatives), or `None` for a surface [`crate::validate`] refuses.
+    pub fn point(&self, u: f64, v: f64) -> Option<[f64; 3]> {
+        let (ku, kv) = self.knot_vectors()?;
+        Some(eval_surface_point(
+            ku,
+            kv,
+            &self.poles,
+            self.weights.as_deref(),
+            u,
+            v,
+        ))
+    }
+
     /// The checked knot vectors, `None` when they or the poles break the rules.
     fn knot_vectors(&self) -> Option<&(KnotVector, KnotVector)> {
-        self.cache
-            .0
-            .get_or_init(|| {
+        self.cache.get_or_init(|| {
                 let ku =
                     KnotVector::new(self.degree_u, &self.knots_u, &self.mults_u, self.periodic_u)
                         .ok()?;
@@ -76,7 +107,6 @@ impl BSplineSurface {
                         .ok()?;
                 surface_fits(&ku, &kv, &self.poles, self.weights.as_deref()).then_some((ku, kv))
             })
-            .as_ref()
     }
 }
 
@@ -186,7 +216,10 @@ impl Surface {
 
     /// S(u, v).
     pub fn point(&self, u: f64, v: f64) -> [f64; 3] {
-        self.eval(u, v).point
+        match self {
+            Surface::Bspline(b) => b.point(u, v).unwrap_or([f64::NAN; 3]),
+            _ => self.eval(u, v).point,
+        }
     }
 
     /// The unit normal `∂S/∂u × ∂S/∂v`; at a sphere's poles, where that vanishes, the

@@ -473,3 +473,44 @@ fn revolution_and_cone_match_ocp() {
         1e-12,
     );
 }
+
+/// `Surface::point` takes a derivative-free path for B-splines: it must give `eval`'s point.
+#[test]
+fn bspline_point_path_matches_eval() {
+    let c = periodic_cubic();
+    let Curve3::Bspline(b) = &c else {
+        unreachable!()
+    };
+    let poles: Vec<Vec<[f64; 3]>> = b
+        .poles
+        .iter()
+        .map(|p| {
+            vec![
+                *p,
+                [p[0] + 0.5, p[1], p[2] + 1.0],
+                [p[0], p[1] + 0.3, p[2] + 2.0],
+            ]
+        })
+        .collect();
+    let weights: Vec<Vec<f64>> = (0..poles.len())
+        .map(|i| vec![1.0, 0.5 + 0.1 * i as f64, 2.0])
+        .collect();
+    let periodic = surface(json!({
+        "type": "bspline", "degree_u": 3, "degree_v": 2, "poles": poles, "weights": weights,
+        "knots_u": b.knots, "mults_u": b.mults, "knots_v": [0, 1], "mults_v": [3, 3],
+        "periodic_u": true, "periodic_v": false
+    }));
+    for s in [periodic, rational_bspline_surface()] {
+        for (u, v) in [
+            (0.0, 0.0),
+            (0.37, 0.61),
+            (1.5, 0.25),
+            (4.2, 0.999),
+            (-0.3, 1.0),
+        ] {
+            let (p, e) = (s.point(u, v), s.eval(u, v).point);
+            let scale = e.iter().map(|c| c.abs()).fold(1.0, f64::max);
+            assert_close3(p, e, 1e-14 * scale);
+        }
+    }
+}

@@ -46,6 +46,7 @@ fn bspline(degree: usize, poles: Vec<[f64; 2]>, knots: Vec<f64>, mults: Vec<u32>
             knots,
             mults,
             periodic: false,
+            cache: Default::default(),
         }),
         range,
         edge: None,

@@ -211,6 +211,7 @@ fn nurbs_circle(center: [f64; 2], r: f64) -> Curve<[f64; 2]> {
         knots: vec![0.0, 1.0, 2.0, 3.0, 4.0],
         mults: vec![3, 2, 2, 2, 3],
         periodic: false,
+        cache: Default::default(),
     })
 }
 
@@ -258,6 +259,7 @@ fn approximations_stay_within_eps() {
             knots: vec![0.0, 0.4, 1.0],
             mults: vec![6, 1, 6],
             periodic: false,
+            cache: Default::default(),
         }),
         range: [0.0, 1.0],
         edge: None,
