@@ -2,9 +2,12 @@
 //! sample the input curve, fit a dense uniform quadratic B-spline, remove knots to the (u, v)
 //! tolerance, split into connected quadratic Béziers, and turn flat ones into lines.
 //!
-//! The tolerance `eps_uv` is shared out: half for the spline against the samples, a quarter
-//! for flattening, the rest for the curve between samples (checked at the midpoints between
-//! samples, and reported). Lines and degree-1 B-splines become segments directly; other
+//! The tolerance `eps_uv` is shared out: half for the spline against the samples and the
+//! curve's midpoints between them, a quarter for flattening, the rest for the curve between
+//! those checks (measured at the samples and midpoints again, and reported). The spline is
+//! compared with each sample at the parameter it was fitted at after parameter correction
+//! (`quadratic_fit::correct_params`): the samples' distance to the curve, not to the point of
+//! the same uniform parameter, which overstated the deviation of arcs several times over. Lines and degree-1 B-splines become segments directly; other
 //! B-splines are split at their corners (knots of multiplicity ≥ the degree) first.
 
 use crate::bezier::{P2, Quadratic, dist};
@@ -106,14 +109,14 @@ pub fn approximate_trim(trim: &Trim, eps_uv: f64) -> Result<TrimApprox, NotFinit
         }
         count *= 2;
     };
-    let thin = remove_knots(&samples, spline, tol);
+    let (thin, fitted_at) = remove_knots(&samples, spline, tol);
     let flat_tol = 0.25 * eps_uv;
     let pieces: Vec<Quadratic> = thin
         .beziers()
         .into_iter()
         .map(|q| q.flattened(flat_tol))
         .collect();
-    let max_error = measure(trim, &thin, &pieces, &samples);
+    let max_error = measure(trim, &thin, &pieces, &samples, &fitted_at);
     Ok(TrimApprox { pieces, max_error })
 }
 
@@ -145,19 +148,30 @@ fn approximate_between_corners(
 }
 
 /// The largest parametric distance between the pieces and the curve at the samples and the
-/// midpoints between them.
-fn measure(trim: &Trim, spline: &QuadSpline, pieces: &[Quadratic], samples: &Samples) -> f64 {
+/// midpoints between them: sample i of the curve (parameter `samples.params[i]`) against the
+/// pieces at the parameter it was fitted at (`fitted_at.params[i]`, after parameter
+/// correction), midpoints against midpoints — a monotone matching of the two curves.
+fn measure(
+    trim: &Trim,
+    spline: &QuadSpline,
+    pieces: &[Quadratic],
+    samples: &Samples,
+    fitted_at: &Samples,
+) -> f64 {
     let [t0, t1] = trim.range;
     let b = &spline.breaks;
     let mut worst: f64 = 0.0;
     let n = samples.params.len();
-    for i in 0..(2 * n - 1) {
-        let s = if i % 2 == 0 {
-            samples.params[i / 2]
+    let mid = |p: &[f64], i: usize| {
+        if i.is_multiple_of(2) {
+            p[i / 2]
         } else {
-            0.5 * (samples.params[i / 2] + samples.params[i / 2 + 1])
-        };
-        let exact = trim.curve.point(t0 + s * (t1 - t0));
+            0.5 * (p[i / 2] + p[i / 2 + 1])
+        }
+    };
+    for i in 0..(2 * n - 1) {
+        let (e, s) = (mid(&samples.params, i), mid(&fitted_at.params, i));
+        let exact = trim.curve.point(t0 + e * (t1 - t0));
         let span = b.partition_point(|&x| x <= s).clamp(1, b.len() - 1) - 1;
         let local = (s - b[span]) / (b[span + 1] - b[span]);
         let q = &pieces[span];

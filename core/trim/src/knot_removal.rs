@@ -11,7 +11,7 @@
 //! when not even the lightest knot can go.
 
 use crate::bezier::{P2, dist};
-use crate::quadratic_fit::{QuadSpline, Samples, fit, knot_vector, max_error};
+use crate::quadratic_fit::{QuadSpline, Samples, fit_corrected, knot_vector, max_error};
 
 /// The weight of each interior breakpoint `breaks[1 ..= L−1]` (index into `breaks`).
 pub fn knot_weights(spline: &QuadSpline) -> Vec<(usize, f64)> {
@@ -43,13 +43,17 @@ pub fn knot_weights(spline: &QuadSpline) -> Vec<(usize, f64)> {
 }
 
 /// Removes knots from `spline` while the refit stays within `tol` of `samples`
-/// (see the module text). Returns the thinned spline (the input when nothing can go).
-pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> QuadSpline {
+/// (see the module text). Each refit corrects the samples' parameters
+/// ([`fit_corrected`]), so the tolerance is checked against the samples' distance to the
+/// curve rather than to the point of the same parameter. Returns the thinned spline (the
+/// input when nothing can go) and the samples at the parameters it was fitted at.
+pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> (QuadSpline, Samples) {
     let mut current = spline;
+    let mut at = samples.clone();
     loop {
         let mut weights = knot_weights(&current);
         if weights.is_empty() {
-            return current;
+            return (current, at);
         }
         weights.sort_by(|a, b| a.1.total_cmp(&b.1));
         let mut count = weights.len().div_ceil(2);
@@ -64,16 +68,16 @@ pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> QuadSpli
                 .filter(|(i, _)| drop.binary_search(i).is_err())
                 .map(|(_, &b)| b)
                 .collect();
-            let candidate = fit(samples, &breaks);
-            if max_error(&candidate, samples) <= tol {
-                accepted = Some(candidate);
+            let (candidate, fitted_at) = fit_corrected(&at, &breaks, tol);
+            if max_error(&candidate, &fitted_at) <= tol {
+                accepted = Some((candidate, fitted_at));
                 break;
             }
             count /= 2;
         }
         match accepted {
-            Some(c) => current = c,
-            None => return current,
+            Some((c, a)) => (current, at) = (c, a),
+            None => return (current, at),
         }
     }
 }
@@ -81,7 +85,7 @@ pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> QuadSpli
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::quadratic_fit::uniform_breaks;
+    use crate::quadratic_fit::{fit, uniform_breaks};
 
     #[test]
     fn a_parabola_needs_one_span() {
@@ -92,11 +96,12 @@ mod tests {
             points,
             start_tangent: [1.0, 0.0],
             end_tangent: [1.0, 6.0],
+            mids: Vec::new(),
         };
         let dense = fit(&samples, &uniform_breaks(40));
         let weights = knot_weights(&dense);
         assert!(weights.iter().all(|w| w.1 < 1e-9), "{weights:?}");
-        let thin = remove_knots(&samples, dense, 1e-9);
+        let (thin, _) = remove_knots(&samples, dense, 1e-9);
         assert_eq!(thin.breaks.len(), 2);
     }
 }

@@ -17,7 +17,7 @@
 //! curve.
 
 use crate::bezier::Quadratic;
-use crate::classify::{NodeRecord, TrimSource, leaf_point, leaf_triangle};
+use crate::classify::{NodeRecord, TrimSource, curve_ref, leaf_point, leaf_triangle, ref_index};
 use crate::implicit::{Implicit, ImplicitKind};
 use crate::separate::{Ray, separating_line};
 use crate::winding::winding;
@@ -117,21 +117,28 @@ impl TrimSource for Quadtree {
 
     fn node(&self, i: u32) -> NodeRecord {
         let n = &self.nodes[i as usize];
+        let r = |c: u32| {
+            if c == NONE {
+                NONE
+            } else {
+                curve_ref(c, self.implicits[c as usize].kind)
+            }
+        };
         NodeRecord {
             kind: n.kind,
             covered: n.covered,
             a: if n.kind == NodeKind::Internal {
                 n.first_child
             } else {
-                n.curves[0]
+                r(n.curves[0])
             },
-            b: n.curves[1],
+            b: r(n.curves[1]),
             line: n.line,
         }
     }
 
-    fn implicit(&self, i: u32) -> Implicit {
-        self.implicits[i as usize]
+    fn implicit(&self, r: u32) -> Implicit {
+        self.implicits[ref_index(r) as usize]
     }
 
     fn line(&self, i: u32) -> [f32; 3] {
