@@ -6,7 +6,8 @@
 //! their own; short ones (the exporter's gap closers) add no point.
 
 use crate::Options;
-use crate::edges::{EdgeSamples, EdgeTable, sample_chordal, snap_radius, trim_point};
+use crate::edges::{EdgeSamples, EdgeTable, min_segments, sample_chordal, snap_radius, trim_point};
+use std::collections::HashMap;
 use tessd_brep::vector::Vector;
 use tessd_brep::{Curve2, Face, Trim};
 
@@ -18,14 +19,45 @@ pub struct BoundaryPoint {
     pub uv: [f64; 2],
     /// The 3D position.
     pub p: [f64; 3],
+    /// Where the segment from this point to the next one comes from, so that it can be split
+    /// (`None` on degenerate edges and the bounds rectangle).
+    pub next: Option<Segment>,
+}
+
+/// What a boundary curve is sampled along: a shared edge (its 3D curve's parameter) or a
+/// trim without an edge (the trim's own parameter; loop and trim index on its face).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Source {
+    /// A shared edge, by id.
+    Edge(u64),
+    /// A trim without an edge: `(loop, trim)` on the face.
+    Free(usize, usize),
+}
+
+/// One boundary segment's origin: the curve and the parameters of its two ends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// The curve sampled.
+    pub source: Source,
+    /// The parameters of the segment's start and end on that curve.
+    pub t: [f64; 2],
 }
 
 /// A closed polyline (the last point connects back to the first).
 pub type Polyline = Vec<BoundaryPoint>;
 
+/// Extra sample parameters for a face's trims without an edge, by `(loop, trim)` (added where
+/// boundary polylines crossed, see [`crate::crossings`]).
+pub type FreeSplits = HashMap<(usize, usize), Vec<f64>>;
+
 /// The loops of `face` as closed polylines, outer first; the `bounds` rectangle for a face
-/// without loops.
-pub fn face_loops(face: &Face, edges: &EdgeTable, options: &Options) -> Vec<Polyline> {
+/// without loops. `extra` adds samples to trims without an edge.
+pub fn face_loops(
+    face: &Face,
+    edges: &EdgeTable,
+    extra: &FreeSplits,
+    options: &Options,
+) -> Vec<Polyline> {
     if face.loops.is_empty() {
         let [u0, u1, v0, v1] = face.bounds;
         let corners = [[u0, v0], [u1, v0], [u1, v1], [u0, v1]];
@@ -41,23 +73,31 @@ pub fn face_loops(face: &Face, edges: &EdgeTable, options: &Options) -> Vec<Poly
                 range: [0.0, len],
                 edge: None,
             };
-            let pts = free_trim(face, &trim, options);
+            let mut pts = free_trim(face, &trim, &[], options);
+            pts.iter_mut().for_each(|b| b.next = None);
             out.extend_from_slice(&pts[..pts.len() - 1]);
         }
         return vec![out];
     }
     face.loops
         .iter()
-        .map(|lp| {
+        .enumerate()
+        .map(|(li, lp)| {
             let mut out: Polyline = Vec::new();
-            for trim in &lp.trims {
-                let pts = match trim.edge.and_then(|id| edges.get(&id)) {
-                    Some(EdgeSamples::Curve { params, points }) => {
-                        shared_trim(face, trim, params, points)
+            for (ti, trim) in lp.trims.iter().enumerate() {
+                let pts = match trim.edge.and_then(|id| edges.get(&id).map(|s| (id, s))) {
+                    Some((id, EdgeSamples::Curve { params, points })) => {
+                        shared_trim(face, trim, id, params, points)
                     }
-                    Some(EdgeSamples::Point(p)) => degenerate_trim(trim, *p),
+                    Some((_, EdgeSamples::Point(p))) => degenerate_trim(trim, *p),
                     None => {
-                        let pts = free_trim(face, trim, options);
+                        let more = extra.get(&(li, ti)).map_or(&[][..], |v| v);
+                        let mut pts = free_trim(face, trim, more, options);
+                        for b in pts.iter_mut() {
+                            if let Some(s) = &mut b.next {
+                                s.source = Source::Free(li, ti);
+                            }
+                        }
                         let len: f64 = pts.windows(2).map(|w| w[1].p.sub(w[0].p).norm()).sum();
                         if len < 2.0 * snap_radius(options) {
                             continue;
@@ -73,35 +113,59 @@ pub fn face_loops(face: &Face, edges: &EdgeTable, options: &Options) -> Vec<Poly
         .collect()
 }
 
-/// Drops consecutive points with equal (u, v) (and the closing duplicate).
+/// Drops consecutive points with equal (u, v) (and the closing duplicate); the point kept
+/// takes over the dropped one's outgoing segment.
 fn dedup(pts: Polyline) -> Polyline {
     let mut out: Polyline = Vec::with_capacity(pts.len());
     for q in pts {
-        if out.last().is_none_or(|l| l.uv != q.uv) {
-            out.push(q);
+        match out.last_mut() {
+            Some(l) if l.uv == q.uv => l.next = q.next,
+            _ => out.push(q),
         }
     }
     while out.len() > 1 && out.first().map(|f| f.uv) == out.last().map(|l| l.uv) {
-        out.pop();
+        let l = out.pop().expect("non-empty");
+        out[0].next = out[0].next.or(l.next);
     }
     out
 }
 
-/// A trim without a shared edge, sampled on its own along S(c(t)).
-fn free_trim(face: &Face, trim: &Trim, options: &Options) -> Vec<BoundaryPoint> {
-    let [t0, t1] = trim.range;
-    let f = |t: f64| trim_point(face, &trim.curve, t);
-    let min = trim.curve.segments(t0, t1).max(1);
-    sample_chordal(&f, t0, t1, min, options.tolerance, options.angle)
-        .into_iter()
-        .map(|t| {
-            let uv = trim.curve.point(t);
-            BoundaryPoint {
-                uv,
-                p: face.surface.point(uv[0], uv[1]),
-            }
+/// The boundary points at parameters `ts`, each with its segment to the next.
+fn with_segments(
+    ts: &[f64],
+    source: Source,
+    point: impl Fn(usize, f64) -> BoundaryPoint,
+) -> Vec<BoundaryPoint> {
+    ts.iter()
+        .enumerate()
+        .map(|(k, &t)| BoundaryPoint {
+            next: ts.get(k + 1).map(|&t1| Segment { source, t: [t, t1] }),
+            ..point(k, t)
         })
         .collect()
+}
+
+/// A trim without a shared edge, sampled on its own along S(c(t)), plus the parameters
+/// `more`. The segments' source is set by the caller (it knows the trim's place).
+fn free_trim(face: &Face, trim: &Trim, more: &[f64], options: &Options) -> Vec<BoundaryPoint> {
+    let [t0, t1] = trim.range;
+    let f = |t: f64| trim_point(face, &trim.curve, t);
+    let min = min_segments(&trim.curve, t0, t1);
+    let mut ts = sample_chordal(&f, t0, t1, min, options.tolerance, options.angle);
+    if !more.is_empty() {
+        ts.extend_from_slice(more);
+        let sign = if t1 >= t0 { 1.0 } else { -1.0 };
+        ts.sort_by(|a, b| (sign * a).total_cmp(&(sign * b)));
+        ts.dedup();
+    }
+    with_segments(&ts, Source::Free(0, 0), |_, t| {
+        let uv = trim.curve.point(t);
+        BoundaryPoint {
+            uv,
+            p: face.surface.point(uv[0], uv[1]),
+            next: None,
+        }
+    })
 }
 
 /// A trim on a degenerate edge: (u, v) samples along the trim (enough for well-shaped
@@ -119,6 +183,7 @@ fn degenerate_trim(trim: &Trim, p: [f64; 3]) -> Vec<BoundaryPoint> {
             BoundaryPoint {
                 uv: trim.curve.point(t),
                 p,
+                next: None,
             }
         })
         .collect()
@@ -129,6 +194,7 @@ fn degenerate_trim(trim: &Trim, p: [f64; 3]) -> Vec<BoundaryPoint> {
 fn shared_trim(
     face: &Face,
     trim: &Trim,
+    id: u64,
     params: &[f64],
     points: &[[f64; 3]],
 ) -> Vec<BoundaryPoint> {
@@ -161,31 +227,30 @@ fn shared_trim(
         (0..params.len()).rev().collect()
     };
     let n = order.len();
-    order
-        .iter()
-        .enumerate()
-        .map(|(k, &i)| {
-            let t = if k == 0 {
-                t0
-            } else if k + 1 == n {
-                t1
-            } else if same {
-                params[i]
+    let edge_ts: Vec<f64> = order.iter().map(|&i| params[i]).collect();
+    with_segments(&edge_ts, Source::Edge(id), |k, _| {
+        let i = order[k];
+        let t = if k == 0 {
+            t0
+        } else if k + 1 == n {
+            t1
+        } else if same {
+            params[i]
+        } else {
+            let guess = t0 + (t1 - t0) * (params[i] - e0) / (e1 - e0);
+            let guess = if forward {
+                guess
             } else {
-                let guess = t0 + (t1 - t0) * (params[i] - e0) / (e1 - e0);
-                let guess = if forward {
-                    guess
-                } else {
-                    t0 + (t1 - t0) * (e1 - params[i]) / (e1 - e0)
-                };
-                project(face, &trim.curve, points[i], guess, t0, t1)
+                t0 + (t1 - t0) * (e1 - params[i]) / (e1 - e0)
             };
-            BoundaryPoint {
-                uv: trim.curve.point(t),
-                p: points[i],
-            }
-        })
-        .collect()
+            project(face, &trim.curve, points[i], guess, t0, t1)
+        };
+        BoundaryPoint {
+            uv: trim.curve.point(t),
+            p: points[i],
+            next: None,
+        }
+    })
 }
 
 /// The parameter of the pcurve whose surface point is nearest `p`, from `guess`, within the

@@ -8,9 +8,10 @@
 
 use crate::Options;
 use crate::boundary::Polyline;
+use crate::interior::Plan;
+use rustc_hash::FxHashSet;
 use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{ConstrainedDelaunayTriangulation, HasPosition, Point2, Triangulation};
-use std::collections::HashSet;
 use tessd_brep::Face;
 use tessd_brep::vector::{Vector, cross};
 
@@ -54,58 +55,51 @@ pub fn triangulate(
     face: &Face,
     loops: &[Polyline],
     interior: &[[f64; 2]],
-    scale: [f64; 2],
-    metric: [f64; 2],
+    plan: &Plan,
     options: &Options,
 ) -> FaceTriangles {
-    let mut cdt = Cdt::new();
-    let mk = |uv: [f64; 2], p: [f64; 3]| Vertex {
-        pos: Point2::new(uv[0] * scale[0], uv[1] * scale[1]),
-        uv,
-        p,
-    };
-    let surface_vertex = |pos: Point2<f64>| {
-        let uv = [pos.x / scale[0], pos.y / scale[1]];
+    let scale = plan.delaunay;
+    let b = plan.bounds;
+    let shake = JITTER * ((b[1] - b[0]) * scale[0]).max((b[3] - b[2]) * scale[1]);
+    let shake = if shake.is_finite() { shake } else { 0.0 };
+    let mk = |uv: [f64; 2], p: [f64; 3]| {
+        let [jx, jy] = jitter(uv);
         Vertex {
-            pos,
+            pos: Point2::new(uv[0] * scale[0] + shake * jx, uv[1] * scale[1] + shake * jy),
             uv,
-            p: face.surface.point(uv[0], uv[1]),
+            p,
         }
     };
-    for lp in loops {
-        let handles: Vec<Option<FixedVertexHandle>> =
-            lp.iter().map(|b| cdt.insert(mk(b.uv, b.p)).ok()).collect();
-        for k in 0..handles.len() {
-            if let (Some(a), Some(b)) = (handles[k], handles[(k + 1) % handles.len()])
-                && a != b
-            {
-                cdt.add_constraint_and_split(a, b, surface_vertex);
-            }
-        }
-    }
-    for &uv in interior {
-        let _ = cdt.insert(mk(uv, face.surface.point(uv[0], uv[1])));
-    }
+    let mut cdt = bulk_load(loops, interior, face, &mk)
+        .unwrap_or_else(|| insert_one_by_one(loops, interior, face, scale, &mk));
     let mut refined = 0;
     let mut inside = classify(&cdt);
     let mut checked = Checked::default();
+    let limits = Limits::new(plan, options);
     for _ in 0..PASSES {
         if cdt.num_vertices() >= MAX_VERTICES {
             break;
         }
-        let wanted = refinement_points(face, &cdt, &inside, metric, options, &mut checked);
+        let wanted = refinement_points(face, &cdt, &inside, &limits, &mut checked);
         if wanted.is_empty() {
             break;
         }
-        for uv in wanted {
+        for (uv, hint) in wanted {
             if cdt.num_vertices() >= MAX_VERTICES {
                 break;
             }
-            if cdt.insert(mk(uv, face.surface.point(uv[0], uv[1]))).is_ok() {
+            let v = mk(uv, face.surface.point(uv[0], uv[1]));
+            // The point lies in (or beside) the triangle it came from: start the search there.
+            if cdt.insert_with_hint(v, hint).is_ok() {
                 refined += 1;
             }
         }
-        inside = classify(&cdt);
+        // Every point went into an inside triangle (a centroid, or the midpoint of an edge
+        // that is not a constraint, whose two sides are both inside), and the triangles it
+        // re-made are those reachable from there without crossing a constraint: all inside.
+        // Faces are only ever added by insertion, so the new ones are appended — inside.
+        inside.resize(cdt.all_faces().len(), true);
+        debug_assert_eq!(inside, classify(&cdt));
     }
     let mut out = FaceTriangles {
         refined,
@@ -130,6 +124,94 @@ pub fn triangulate(
         out.triangles.push(tri);
     }
     out
+}
+
+/// The size of the displacement of every point in the Delaunay plane, relative to the face's
+/// extent there. Sampled circles are cocircular, grids and straight edges collinear, and
+/// spade's exact predicates settle such ties with multi-word arithmetic (half of a holed
+/// plate's time); a displacement far above rounding and far below any sample spacing makes
+/// every test decide in plain f64. Only the Delaunay plane moves: each vertex keeps its true
+/// (u, v) and 3D point.
+const JITTER: f64 = 1e-10;
+
+/// A displacement in [−1, 1]² that depends on the point alone (equal points stay equal:
+/// loops meeting at a vertex still meet), from a hash of its coordinates' bits.
+fn jitter(uv: [f64; 2]) -> [f64; 2] {
+    let mut h = uv[0].to_bits() ^ uv[1].to_bits().rotate_left(29) ^ 0x9e37_79b9_7f4a_7c15;
+    // SplitMix64's finaliser.
+    h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 31;
+    let unit = |x: u64| (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
+    [unit(h), unit(h.rotate_left(32))]
+}
+
+/// The triangulation of the loops and interior points loaded at once (spade's bulk loading, a
+/// few times faster than inserting point by point); `None` when constraint edges conflict
+/// (cross or overlap) and would be dropped.
+fn bulk_load(
+    loops: &[Polyline],
+    interior: &[[f64; 2]],
+    face: &Face,
+    mk: &dyn Fn([f64; 2], [f64; 3]) -> Vertex,
+) -> Option<Cdt> {
+    let count = loops.iter().map(Vec::len).sum::<usize>() + interior.len();
+    let mut vertices = Vec::with_capacity(count);
+    let mut edges = Vec::with_capacity(count);
+    for lp in loops {
+        let base = vertices.len();
+        vertices.extend(lp.iter().map(|b| mk(b.uv, b.p)));
+        edges.extend((0..lp.len()).map(|k| [base + k, base + (k + 1) % lp.len()]));
+    }
+    vertices.extend(
+        interior
+            .iter()
+            .map(|&uv| mk(uv, face.surface.point(uv[0], uv[1]))),
+    );
+    if vertices
+        .iter()
+        .any(|v| !(v.pos.x.is_finite() && v.pos.y.is_finite()))
+    {
+        return None;
+    }
+    let mut conflicts = 0;
+    let cdt = Cdt::try_bulk_load_cdt(vertices, edges, |_| conflicts += 1).ok()?;
+    (conflicts == 0).then_some(cdt)
+}
+
+/// The triangulation built point by point: the fallback where loops conflict, each crossing
+/// split at a new surface point (an open edge in the welded mesh, but a face that stays whole).
+fn insert_one_by_one(
+    loops: &[Polyline],
+    interior: &[[f64; 2]],
+    face: &Face,
+    scale: [f64; 2],
+    mk: &dyn Fn([f64; 2], [f64; 3]) -> Vertex,
+) -> Cdt {
+    let mut cdt = Cdt::new();
+    let surface_vertex = |pos: Point2<f64>| {
+        let uv = [pos.x / scale[0], pos.y / scale[1]];
+        Vertex {
+            pos,
+            uv,
+            p: face.surface.point(uv[0], uv[1]),
+        }
+    };
+    for lp in loops {
+        let handles: Vec<Option<FixedVertexHandle>> =
+            lp.iter().map(|b| cdt.insert(mk(b.uv, b.p)).ok()).collect();
+        for k in 0..handles.len() {
+            if let (Some(a), Some(b)) = (handles[k], handles[(k + 1) % handles.len()])
+                && a != b
+            {
+                cdt.add_constraint_and_split(a, b, surface_vertex);
+            }
+        }
+    }
+    for &uv in interior {
+        let _ = cdt.insert(mk(uv, face.surface.point(uv[0], uv[1])));
+    }
+    cdt
 }
 
 /// For each face of the triangulation (by index), whether it lies inside the trims.
@@ -198,8 +280,41 @@ fn near_constraint(f: &FaceRef<'_>, uv: [f64; 2], metric: [f64; 2]) -> bool {
 /// evaluations of the tests are most of the tessellator's time).
 #[derive(Default)]
 struct Checked {
-    triangles: HashSet<[usize; 3]>,
-    edges: HashSet<(usize, usize)>,
+    triangles: FxHashSet<[usize; 3]>,
+    edges: FxHashSet<(usize, usize)>,
+}
+
+/// What refinement tests a face's triangles against.
+struct Limits {
+    /// The chordal tolerance.
+    tol: f64,
+    /// The cosine of the angle.
+    cos_angle: f64,
+    /// The shortest longest-edge of a triangle that is split for its normal: a quarter of the
+    /// 3D length of the face's shortest curvature step (and at least 4 tolerances). The grid's
+    /// steps already keep the surface's turn within the angle; a triangle smaller than that
+    /// which still fails sits on something splitting cannot resolve — the fixed samples of a
+    /// boundary where the surface twists across it, a degenerate edge's fan — and without the
+    /// floor a thin fillet strip (CrankArm face 40 at angle 0.05) was split 400 000 times.
+    angle_floor: f64,
+    /// The (u, v) scale of 3D distances, for [`near_constraint`].
+    metric: [f64; 2],
+}
+
+impl Limits {
+    fn new(plan: &Plan, options: &Options) -> Limits {
+        let step = [0, 1]
+            .map(|k| plan.curvature[k] * plan.metric[k])
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        let floor = if step.is_finite() { 0.25 * step } else { 0.0 };
+        Limits {
+            tol: options.tolerance,
+            cos_angle: options.angle.cos(),
+            angle_floor: floor.max(4.0 * options.tolerance),
+            metric: plan.metric,
+        }
+    }
 }
 
 /// The (u, v) points that the inside triangles want inserted.
@@ -207,12 +322,10 @@ fn refinement_points(
     face: &Face,
     cdt: &Cdt,
     inside: &[bool],
-    metric: [f64; 2],
-    options: &Options,
+    limits: &Limits,
     checked: &mut Checked,
-) -> Vec<[f64; 2]> {
+) -> Vec<([f64; 2], FixedVertexHandle)> {
     let mut out = Vec::new();
-    let tol = options.tolerance;
     for f in cdt.inner_faces() {
         if !inside[f.fix().index()] {
             continue;
@@ -223,7 +336,7 @@ fn refinement_points(
             continue;
         }
         let before = out.len();
-        let edges_ok = triangle_points(face, &f, metric, options, tol, checked, &mut out);
+        let edges_ok = triangle_points(face, &f, limits, checked, &mut out);
         if edges_ok && out.len() == before {
             checked.triangles.insert(key);
         }
@@ -235,12 +348,11 @@ fn refinement_points(
 fn triangle_points(
     face: &Face,
     f: &FaceRef<'_>,
-    metric: [f64; 2],
-    options: &Options,
-    tol: f64,
+    limits: &Limits,
     checked: &mut Checked,
-    out: &mut Vec<[f64; 2]>,
+    out: &mut Vec<([f64; 2], FixedVertexHandle)>,
 ) -> bool {
+    let (tol, metric) = (limits.tol, limits.metric);
     let [a, b, c] = f.vertices().map(|v| *v.data());
     let cuv = a.uv.add(b.uv).add(c.uv).scale(1.0 / 3.0);
     let cp = a.p.add(b.p).add(c.p).scale(1.0 / 3.0);
@@ -261,11 +373,11 @@ fn triangle_points(
     let mut want = sp.point.sub(cp).norm() > tol;
     if !want && let Some(sn) = sp.normal() {
         let cosang = (n.dot(sn) / area2).abs().clamp(0.0, 1.0);
-        want = cosang.acos() > options.angle && edge_max > 4.0 * tol;
+        want = cosang < limits.cos_angle && edge_max > limits.angle_floor;
     }
     if want {
         if !near_constraint(f, cuv, metric) {
-            out.push(cuv);
+            out.push((cuv, f.vertices()[0].fix()));
         }
         return true;
     }
@@ -284,7 +396,7 @@ fn triangle_points(
         let mp = p.p.add(q.p).scale(0.5);
         let s = face.surface.point(muv[0], muv[1]);
         if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(f, muv, metric) {
-            out.push(muv);
+            out.push((muv, e.from().fix()));
             all = false;
         } else {
             checked.edges.insert((i, j));

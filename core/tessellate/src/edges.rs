@@ -7,7 +7,7 @@
 use crate::Options;
 use std::collections::HashMap;
 use tessd_brep::vector::Vector;
-use tessd_brep::{Curve2, Document, Face};
+use tessd_brep::{Curve, Curve2, Curve3, Document, Face};
 
 /// The discretisation of one shared edge.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,8 +55,53 @@ pub fn sample_chordal(
     out
 }
 
-/// Pushes the samples of `(a, b]`, splitting in two while the midpoint's chordal deviation or
-/// the turn between the half-chords is too large.
+/// The fewest segments a curve starts from before chordal refinement: one per quarter turn
+/// of a conic, two per polynomial piece of a B-spline (a cubic piece bends at most twice), one
+/// for a line. Refinement tests the chord's midpoint and quarter points, so a floor this low
+/// cannot hide a bend; where the coarse polylines of two curves cross in a face's (u, v),
+/// [`crate::crossings`] splits them.
+pub fn min_segments<P: Vector>(curve: &Curve<P>, t0: f64, t1: f64) -> usize {
+    let span = (t1 - t0).abs();
+    let n = match curve {
+        Curve::Line { .. } => 1.0,
+        Curve::Circle { .. } | Curve::Ellipse { .. } => (span / std::f64::consts::FRAC_PI_2).ceil(),
+        Curve::Bspline(b) => match b.knot_vector() {
+            Ok(kv) => (2 * kv.pieces(t0, t1)) as f64,
+            Err(_) => 1.0,
+        },
+    };
+    if n.is_finite() {
+        n.clamp(1.0, 4096.0) as usize
+    } else {
+        1
+    }
+}
+
+/// The largest distance of the curve's points at the quarter points of `[a, b]` from the
+/// chord `pa`–`pb` (the midpoint `pm` already evaluated).
+fn chord_deviation(
+    f: &dyn Fn(f64) -> [f64; 3],
+    (a, pa): (f64, [f64; 3]),
+    (b, pb): (f64, [f64; 3]),
+    pm: [f64; 3],
+) -> f64 {
+    let d = pb.sub(pa);
+    let len2 = d.dot(d);
+    let off = |p: [f64; 3]| {
+        let t = if len2 > 0.0 {
+            (p.sub(pa).dot(d) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        p.sub(pa.add(d.scale(t))).norm()
+    };
+    let q1 = f(a + 0.25 * (b - a));
+    let q3 = f(a + 0.75 * (b - a));
+    off(pm).max(off(q1)).max(off(q3))
+}
+
+/// Pushes the samples of `(a, b]`, splitting in two while the curve's chordal deviation (at
+/// the midpoint and quarter points) or the turn between the half-chords is too large.
 fn refine(
     f: &dyn Fn(f64) -> [f64; 3],
     (a, pa): (f64, [f64; 3]),
@@ -68,16 +113,17 @@ fn refine(
 ) {
     let m = 0.5 * (a + b);
     let pm = f(m);
-    let chord_mid = pa.add(pb).scale(0.5);
-    let dev = pm.sub(chord_mid).norm();
+    let dev = chord_deviation(f, (a, pa), (b, pb), pm);
     let (d1, d2) = (pm.sub(pa), pb.sub(pm));
     let (l1, l2) = (d1.norm(), d2.norm());
-    let turn = if l1 > 0.0 && l2 > 0.0 {
-        (d1.dot(d2) / (l1 * l2)).clamp(-1.0, 1.0).acos()
+    // The turn between the half-chords exceeds `angle` when its cosine is below cos(angle).
+    let cos_turn = if l1 > 0.0 && l2 > 0.0 {
+        d1.dot(d2) / (l1 * l2)
     } else {
-        0.0
+        1.0
     };
-    let split = dev.is_finite() && (dev > tol || (turn > angle && l1 + l2 > 1e-3 * tol));
+    let turns = cos_turn < angle.min(std::f64::consts::PI).cos();
+    let split = dev.is_finite() && (dev > tol || (turns && l1 + l2 > 1e-3 * tol));
     if depth < 24 && split {
         refine(f, (a, pa), (m, pm), tol, angle, depth + 1, out);
         refine(f, (m, pm), (b, pb), tol, angle, depth + 1, out);
@@ -154,6 +200,28 @@ pub fn trim_point(face: &Face, curve: &Curve2, t: f64) -> [f64; 3] {
     face.surface.point(u, v)
 }
 
+/// Adds the sample at the middle of the segment between the parameters `ta` and `tb` of edge
+/// `id` (consecutive samples, either order) on its 3D `curve`; false when there is no such
+/// segment.
+pub fn split_edge(table: &mut EdgeTable, id: u64, curve: &Curve3, ta: f64, tb: f64) -> bool {
+    let Some(EdgeSamples::Curve { params, points }) = table.get_mut(&id) else {
+        return false;
+    };
+    let Some(i) = params
+        .windows(2)
+        .position(|w| (w[0] == ta && w[1] == tb) || (w[0] == tb && w[1] == ta))
+    else {
+        return false;
+    };
+    let m = 0.5 * (ta + tb);
+    if m == ta || m == tb {
+        return false;
+    }
+    params.insert(i + 1, m);
+    points.insert(i + 1, curve.point(m));
+    true
+}
+
 /// Discretises every edge of `doc` once.
 pub fn discretise(doc: &Document, options: &Options) -> EdgeTable {
     let mut table = EdgeTable::new();
@@ -165,7 +233,7 @@ pub fn discretise(doc: &Document, options: &Options) -> EdgeTable {
         let Some(curve) = &edge.curve else { continue };
         let [t0, t1] = edge.range;
         let f = |t: f64| curve.point(t);
-        let min = curve.segments(t0, t1).max(2);
+        let min = min_segments(curve, t0, t1).max(2);
         let params = sample_chordal(&f, t0, t1, min, options.tolerance, options.angle);
         let mut points: Vec<[f64; 3]> = params.iter().map(|&t| curve.point(t)).collect();
         let last = points.len() - 1;

@@ -33,138 +33,272 @@ pub fn uv_box(loops: &[Polyline]) -> [f64; 4] {
     b
 }
 
-/// The scale factors (average |S_u|, |S_v| over the box) that make (u, v) distances roughly
-/// metric, for well-shaped triangles and distance tests in (u, v).
-pub fn metric_scale(face: &Face, b: [f64; 4]) -> [f64; 2] {
-    let (mut su, mut sv, mut n) = (0.0, 0.0, 0.0);
-    for i in 0..5 {
-        for j in 0..5 {
-            let u = b[0] + (b[1] - b[0]) * (i as f64 + 0.5) / 5.0;
-            let v = b[2] + (b[3] - b[2]) * (j as f64 + 0.5) / 5.0;
-            let sp = face.surface.eval(u, v);
-            let (a, c) = (sp.du.norm(), sp.dv.norm());
-            if a.is_finite() && c.is_finite() {
-                su += a;
-                sv += c;
-                n += 1.0;
-            }
-        }
-    }
-    let fix = |s: f64| if s > 1e-300 && s.is_finite() { s } else { 1.0 };
-    if n == 0.0 {
-        [1.0, 1.0]
+/// What a face's triangulation needs to know about its surface over the loops' box, measured
+/// once: the box, the metric scale, the curvature steps and the Delaunay plane's scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// The loops' (u, v) box, `[u0, u1, v0, v1]`.
+    pub bounds: [f64; 4],
+    /// The average |S_u|, |S_v| over the box: scale factors that make (u, v) distances
+    /// roughly metric, for distance tests in (u, v).
+    pub metric: [f64; 2],
+    /// The parameter steps `[du, dv]` that the chordal tolerance and the angle allow along
+    /// each direction (infinite where the surface does not bend): the least of
+    /// [`Plan::profiles`].
+    pub curvature: [f64; 2],
+    /// The curvature steps across the box: `profiles[0][j]` the u step the survey's row `j`
+    /// (at the `j`-th of its evenly spaced v) asks for, `profiles[1][i]` the v step of its
+    /// column `i` (a sphere's u step grows towards the poles, where its rows shrink).
+    pub profiles: [Vec<f64>; 2],
+    /// [`delaunay_scale`] over the box.
+    pub delaunay: [f64; 2],
+}
+
+/// The [`Plan`] of `face` with `loops`.
+pub fn plan(face: &Face, loops: &[Polyline], options: &Options) -> Plan {
+    let bounds = uv_box(loops);
+    // A 4 × 4 sample first: enough for the many small faces (fillets, chamfers, thread ends)
+    // that get a few grid cells at most, where a finer one costs more surface evaluations
+    // than their triangles; larger grids look again, closer.
+    let coarse = survey(face, bounds, 3, options);
+    let cells = |k: usize| (bounds[2 * k + 1] - bounds[2 * k]) / coarse.curvature[k];
+    let s = if cells(0).max(cells(1)) <= 4.0 {
+        coarse
     } else {
-        [fix(su / n), fix(sv / n)]
+        survey(face, bounds, 9, options)
+    };
+    Plan {
+        bounds,
+        metric: s.metric,
+        curvature: s.curvature,
+        delaunay: delaunay_scale(bounds, s.metric, s.curvature),
+        profiles: s.profiles,
     }
 }
 
-/// The scale factors of the constrained Delaunay triangulation's plane. Where the surface bends
-/// in one direction only (cylinders, cones, extrusions: no curvature along the other), that
-/// direction is compressed so that a curvature step and the face's extent have the same length:
-/// Delaunay triangles, round in that plane, then run along the rulings and need no refinement,
-/// where an isotropic (3D) metric fans long diagonals across the curved direction and refines
-/// them over and over (a Ø10 cylinder at 0.01 mm: 3142 triangles, 294 this way, as many as
-/// BRepMesh). Elsewhere the 3D metric of [`metric_scale`]; the anisotropy is capped.
-pub fn delaunay_scale(face: &Face, b: [f64; 4], options: &Options) -> [f64; 2] {
+/// The scale factors of the constrained Delaunay triangulation's plane, from the box `b`, its
+/// metric scale `s` and curvature steps `h`: the 3D metric, with the direction that bends less
+/// compressed so that one curvature step has the same length in both directions (a step
+/// spanning the face where a direction does not bend at all). Delaunay triangles, round in that
+/// plane, then run along the flatter direction as the curvature allows, where an isotropic
+/// metric fans long diagonals across the curved direction and refines them over and over: a
+/// Ø10 cylinder at 0.01 mm gets 294 triangles this way (3142 isotropic; BRepMesh 292), a
+/// crank arm's swept B-spline face (CrankArm.brep face 13) 5028 → 140. The anisotropy is
+/// capped.
+pub fn delaunay_scale(b: [f64; 4], s: [f64; 2], h: [f64; 2]) -> [f64; 2] {
     const MAX_ANISOTROPY: f64 = 100.0;
-    let s = metric_scale(face, b);
-    let h = curvature_steps(face, b, options);
     let extent = ((b[1] - b[0]) * s[0]).max((b[3] - b[2]) * s[1]);
-    // The 3D length of one curvature step in each direction; a direction is flat where that
-    // step spans the whole face (rounding gives a cylinder's rulings a tiny curvature).
-    let l = [h[0] * s[0], h[1] * s[1]];
-    let flat = |x: f64| x >= extent || x.is_nan();
-    let (flat_u, flat_v) = (flat(l[0]), flat(l[1]));
-    if flat_u == flat_v {
+    // The 3D length of one curvature step in each direction, at most the face's extent (a
+    // direction that does not bend, or that rounding gives a tiny curvature).
+    let l = [h[0] * s[0], h[1] * s[1]].map(|x| if x.is_nan() { extent } else { x.min(extent) });
+    let short = l[0].min(l[1]);
+    if !(short > 0.0 && extent.is_finite()) {
         return s;
     }
-    let step = if flat_u { l[1] } else { l[0] };
-    let ratio = (extent / step).clamp(1.0, MAX_ANISOTROPY);
-    if !ratio.is_finite() {
-        return s;
-    }
-    if flat_u {
-        [s[0] / ratio, s[1]]
-    } else {
-        [s[0], s[1] / ratio]
-    }
+    let ratio = l.map(|x| (x / short).clamp(1.0, MAX_ANISOTROPY));
+    [s[0] / ratio[0], s[1] / ratio[1]]
 }
 
-/// The grid steps `[du, dv]` the surface's curvature asks for over the box.
-fn steps(face: &Face, b: [f64; 4], options: &Options) -> [f64; 2] {
-    let h = curvature_steps(face, b, options);
-    [h[0].min(b[1] - b[0]), h[1].min(b[3] - b[2])]
-}
-
-/// The parameter steps `[du, dv]` that the chordal tolerance and the angle allow along each
-/// direction (infinite where the surface does not bend).
-fn curvature_steps(face: &Face, b: [f64; 4], options: &Options) -> [f64; 2] {
+/// The surface sampled at `(n + 1) × (n + 1)` points over the box `b`: the metric scale
+/// (the average |S_u|, |S_v|) and the curvature steps (the steps that the chordal tolerance
+/// and the angle allow along each direction, infinite where the surface does not bend). The
+/// second derivatives come from a forward difference at each sample,
+/// `S_uu ≈ 2 (S(u + h) − S(u) − h S_u(u)) / h²` with `h` a thousandth of the box: local, so
+/// a thread's helix sampled a whole number of turns apart does not look flat (differences
+/// between the samples themselves would alias), and one point evaluation per direction.
+pub fn survey(face: &Face, b: [f64; 4], n: usize, options: &Options) -> Survey {
+    let n = n.max(1);
     let (wu, wv) = (b[1] - b[0], b[3] - b[2]);
-    let mut step = [f64::INFINITY, f64::INFINITY];
-    let n = 9;
+    let mut sums = [0.0; 2];
+    let mut count = 0.0;
+    let mut profiles = [vec![f64::INFINITY; n + 1], vec![f64::INFINITY; n + 1]];
     for i in 0..=n {
         for j in 0..=n {
             let u = b[0] + wu * i as f64 / n as f64;
             let v = b[2] + wv * j as f64 / n as f64;
+            let p0 = face.surface.eval(u, v);
+            let (nu, nv) = (p0.du.norm(), p0.dv.norm());
+            if nu.is_finite() && nv.is_finite() {
+                sums[0] += nu;
+                sums[1] += nv;
+                count += 1.0;
+            }
             for (dir, w) in [(0usize, wu), (1usize, wv)] {
-                let h = 1e-3 * w;
-                let at = |d: f64| {
-                    if dir == 0 {
-                        face.surface.eval(u + d, v)
-                    } else {
-                        face.surface.eval(u, v + d)
-                    }
+                // Towards the box's inside, so that the stencil stays on the face.
+                let h = if [i, j][dir] == n {
+                    -1e-3 * w
+                } else {
+                    1e-3 * w
                 };
-                let (m, p0, p1) = (at(-h), at(0.0), at(h));
-                let second = m
-                    .point
-                    .add(p1.point)
-                    .sub(p0.point.scale(2.0))
-                    .scale(1.0 / (h * h));
-                let first = if dir == 0 { p0.du } else { p0.dv };
-                let (s2, s1) = (second.norm(), first.norm());
+                let (p1, first) = if dir == 0 {
+                    (face.surface.point(u + h, v), p0.du)
+                } else {
+                    (face.surface.point(u, v + h), p0.dv)
+                };
+                let second = p1.sub(p0.point).sub(first.scale(h)).scale(2.0 / (h * h));
+                // Only the part across the tangent bends the iso-curve: the part along it is
+                // the parametrisation speeding up (large on uneven rational B-splines), which
+                // moves no point off the chord.
+                let s1 = first.norm();
+                let along = if s1 > 0.0 {
+                    second.dot(first) / (s1 * s1)
+                } else {
+                    0.0
+                };
+                let s2 = second.sub(first.scale(along)).norm();
                 if !(s2.is_finite() && s1.is_finite()) || s2 <= 1e-300 {
                     continue;
                 }
                 let chordal = (8.0 * options.tolerance / s2).sqrt();
-                let angular = options.angle * s1 / s2;
+                // The normal's turn matters only for triangles longer than 4 tolerances (as in
+                // refinement): near a degenerate edge (|S_v| → 0) the turn per parameter step
+                // grows without bound while the triangles there shrink to nothing in 3D.
+                let angular = (options.angle * s1 / s2).max(4.0 * options.tolerance / s1);
                 let h = chordal.min(if angular > 0.0 { angular } else { chordal });
-                step[dir] = step[dir].min(h);
+                // u steps by row (j), v steps by column (i).
+                let across = if dir == 0 { j } else { i };
+                profiles[dir][across] = profiles[dir][across].min(h);
             }
         }
     }
-    step
+    let metric = sums.map(|s| {
+        let m = s / count;
+        if m > 1e-300 && m.is_finite() { m } else { 1.0 }
+    });
+    let least = |p: &[f64]| p.iter().copied().fold(f64::INFINITY, f64::min);
+    Survey {
+        metric,
+        curvature: [least(&profiles[0]), least(&profiles[1])],
+        profiles,
+    }
 }
 
-/// The interior sample points of a face, in (u, v).
-pub fn grid(face: &Face, loops: &[Polyline], options: &Options) -> Vec<[f64; 2]> {
-    let b = uv_box(loops);
+/// What [`survey`] measured (see [`Plan`]'s fields of the same names).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Survey {
+    /// The average |S_u|, |S_v|.
+    pub metric: [f64; 2],
+    /// The least curvature steps.
+    pub curvature: [f64; 2],
+    /// The curvature steps by row (u) and column (v).
+    pub profiles: [Vec<f64>; 2],
+}
+
+/// The grid steps `[du, dv]` over the plan's box. A grid cell's diagonal, the longest edge of
+/// its two triangles, deviates from the surface at its midpoint by about
+/// `(|S_uu| du² + |S_vv| dv²) / 8` (a quadratic's interpolation error; the twist term left
+/// out), while each curvature step alone spends the whole tolerance on its own direction
+/// (`|S_uu| h² / 8 = tol`). So where both directions bend, both steps shrink by √2 (each term
+/// half the tolerance); where one direction spans the box in one cell, the other keeps what
+/// that cell leaves. A grid that already meets the tolerance leaves refinement little to do
+/// (a sphere's cells otherwise all split once more: twice the points, inserted one by one).
+pub fn grid_steps(plan: &Plan) -> [f64; 2] {
+    let b = plan.bounds;
+    let extent = [b[1] - b[0], b[3] - b[2]];
+    let h = plan.curvature;
+    // The share of the tolerance a direction spends: all of it with grid lines across it,
+    // (extent / step)² when a single cell spans it.
+    let share = |k: usize| {
+        if h[k] < extent[k] {
+            1.0
+        } else {
+            (extent[k] / h[k]).powi(2)
+        }
+    };
+    let (su, sv) = (share(0), share(1));
+    let (fu, fv) = if su >= 1.0 && sv >= 1.0 {
+        (0.5, 0.5)
+    } else if su >= 1.0 {
+        (1.0 - sv.min(0.5), sv)
+    } else {
+        (su, 1.0 - su.min(0.5))
+    };
+    [
+        (h[0] * fu.sqrt()).min(extent[0]),
+        (h[1] * fv.sqrt()).min(extent[1]),
+    ]
+}
+
+/// The interior sample points of a face, in (u, v): rows of points, evenly spaced at the
+/// [`grid_steps`] across them and, along each row, at the step the curvature there asks for
+/// ([`Plan::profiles`], the finer of the two survey rows around it) — or columns, whichever
+/// gives fewer points. On a tensor grid a sphere's cells shrink to slivers towards its poles,
+/// where its u step could grow as the rows shorten (a fillet's R3 sphere octant at 0.01 mm:
+/// 544 → 472 triangles).
+pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<[f64; 2]> {
+    let b = plan.bounds;
     if !(b[1] > b[0] && b[3] > b[2]) {
         return Vec::new();
     }
-    let [hu, hv] = steps(face, b, options);
-    let mut nu = ((b[1] - b[0]) / hu)
-        .ceil()
-        .clamp(1.0, MAX_PER_DIRECTION as f64) as usize;
-    let mut nv = ((b[3] - b[2]) / hv)
-        .ceil()
-        .clamp(1.0, MAX_PER_DIRECTION as f64) as usize;
-    while nu * nv > MAX_PER_FACE {
-        nu = (nu * 3 / 4).max(1);
-        nv = (nv * 3 / 4).max(1);
-    }
-    if nu <= 1 && nv <= 1 {
+    let extent = [b[1] - b[0], b[3] - b[2]];
+    let steps = grid_steps(plan);
+    // Lines across direction `across`, evenly spaced; along each, the count its own step asks
+    // for. `dir` is the direction along the lines.
+    let layout = |dir: usize| -> Vec<(f64, usize)> {
+        let across = 1 - dir;
+        let lines = (extent[across] / steps[across])
+            .ceil()
+            .clamp(1.0, MAX_PER_DIRECTION as f64) as usize;
+        // The grid step along `dir` is the curvature step times the tolerance share.
+        let share = steps[dir] / plan.curvature[dir];
+        let share = if share.is_finite() && share > 0.0 {
+            share.min(1.0)
+        } else {
+            1.0
+        };
+        let profile = &plan.profiles[dir];
+        let m = profile.len().saturating_sub(1).max(1);
+        (1..lines)
+            .map(|k| {
+                let t = k as f64 / lines as f64;
+                // The survey samples on both sides of this line.
+                let x = t * m as f64;
+                let (lo, hi) = (x.floor() as usize, (x.ceil() as usize).min(m));
+                let h = profile[lo].min(profile[hi]) * share;
+                let h = if h.is_nan() {
+                    steps[dir]
+                } else {
+                    h.max(steps[dir])
+                };
+                let n = (extent[dir] / h)
+                    .ceil()
+                    .clamp(1.0, MAX_PER_DIRECTION as f64);
+                (b[2 * across] + t * extent[across], n as usize)
+            })
+            .collect()
+    };
+    let (rows, cols) = (layout(0), layout(1));
+    let total = |l: &[(f64, usize)]| l.iter().map(|&(_, n)| n.saturating_sub(1)).sum::<usize>();
+    let (dir, lines) = if total(&rows) <= total(&cols) {
+        (0, rows)
+    } else {
+        (1, cols)
+    };
+    let count = total(&lines);
+    if count == 0 {
         return Vec::new();
     }
-    let scale = metric_scale(face, b);
-    let (du, dv) = ((b[1] - b[0]) / nu as f64, (b[3] - b[2]) / nv as f64);
-    // Keep-away distance in scaled (u, v): a fraction of the smaller scaled step.
-    let keep = 0.4 * (du * scale[0]).min(dv * scale[1]);
+    // Thin out evenly where a face would get too many.
+    let thin = (count as f64 / MAX_PER_FACE as f64).sqrt().max(1.0);
+    let scale = plan.metric;
+    let spacing_across = extent[1 - dir] / (lines.len() + 1) as f64 * thin;
+    let finest = lines
+        .iter()
+        .map(|&(_, n)| extent[dir] / n as f64 * thin)
+        .fold(f64::INFINITY, f64::min);
+    // Keep-away distance in scaled (u, v): a fraction of the smallest scaled step.
+    let keep = 0.4 * (finest * scale[dir]).min(spacing_across * scale[1 - dir]);
     let near = SegmentIndex::new(loops, scale, keep.max(1e-300));
     let mut out = Vec::new();
-    for i in 1..nu {
-        for j in 1..nv {
-            let uv = [b[0] + du * i as f64, b[2] + dv * j as f64];
+    let stride = thin.ceil() as usize;
+    for (k, &(at, n)) in lines.iter().enumerate() {
+        if k % stride != 0 {
+            continue;
+        }
+        let n = ((n as f64 / thin).ceil() as usize).max(1);
+        for i in 1..n {
+            let along = b[2 * dir] + extent[dir] * i as f64 / n as f64;
+            let uv = if dir == 0 { [along, at] } else { [at, along] };
             if !near.within(uv) {
                 out.push(uv);
             }
@@ -267,4 +401,66 @@ pub fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
         0.0
     };
     p.sub(lerp(a, b, t)).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn face(surface: &str) -> Face {
+        let json = format!(
+            r#"{{"format": "tessd-brep", "version": 1, "units": "mm",
+                "faces": [{{"id": 0, "surface": {surface}, "bounds": [0, 1, 0, 1]}}]}}"#
+        );
+        tessd_brep::Document::from_json(&json)
+            .unwrap()
+            .faces
+            .remove(0)
+    }
+
+    #[test]
+    fn a_plane_parametrised_unevenly_does_not_bend() {
+        // Poles on straight lines, unevenly spaced: S_uu is large, all of it along S_u.
+        let f = face(
+            r#"{"type": "bspline", "degree_u": 2, "degree_v": 1,
+                "poles": [[[0, 0, 0], [0, 1, 0]], [[0.05, 0, 0], [0.05, 1, 0]],
+                          [[1, 0, 0], [1, 1, 0]]],
+                "knots_u": [0, 1], "mults_u": [3, 3], "knots_v": [0, 1], "mults_v": [2, 2]}"#,
+        );
+        let s = survey(&f, [0.0, 1.0, 0.0, 1.0], 9, &Options::new(1e-4));
+        assert!(s.curvature[0] > 1e3 && s.curvature[1] > 1e3, "{s:?}");
+    }
+
+    #[test]
+    fn a_cylinder_bends_one_way() {
+        let f = face(
+            r#"{"type": "cylinder", "origin": [0, 0, 0], "x_dir": [1, 0, 0],
+                "y_dir": [0, 1, 0], "radius": 2}"#,
+        );
+        let tol = 1e-3;
+        let s = survey(&f, [0.0, 1.0, 0.0, 1.0], 9, &Options::new(tol));
+        // h² r / 8 = tol along u; nothing along v.
+        let expect = (8.0 * tol / 2.0f64).sqrt();
+        assert!((s.curvature[0] - expect).abs() < 1e-3 * expect, "{s:?}");
+        assert!(s.curvature[1].is_infinite(), "{s:?}");
+        assert_eq!(s.metric, [2.0, 1.0]);
+    }
+
+    #[test]
+    fn both_directions_bending_share_the_tolerance() {
+        let plan = |curvature: [f64; 2]| Plan {
+            bounds: [0.0, 1.0, 0.0, 1.0],
+            metric: [1.0, 1.0],
+            curvature,
+            delaunay: [1.0, 1.0],
+            profiles: [vec![curvature[0]; 2], vec![curvature[1]; 2]],
+        };
+        let h = 0.01;
+        let both = grid_steps(&plan([h, h]));
+        assert!((both[0] - h / 2f64.sqrt()).abs() < 1e-12, "{both:?}");
+        assert!((both[1] - h / 2f64.sqrt()).abs() < 1e-12, "{both:?}");
+        // One direction flat: the other keeps its whole step.
+        let one = grid_steps(&plan([h, f64::INFINITY]));
+        assert!((one[0] - h).abs() < 1e-12 && one[1] == 1.0, "{one:?}");
+    }
 }

@@ -3,7 +3,8 @@
 //! discretised once so that neighbouring faces meet without cracks.
 //!
 //! One step per module: [`edges`] (each shared edge sampled once along its 3D curve),
-//! [`boundary`] (each face's loops as (u, v) polylines reusing those samples), [`interior`]
+//! [`boundary`] (each face's loops as (u, v) polylines reusing those samples), [`crossings`]
+//! (polylines that cross in (u, v) split, on the shared edge), [`interior`]
 //! (a curvature-driven grid of interior points), [`cdt`] (constrained Delaunay triangulation,
 //! trimming and refinement). [`tessellate`] runs them, in parallel over faces, into one
 //! [`Mesh`] with a face group per B-Rep face, named `face<id>`.
@@ -23,6 +24,7 @@
 
 pub mod boundary;
 pub mod cdt;
+pub mod crossings;
 pub mod edges;
 pub mod interior;
 
@@ -89,6 +91,8 @@ pub struct Stats {
     pub edges: usize,
     /// Points inserted by refinement.
     pub refined_points: usize,
+    /// What splitting crossing boundary polylines did.
+    pub crossings: crossings::CrossingStats,
     /// Wall time, milliseconds.
     pub time_ms: f64,
 }
@@ -102,6 +106,19 @@ pub struct Tessellation {
     pub uvs: Vec<[f64; 2]>,
     /// Counts and timings.
     pub stats: Stats,
+}
+
+/// `f` over `items`, in parallel with the `parallel` feature; results in order.
+fn map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync + Send) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items.par_iter().map(f).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items.iter().map(f).collect()
+    }
 }
 
 /// Tessellates every face of `doc`.
@@ -136,33 +153,27 @@ pub fn tessellate_with_progress(
     }
     doc.validate().map_err(TessellateError::Invalid)?;
     let start = Instant::now();
-    let edges = edges::discretise(doc, options);
+    let mut edges = edges::discretise(doc, options);
+    let (loops, crossing_stats) = crossings::face_loops_uncrossed(doc, &mut edges, options);
     let done = std::sync::atomic::AtomicUsize::new(0);
     let total = doc.faces.len();
-    let one = |face: &tessd_brep::Face| {
-        let loops = boundary::face_loops(face, &edges, options);
-        let b = interior::uv_box(&loops);
-        let scale = interior::delaunay_scale(face, b, options);
-        let points = interior::grid(face, &loops, options);
-        let metric = interior::metric_scale(face, b);
-        let t = cdt::triangulate(face, &loops, &points, scale, metric, options);
+    let indices: Vec<usize> = (0..total).collect();
+    let faces: Vec<cdt::FaceTriangles> = map(&indices, |&f| {
+        let (face, loops) = (&doc.faces[f], &loops[f]);
+        let plan = interior::plan(face, loops, options);
+        let points = interior::grid(loops, &plan);
+        let t = cdt::triangulate(face, loops, &points, &plan, options);
         let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         progress(n, total);
         t
-    };
-    #[cfg(feature = "parallel")]
-    let faces: Vec<cdt::FaceTriangles> = {
-        use rayon::prelude::*;
-        doc.faces.par_iter().map(one).collect()
-    };
-    #[cfg(not(feature = "parallel"))]
-    let faces: Vec<cdt::FaceTriangles> = doc.faces.iter().map(one).collect();
+    });
 
     let mut mesh = Mesh::default();
     let mut uvs = Vec::new();
     let mut stats = Stats {
         faces: total,
         edges: edges.len(),
+        crossings: crossing_stats,
         ..Stats::default()
     };
     for (g, (face, t)) in doc.faces.iter().zip(&faces).enumerate() {
