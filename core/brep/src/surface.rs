@@ -99,14 +99,12 @@ impl BSplineSurface {
     /// The checked knot vectors, `None` when they or the poles break the rules.
     fn knot_vectors(&self) -> Option<&(KnotVector, KnotVector)> {
         self.cache.get_or_init(|| {
-                let ku =
-                    KnotVector::new(self.degree_u, &self.knots_u, &self.mults_u, self.periodic_u)
-                        .ok()?;
-                let kv =
-                    KnotVector::new(self.degree_v, &self.knots_v, &self.mults_v, self.periodic_v)
-                        .ok()?;
-                surface_fits(&ku, &kv, &self.poles, self.weights.as_deref()).then_some((ku, kv))
-            })
+            let ku = KnotVector::new(self.degree_u, &self.knots_u, &self.mults_u, self.periodic_u)
+                .ok()?;
+            let kv = KnotVector::new(self.degree_v, &self.knots_v, &self.mults_v, self.periodic_v)
+                .ok()?;
+            surface_fits(&ku, &kv, &self.poles, self.weights.as_deref()).then_some((ku, kv))
+        })
     }
 }
 
