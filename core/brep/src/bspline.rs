@@ -406,6 +406,17 @@ pub fn eval_curve<P: Vector>(
     Some((c, da.sub(c.scale(dw)).scale(1.0 / w)))
 }
 
+/// The u and v bases at (u, v) with their pole indices.
+fn tensor_basis(
+    ku: &KnotVector,
+    kv: &KnotVector,
+    u: f64,
+    v: f64,
+    derivs: bool,
+) -> [(Basis, [usize; MAX_DEGREE + 1]); 2] {
+    [ku.basis_with(u, derivs), kv.basis_with(v, derivs)].map(|b| (b, b.pole_indices()))
+}
+
 /// A point of a (rational) tensor-product B-spline surface without its derivatives (a third of
 /// the sums of [`eval_surface`]), for poles and weights that [`surface_fits`] accepted.
 pub fn eval_surface_point(
@@ -416,9 +427,7 @@ pub fn eval_surface_point(
     u: f64,
     v: f64,
 ) -> [f64; 3] {
-    let bu = ku.basis_with(u, false);
-    let bv = kv.basis_with(v, false);
-    let (iu, iv) = (bu.pole_indices(), bv.pole_indices());
+    let [(bu, iu), (bv, iv)] = tensor_basis(ku, kv, u, v, false);
     let mut a = [0.0; 3];
     let mut w = 0.0;
     for (ku_, &i) in iu[..bu.count].iter().enumerate() {
@@ -462,9 +471,7 @@ pub fn eval_surface(
     u: f64,
     v: f64,
 ) -> ([f64; 3], [f64; 3], [f64; 3]) {
-    let bu = ku.basis(u);
-    let bv = kv.basis(v);
-    let (iu, iv) = (bu.pole_indices(), bv.pole_indices());
+    let [(bu, iu), (bv, iv)] = tensor_basis(ku, kv, u, v, true);
     let zero = [0.0; 3];
     let (mut a, mut au, mut av) = (zero, zero, zero);
     let (mut w, mut wu, mut wv) = (0.0, 0.0, 0.0);

@@ -368,21 +368,25 @@ fn periodic_bspline_curve_closes() {
     );
 }
 
+/// Rows of poles grown from each pole of [`periodic_cubic`] by `row`, with its knots and
+/// multiplicities (u of a surface periodic in u).
+fn periodic_rows(
+    row: impl Fn([f64; 3]) -> Vec<[f64; 3]>,
+) -> (Vec<Vec<[f64; 3]>>, Vec<f64>, Vec<u32>) {
+    let Curve3::Bspline(b) = periodic_cubic() else {
+        unreachable!()
+    };
+    (b.poles.iter().map(|&p| row(p)).collect(), b.knots, b.mults)
+}
+
 #[test]
 fn periodic_surface_wraps() {
     // A torus-like periodic B-spline surface in u: the same rows as the curve above.
     let c = periodic_cubic();
-    let Curve3::Bspline(b) = &c else {
-        unreachable!()
-    };
-    let poles: Vec<Vec<[f64; 3]>> = b
-        .poles
-        .iter()
-        .map(|p| vec![*p, [p[0], p[1], p[2] + 1.0]])
-        .collect();
+    let (poles, knots, mults) = periodic_rows(|p| vec![p, [p[0], p[1], p[2] + 1.0]]);
     let s = surface(json!({
         "type": "bspline", "degree_u": 3, "degree_v": 1, "poles": poles, "weights": null,
-        "knots_u": b.knots, "mults_u": b.mults, "knots_v": [0, 1], "mults_v": [2, 2],
+        "knots_u": knots, "mults_u": mults, "knots_v": [0, 1], "mults_v": [2, 2],
         "periodic_u": true, "periodic_v": false
     }));
     for t in [0.0, 1.5, 4.2] {
@@ -477,27 +481,19 @@ fn revolution_and_cone_match_ocp() {
 /// `Surface::point` takes a derivative-free path for B-splines: it must give `eval`'s point.
 #[test]
 fn bspline_point_path_matches_eval() {
-    let c = periodic_cubic();
-    let Curve3::Bspline(b) = &c else {
-        unreachable!()
-    };
-    let poles: Vec<Vec<[f64; 3]>> = b
-        .poles
-        .iter()
-        .map(|p| {
-            vec![
-                *p,
-                [p[0] + 0.5, p[1], p[2] + 1.0],
-                [p[0], p[1] + 0.3, p[2] + 2.0],
-            ]
-        })
-        .collect();
+    let (poles, knots, mults) = periodic_rows(|p| {
+        vec![
+            p,
+            [p[0] + 0.5, p[1], p[2] + 1.0],
+            [p[0], p[1] + 0.3, p[2] + 2.0],
+        ]
+    });
     let weights: Vec<Vec<f64>> = (0..poles.len())
         .map(|i| vec![1.0, 0.5 + 0.1 * i as f64, 2.0])
         .collect();
     let periodic = surface(json!({
         "type": "bspline", "degree_u": 3, "degree_v": 2, "poles": poles, "weights": weights,
-        "knots_u": b.knots, "mults_u": b.mults, "knots_v": [0, 1], "mults_v": [3, 3],
+        "knots_u": knots, "mults_u": mults, "knots_v": [0, 1], "mults_v": [3, 3],
         "periodic_u": true, "periodic_v": false
     }));
     for s in [periodic, rational_bspline_surface()] {
