@@ -237,6 +237,14 @@ pub fn discretise(doc: &Document, options: &Options) -> EdgeTable {
         let params = sample_chordal(&f, t0, t1, min, options.tolerance, options.angle);
         let mut points: Vec<[f64; 3]> = params.iter().map(|&t| curve.point(t)).collect();
         let last = points.len() - 1;
+        let length: f64 = points.windows(2).map(|w| w[1].sub(w[0]).norm()).sum();
+        if length < 2.0 * snap.radius {
+            // Shorter than the snapping: both ends would become one vertex and the middle
+            // samples a needle out and back (a fold three triangles share; Pump_Nut's
+            // 0.002 mm edge 18 at 0.1 mm). The edge is that vertex, as a degenerate one is.
+            table.insert(edge.id, EdgeSamples::Point(snap.snap(points[0])));
+            continue;
+        }
         points[0] = snap.snap(points[0]);
         points[last] = snap.snap(points[last]);
         table.insert(edge.id, EdgeSamples::Curve { params, points });

@@ -20,9 +20,9 @@ pub fn run(doc: &Document, tolerance: f64) -> Tessellation {
     tessd_tessellate::tessellate(doc, &Options::new(tolerance)).unwrap()
 }
 
-/// Welds vertices of equal position and returns the edges used by one triangle only (after
-/// dropping triangles collapsed by the weld).
-pub fn open_edges(t: &Tessellation) -> Vec<([f32; 3], [f32; 3])> {
+/// Welds vertices of equal position and counts the triangles using each edge (after dropping
+/// triangles collapsed by the weld), with the welded positions.
+fn edge_uses(t: &Tessellation) -> (HashMap<(u32, u32), i64>, Vec<[f32; 3]>) {
     let mesh = &t.mesh;
     let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
     let mut pos = Vec::new();
@@ -53,11 +53,27 @@ pub fn open_edges(t: &Tessellation) -> Vec<([f32; 3], [f32; 3])> {
             *count.entry((a.min(b), a.max(b))).or_default() += 1;
         }
     }
+    (count, pos)
+}
+
+/// The welded edges whose number of triangles `keep` accepts.
+fn edges_where(t: &Tessellation, keep: impl Fn(i64) -> bool) -> Vec<([f32; 3], [f32; 3])> {
+    let (count, pos) = edge_uses(t);
     count
         .into_iter()
-        .filter(|(_, n)| *n == 1)
+        .filter(|&(_, n)| keep(n))
         .map(|((a, b), _)| (pos[a as usize], pos[b as usize]))
         .collect()
+}
+
+/// The edges used by one triangle only (cracks, on a closed solid).
+pub fn open_edges(t: &Tessellation) -> Vec<([f32; 3], [f32; 3])> {
+    edges_where(t, |n| n == 1)
+}
+
+/// The edges used by more than two triangles (folds).
+pub fn nonmanifold_edges(t: &Tessellation) -> Vec<([f32; 3], [f32; 3])> {
+    edges_where(t, |n| n > 2)
 }
 
 /// The total area of the mesh's triangles (in f64).
