@@ -11,7 +11,7 @@
 //! when not even the lightest knot can go.
 
 use crate::bezier::{P2, dist};
-use crate::quadratic_fit::{QuadSpline, Samples, fit_corrected, knot_vector, max_error};
+use crate::quadratic_fit::{QuadSpline, Samples, fit_corrected, knot_vector};
 
 /// The weight of each interior breakpoint `breaks[1 ..= L−1]` (index into `breaks`).
 pub fn knot_weights(spline: &QuadSpline) -> Vec<(usize, f64)> {
@@ -46,10 +46,10 @@ pub fn knot_weights(spline: &QuadSpline) -> Vec<(usize, f64)> {
 /// (see the module text). Each refit corrects the samples' parameters
 /// ([`fit_corrected`]), so the tolerance is checked against the samples' distance to the
 /// curve rather than to the point of the same parameter. Returns the thinned spline (the
-/// input when nothing can go) and the samples at the parameters it was fitted at.
-pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> (QuadSpline, Samples) {
+/// input when nothing can go) and the samples' parameters it was fitted at.
+pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> (QuadSpline, Vec<f64>) {
     let mut current = spline;
-    let mut at = samples.clone();
+    let mut at = samples.params.clone();
     loop {
         let mut weights = knot_weights(&current);
         if weights.is_empty() {
@@ -68,8 +68,8 @@ pub fn remove_knots(samples: &Samples, spline: QuadSpline, tol: f64) -> (QuadSpl
                 .filter(|(i, _)| drop.binary_search(i).is_err())
                 .map(|(_, &b)| b)
                 .collect();
-            let (candidate, fitted_at) = fit_corrected(&at, &breaks, tol);
-            if max_error(&candidate, &fitted_at) <= tol {
+            let (candidate, fitted_at, error) = fit_corrected(samples, &at, &breaks, tol);
+            if error <= tol {
                 accepted = Some((candidate, fitted_at));
                 break;
             }

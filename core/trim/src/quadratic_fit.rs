@@ -4,7 +4,7 @@
 //! follow the input curve's, so that where two input curves meet with C1 continuity, so do
 //! their approximations.
 
-use crate::bezier::{P2, Quadratic, dist};
+use crate::bezier::{P2, Quadratic};
 use tessd_brep::{Curve, Trim};
 
 /// Points of a trim at parameters `s ∈ [0, 1]` along its range (`t = t0 + s (t1 − t0)`, so a
@@ -165,7 +165,12 @@ pub fn basis(knots: &[f64], poles: usize, s: f64) -> (usize, [f64; 3]) {
             hi = mid - 1;
         }
     }
-    let j = lo;
+    (lo, basis_in(knots, lo, s))
+}
+
+/// The three non-zero quadratic basis functions at `s` in span `j` (Cox–de Boor), for a
+/// caller that walks sorted parameters through the spans instead of searching each.
+fn basis_in(knots: &[f64], j: usize, s: f64) -> [f64; 3] {
     let mut n = [1.0, 0.0, 0.0];
     let mut left = [0.0; 3];
     let mut right = [0.0; 3];
@@ -181,7 +186,28 @@ pub fn basis(knots: &[f64], poles: usize, s: f64) -> (usize, [f64; 3]) {
         }
         n[d] = saved;
     }
-    (j, n)
+    n
+}
+
+/// The index of the span of `breaks` holding `s` (`breaks[i] ≤ s < breaks[i+1]`, the last
+/// span closed, the first for `s` below 0), searching from `from`: parameters visited in
+/// increasing order cost one pass over the breaks in all instead of a binary search each.
+#[inline]
+fn span_from(breaks: &[f64], from: usize, s: f64) -> usize {
+    let last = breaks.len() - 2;
+    let mut i = from.min(last);
+    while i > 0 && breaks[i] > s {
+        i -= 1;
+    }
+    while i < last && breaks[i + 1] <= s {
+        i += 1;
+    }
+    i
+}
+
+fn dist2(a: P2, b: P2) -> f64 {
+    let (x, y) = (a[0] - b[0], a[1] - b[1]);
+    x * x + y * y
 }
 
 /// Evenly spaced breakpoints for `spans` spans (the uniform B-spline).
@@ -194,6 +220,11 @@ pub fn uniform_breaks(spans: usize) -> Vec<f64> {
 /// across trims where the input is C1). A banded (width 2) Cholesky solves the normal
 /// equations.
 pub fn fit(samples: &Samples, breaks: &[f64]) -> QuadSpline {
+    fit_at(samples, &samples.params, breaks)
+}
+
+/// [`fit`] with sample i at parameter `params[i]` (increasing) instead of `samples.params[i]`.
+pub fn fit_at(samples: &Samples, params: &[f64], breaks: &[f64]) -> QuadSpline {
     let knots = knot_vector(breaks);
     let n = breaks.len() + 1;
     let first = samples.points[0];
@@ -205,8 +236,11 @@ pub fn fit(samples: &Samples, breaks: &[f64]) -> QuadSpline {
         // Band storage: a[i][k] = A[i][i − 2 + k], k = 0..=2 (lower part).
         let mut a = vec![[0.0f64; 3]; unknowns];
         let mut rhs = vec![[0.0f64; 2]; unknowns];
-        for (&s, &p) in samples.params.iter().zip(&samples.points) {
-            let (j, w) = basis(&knots, n, s);
+        let mut span = 0;
+        for (&s, &p) in params.iter().zip(&samples.points) {
+            span = span_from(breaks, span, s);
+            let j = span + 2;
+            let w = basis_in(&knots, j, s);
             let mut r = p;
             for (k, &wk) in w.iter().enumerate() {
                 let idx = j - 2 + k;
@@ -350,10 +384,18 @@ pub const CORRECTION_ROUNDS: usize = 3;
 /// speed, so the uniform parameters alone overstate the (u, v) deviation several times over
 /// and cost pieces (see `approximate`).
 pub fn correct_params(spline: &QuadSpline, samples: &Samples) -> Samples {
+    Samples {
+        params: correct(spline, samples, &samples.params),
+        ..samples.clone()
+    }
+}
+
+/// [`correct_params`] from the parameters `from` (one per sample, increasing): the corrected
+/// parameters.
+fn correct(spline: &QuadSpline, samples: &Samples, from: &[f64]) -> Vec<f64> {
     let pieces = spline.beziers();
     let b = &spline.breaks;
-    let eval = |s: f64| {
-        let span = b.partition_point(|&x| x <= s).clamp(1, b.len() - 1) - 1;
+    let eval = |span: usize, s: f64| {
         let h = b[span + 1] - b[span];
         let q = &pieces[span];
         let t = (s - b[span]) / h;
@@ -369,11 +411,13 @@ pub fn correct_params(spline: &QuadSpline, samples: &Samples) -> Samples {
             [dd[0] / (h * h), dd[1] / (h * h)],
         )
     };
-    let n = samples.params.len();
-    let mut params = samples.params.clone();
+    let n = from.len();
+    let mut params = from.to_vec();
+    let mut span = 0;
     for i in 1..n.saturating_sub(1) {
         let (s, p) = (params[i], samples.points[i]);
-        let (c, d1, d2) = eval(s);
+        span = span_from(b, span, s);
+        let (c, d1, d2) = eval(span, s);
         let r = [c[0] - p[0], c[1] - p[1]];
         let num = r[0] * d1[0] + r[1] * d1[1];
         let den = d1[0] * d1[0] + d1[1] * d1[1] + r[0] * d2[0] + r[1] * d2[1];
@@ -381,16 +425,16 @@ pub fn correct_params(spline: &QuadSpline, samples: &Samples) -> Samples {
             continue;
         }
         // Between the (already corrected) previous sample and the next one.
-        let (lo, hi) = (params[i - 1], samples.params[i + 1]);
+        let (lo, hi) = (params[i - 1], from[i + 1]);
         let t = (s - num / den).clamp(lo, hi);
-        if t.is_finite() && dist(eval(t).0, p) < dist(c, p) {
-            params[i] = t;
+        if t.is_finite() {
+            let at = span_from(b, span, t);
+            if dist2(eval(at, t).0, p) < dist2(c, p) {
+                params[i] = t;
+            }
         }
     }
-    Samples {
-        params,
-        ..samples.clone()
-    }
+    params
 }
 
 /// The fewest samples a span keeps under parameter correction.
@@ -398,40 +442,54 @@ pub const MIN_PER_SPAN: usize = 3;
 
 fn every_span_sampled(params: &[f64], breaks: &[f64]) -> bool {
     let mut counts = vec![0usize; breaks.len() - 1];
+    let mut span = 0;
     for &s in params {
-        counts[breaks
-            .partition_point(|&x| x <= s)
-            .clamp(1, breaks.len() - 1)
-            - 1] += 1;
+        span = span_from(breaks, span, s);
+        counts[span] += 1;
     }
     counts.iter().all(|&c| c >= MIN_PER_SPAN)
 }
 
-/// [`fit`] on `breaks`, then up to [`CORRECTION_ROUNDS`] rounds of [`correct_params`] and
-/// refit, stopping early once the error ([`max_error`]) is within `target`.
-/// Returns the spline and the samples with the parameters it was fitted at. A round that would
-/// leave a span with fewer than [`MIN_PER_SPAN`] samples is not taken: the fit and its error
-/// would no longer see that span.
-pub fn fit_corrected(samples: &Samples, breaks: &[f64], target: f64) -> (QuadSpline, Samples) {
-    let mut spline = fit(samples, breaks);
-    let mut at = samples.clone();
-    let mut error = max_error(&spline, &at);
-    for _ in 0..CORRECTION_ROUNDS {
+/// [`fit`] on `breaks` with the samples at the parameters `from`, then up to
+/// [`CORRECTION_ROUNDS`] rounds of [`correct_params`] and refit, stopping early once the
+/// error ([`max_error`]) is within `target`. Returns the spline, the parameters it was fitted
+/// at and its error. A round that would leave a span with fewer than [`MIN_PER_SPAN`]
+/// samples is not taken: the fit and its error would no longer see that span.
+pub fn fit_corrected(
+    samples: &Samples,
+    from: &[f64],
+    breaks: &[f64],
+    target: f64,
+) -> (QuadSpline, Vec<f64>, f64) {
+    let mut spline = fit_at(samples, from, breaks);
+    let mut at = from.to_vec();
+    let mut error = max_error_at(&spline, samples, &at, f64::INFINITY);
+    for round in 0..CORRECTION_ROUNDS {
         if error <= target {
             break;
         }
-        let next = correct_params(&spline, &at);
-        if !every_span_sampled(&next.params, breaks) {
+        let next = correct(&spline, samples, &at);
+        if !every_span_sampled(&next, breaks) {
             break;
         }
-        let refit = fit(&next, breaks);
-        let e = max_error(&refit, &next);
+        let refit = fit_at(samples, &next, breaks);
+        // A refit worse than the current one is not taken: its exact error is not needed.
+        let e = max_error_at(&refit, samples, &next, error);
         if e > error {
             break;
         }
+        // Stop when even the last round's gain, repeated every remaining round, would not
+        // bring the error within `target`: the candidate is failing (a knot removal that
+        // goes too far, or a correction that has stalled), and the gains shrink from round
+        // to round.
+        let left = (CORRECTION_ROUNDS - 1 - round) as f64;
+        let hopeless = e - left * (error - e) > target;
         (spline, at, error) = (refit, next, e);
+        if hopeless {
+            break;
+        }
     }
-    (spline, at)
+    (spline, at, error)
 }
 
 /// The largest distance between the spline at the sample parameters and the samples (the
@@ -439,34 +497,48 @@ pub fn fit_corrected(samples: &Samples, breaks: &[f64], target: f64) -> (QuadSpl
 /// the samples carry them, between the spline halfway between consecutive parameters and
 /// the curve's midpoints.
 pub fn max_error(spline: &QuadSpline, samples: &Samples) -> f64 {
-    let knots = spline.knots();
-    let n = spline.poles.len();
-    let at = |s: f64| {
-        let (j, w) = basis(&knots, n, s);
-        let mut q = [0.0; 2];
-        for (k, wk) in w.iter().enumerate() {
-            let c = spline.poles[j - 2 + k];
-            q[0] += wk * c[0];
-            q[1] += wk * c[1];
+    max_error_at(spline, samples, &samples.params, f64::INFINITY)
+}
+
+/// [`max_error`] with sample i at parameter `params[i]` (increasing), stopping at the first
+/// distance above `cap` (the result is then that distance, some error above `cap`, not
+/// necessarily the largest): a fit that fails its tolerance is known to fail at its first
+/// bad sample. Squared distances, the spline as its Bézier pieces and the spans walked with
+/// the parameters keep the pass cheap.
+pub fn max_error_at(spline: &QuadSpline, samples: &Samples, params: &[f64], cap: f64) -> f64 {
+    let pieces = spline.beziers();
+    let b = &spline.breaks;
+    let at = |span: usize, s: f64| pieces[span].point((s - b[span]) / (b[span + 1] - b[span]));
+    let cap2 = cap * cap;
+    let mut worst2: f64 = 0.0;
+    let mut span = 0;
+    let n = params.len();
+    for i in 0..n {
+        let s = params[i];
+        span = span_from(b, span, s);
+        let d2 = dist2(samples.points[i], at(span, s));
+        if d2 > worst2 {
+            worst2 = d2;
         }
-        q
-    };
-    let on = samples
-        .params
-        .iter()
-        .zip(&samples.points)
-        .map(|(&s, &p)| dist(p, at(s)));
-    let between = samples
-        .params
-        .windows(2)
-        .zip(&samples.mids)
-        .map(|(w, &p)| dist(p, at(0.5 * (w[0] + w[1]))));
-    on.chain(between).fold(0.0, f64::max)
+        if let (Some(&m), Some(&next)) = (samples.mids.get(i), params.get(i + 1)) {
+            let s = 0.5 * (s + next);
+            span = span_from(b, span, s);
+            let d2 = dist2(m, at(span, s));
+            if d2 > worst2 {
+                worst2 = d2;
+            }
+        }
+        if worst2 > cap2 {
+            break;
+        }
+    }
+    worst2.sqrt()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bezier::dist;
 
     /// One span (the fewest knot removal can leave): its middle pole is where the two end
     /// tangents meet, so pieces of consecutive trims meet with the input's tangents — at a
@@ -557,11 +629,12 @@ mod tests {
         };
         let breaks = uniform_breaks(2);
         let plain = fit(&samples, &breaks);
-        let (corrected, at) = fit_corrected(&samples, &breaks, 0.0);
-        let (e0, e1) = (max_error(&plain, &samples), max_error(&corrected, &at));
+        let (corrected, at, e1) = fit_corrected(&samples, &samples.params, &breaks, 0.0);
+        let e0 = max_error(&plain, &samples);
+        assert_eq!(e1, max_error_at(&corrected, &samples, &at, f64::INFINITY));
         assert!(e1 < 0.8 * e0, "{e0:e} → {e1:e}");
-        assert!(at.params.windows(2).all(|w| w[0] <= w[1]));
-        assert_eq!((at.params[0], at.params[n]), (0.0, 1.0));
+        assert!(at.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!((at[0], at[n]), (0.0, 1.0));
         // e1 bounds the true distance from the arc to the fit, sampled densely.
         for i in 0..=1000 {
             let p = arc(i as f64 / 1000.0);

@@ -20,7 +20,7 @@ use crate::bezier::Quadratic;
 use crate::classify::{NodeRecord, TrimSource, curve_ref, leaf_point, leaf_triangle, ref_index};
 use crate::implicit::{Implicit, ImplicitKind};
 use crate::separate::{Ray, separating_line};
-use crate::winding::winding;
+use crate::winding::WindingIndex;
 
 /// The depth at which subdivision gives up (section 8, table 4).
 pub const MAX_DEPTH: u32 = 13;
@@ -182,6 +182,7 @@ impl Quadtree {
         };
         self.nodes.push(blank);
         let mut candidates: Vec<Vec<u32>> = vec![(0..self.curves.len() as u32).collect()];
+        let index = WindingIndex::new(&self.curves);
         let mut i = 0;
         while i < self.nodes.len() {
             let node = self.nodes[i];
@@ -202,7 +203,7 @@ impl Quadtree {
             match crossing.len() {
                 0 => {
                     let c = [node.origin[0] + h / 2.0, node.origin[1] + h / 2.0];
-                    self.nodes[i].kind = if winding(&self.curves, c[0], c[1]) > 0 {
+                    self.nodes[i].kind = if index.winding(c[0], c[1]) > 0 {
                         NodeKind::On
                     } else {
                         NodeKind::Off
@@ -298,6 +299,7 @@ impl Quadtree {
 
     fn coverage(&mut self) {
         let g = COVERAGE_GRID;
+        let index = WindingIndex::new(&self.curves);
         for i in (0..self.nodes.len()).rev() {
             let node = self.nodes[i];
             let h = node.size();
@@ -316,7 +318,7 @@ impl Quadtree {
                             let s = node.origin[0] + h * (a as f64 + 0.5) / g as f64;
                             let t = node.origin[1] + h * (b as f64 + 0.5) / g as f64;
                             let inside = if node.kind == NodeKind::Failed {
-                                winding(&self.curves, s, t) > 0
+                                index.winding(s, t) > 0
                             } else {
                                 leaf_point(self, &rec, s, t)
                             };

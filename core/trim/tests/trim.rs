@@ -281,6 +281,98 @@ fn approximations_stay_within_eps() {
     }
 }
 
+/// Circles and ellipses are cut into Béziers directly (`approximate_conic`), not fitted: the
+/// pieces stay within the fit's half of the tolerance of the curve both ways (a quarter more
+/// where flattened), the reported error bounds the true distance, the pieces are connected,
+/// start and end on the curve, and there are no more of them than the sampled fit of the same
+/// circle (a rational B-spline) makes.
+#[test]
+fn conics_are_cut_directly_within_eps() {
+    let circle = |r: f64, range: [f64; 2], clockwise: bool| Trim {
+        curve: Curve::Circle {
+            center: [0.3, -0.2],
+            x_dir: [FRAC_1_SQRT_2, FRAC_1_SQRT_2],
+            y_dir: if clockwise {
+                [FRAC_1_SQRT_2, -FRAC_1_SQRT_2]
+            } else {
+                [-FRAC_1_SQRT_2, FRAC_1_SQRT_2]
+            },
+            radius: r,
+        },
+        range,
+        edge: None,
+    };
+    let ellipse = |a: f64, b: f64, range: [f64; 2]| Trim {
+        curve: Curve::Ellipse {
+            center: [1.0, 2.0],
+            x_dir: [0.6, 0.8],
+            y_dir: [-0.8, 0.6],
+            major_radius: a,
+            minor_radius: b,
+        },
+        range,
+        edge: None,
+    };
+    let mut trims = Vec::new();
+    for r in [2e-3, 0.05, 2.0, 300.0] {
+        trims.push(circle(r, [0.0, TAU], false));
+        trims.push(circle(r, [TAU, 0.0], true));
+        trims.push(circle(r, [0.4, 1.3], false));
+        trims.push(circle(r, [5.0, 5.0 - 1e-3], true));
+        trims.push(ellipse(r, 0.3 * r, [2.0 * PI, 0.0]));
+        trims.push(ellipse(r, r / 40.0, [-0.7, 2.9]));
+    }
+    for eps in [1e-1, 1e-2, 1e-3, 1e-4] {
+        for trim in &trims {
+            let a = approximate_trim(trim, eps).unwrap();
+            let h = hausdorff(trim, &a.pieces);
+            let flattened = a.pieces.iter().any(|q| q.line);
+            let share = if flattened { 0.75 } else { 0.5 };
+            let name = format!("{:?} over {:?} at {eps:e}", trim.curve, trim.range);
+            assert!(h <= share * eps, "{name}: {h:e} > {share} eps");
+            assert!(
+                a.max_error <= share * eps,
+                "{name}: reported {:e}",
+                a.max_error
+            );
+            assert!(
+                h <= a.max_error * 1.001 + 1e-12,
+                "{name}: {h:e} > {:e}",
+                a.max_error
+            );
+            for w in a.pieces.windows(2) {
+                assert_eq!(w[0].p[2], w[1].p[0], "{name}: pieces are connected");
+            }
+            let [t0, t1] = trim.range;
+            assert_eq!(a.pieces[0].p[0], trim.curve.point(t0), "{name}");
+            assert_eq!(
+                a.pieces.last().unwrap().p[2],
+                trim.curve.point(t1),
+                "{name}"
+            );
+        }
+        // The circle as a NURBS goes through sampling, fitting and knot removal.
+        let exact = Trim {
+            curve: Curve::Circle {
+                center: [0.5, 0.5],
+                x_dir: [1.0, 0.0],
+                y_dir: [0.0, 1.0],
+                radius: 1.5,
+            },
+            range: [0.0, TAU],
+            edge: None,
+        };
+        let rational = Trim {
+            curve: nurbs_circle([0.5, 0.5], 1.5),
+            range: [0.0, 4.0],
+            edge: None,
+        };
+        let direct = approximate_trim(&exact, eps).unwrap().pieces.len();
+        let fitted = approximate_trim(&rational, eps).unwrap().pieces.len();
+        assert!(direct <= fitted, "eps {eps:e}: {direct} > {fitted} pieces");
+    }
+}
+
 #[test]
 fn loop_blinn_signs() {
     // Turning right (concave): the face is on the left, above the arch.
