@@ -20,9 +20,12 @@ pub fn run(doc: &Document, tolerance: f64) -> Tessellation {
     tessd_tessellate::tessellate(doc, &Options::new(tolerance)).unwrap()
 }
 
+/// Triangles per welded edge (a pair of welded vertex indices).
+type EdgeUses = HashMap<(u32, u32), i64>;
+
 /// Welds vertices of equal position and counts the triangles using each edge (after dropping
 /// triangles collapsed by the weld), with the welded positions.
-fn edge_uses(t: &Tessellation) -> (HashMap<(u32, u32), i64>, Vec<[f32; 3]>) {
+fn edge_uses(t: &Tessellation) -> (EdgeUses, Vec<[f32; 3]>) {
     let mesh = &t.mesh;
     let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
     let mut pos = Vec::new();
