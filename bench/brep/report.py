@@ -256,13 +256,15 @@ def table1(d, L):
     L.append("")
     L.append("Trim curves per type (B-spline trims split by degree as the paper does) and the connected "
              "quadratic pieces after approximation (section 3.1: fit, knot removal to the face's (u, v) "
-             "tolerance derived from ε, flat pieces made lines) at ε = 0.1 and 0.01 mm in world units; "
+             "tolerance derived from ε, flat pieces made lines; circles and ellipses cut directly into "
+             "equal-angle pieces within the same share of the tolerance) at ε = 0.1 and 0.01 mm in world units; "
              "*pieces* = curved + lines (the paper's “Quadratiques”), *lines* = how many of them are line "
              "segments; *per trim* = pieces at 0.01 mm ÷ trims:\n")
     L.append("| part | line | circle | ellipse | B-spline | deg 1 | deg 2–4 | deg 5 | deg ≥ 6 | rational | trims "
              "| pieces 0.1 mm (lines) | pieces 0.01 mm (lines) | per trim |")
     L.append("|---|" + "---|" * 13)
     tot = Counter()
+    any_failed = False
     for p in d.parts:
         doc = d.doc.get(p)
         if not doc or "stats" not in doc:
@@ -277,6 +279,7 @@ def table1(d, L):
             n, ln = d.trim_sum(p, e, "quadratics"), d.trim_sum(p, e, "lines")
             failed = d.trim.get((p, e), {}).get("failed_faces", 0)
             q[e] = "–" if n is None else f"{fmt(n)} ({fmt(ln)})" + ("²" if failed else "")
+            any_failed = any_failed or bool(failed)
             tot[f"q{e}"] += n or 0
             tot[f"l{e}"] += ln or 0
         for c in CURVES:
@@ -294,7 +297,8 @@ def table1(d, L):
              + f" | **{fmt(tot['rational'])}** | **{fmt(tot['trims'])}** | **{fmt(tot['q0.1'])} ({fmt(tot['l0.1'])})** "
              f"| **{fmt(tot['q0.01'])} ({fmt(tot['l0.01'])})** | **{fmt(tot['q0.01'] / tot['trims'] if tot['trims'] else None)}** |")
     L.append("")
-    L.append("² some faces of the part have no structure (see *Problems found*); their pieces are not counted.\n")
+    if any_failed:
+        L.append("² some faces of the part have no structure (see *Problems found*); their pieces are not counted.\n")
     rows = [f"{m}: {fmt(v['curves'])} curves → {fmt(v['q01'])} / {fmt(v['q001'])} pieces "
             f"({fmt(v['q01'] / v['curves'])} / {fmt(v['q001'] / v['curves'])} per curve)" for m, v in PAPER_T1.items()]
     ratio01 = tot["q0.1"] / tot["trims"] if tot["trims"] else None
