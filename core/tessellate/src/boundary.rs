@@ -73,8 +73,7 @@ pub fn face_loops(
                 range: [0.0, len],
                 edge: None,
             };
-            let mut pts = free_trim(face, &trim, &[], options);
-            pts.iter_mut().for_each(|b| b.next = None);
+            let pts = free_trim(face, &trim, &[], None, options);
             out.extend_from_slice(&pts[..pts.len() - 1]);
         }
         return vec![out];
@@ -92,12 +91,8 @@ pub fn face_loops(
                     Some((_, EdgeSamples::Point(p))) => degenerate_trim(trim, *p),
                     None => {
                         let more = extra.get(&(li, ti)).map_or(&[][..], |v| v);
-                        let mut pts = free_trim(face, trim, more, options);
-                        for b in pts.iter_mut() {
-                            if let Some(s) = &mut b.next {
-                                s.source = Source::Free(li, ti);
-                            }
-                        }
+                        let source = Some(Source::Free(li, ti));
+                        let pts = free_trim(face, trim, more, source, options);
                         let len: f64 = pts.windows(2).map(|w| w[1].p.sub(w[0].p).norm()).sum();
                         if len < 2.0 * snap_radius(options) {
                             continue;
@@ -130,24 +125,32 @@ fn dedup(pts: Polyline) -> Polyline {
     out
 }
 
-/// The boundary points at parameters `ts`, each with its segment to the next.
+/// The boundary points at parameters `ts`, each with its segment to the next (from `source`).
 fn with_segments(
     ts: &[f64],
-    source: Source,
+    source: Option<Source>,
     point: impl Fn(usize, f64) -> BoundaryPoint,
 ) -> Vec<BoundaryPoint> {
     ts.iter()
         .enumerate()
         .map(|(k, &t)| BoundaryPoint {
-            next: ts.get(k + 1).map(|&t1| Segment { source, t: [t, t1] }),
+            next: source
+                .zip(ts.get(k + 1))
+                .map(|(source, &t1)| Segment { source, t: [t, t1] }),
             ..point(k, t)
         })
         .collect()
 }
 
 /// A trim without a shared edge, sampled on its own along S(c(t)), plus the parameters
-/// `more`. The segments' source is set by the caller (it knows the trim's place).
-fn free_trim(face: &Face, trim: &Trim, more: &[f64], options: &Options) -> Vec<BoundaryPoint> {
+/// `more`; its segments come from `source` (`None`: they cannot be split).
+fn free_trim(
+    face: &Face,
+    trim: &Trim,
+    more: &[f64],
+    source: Option<Source>,
+    options: &Options,
+) -> Vec<BoundaryPoint> {
     let [t0, t1] = trim.range;
     let f = |t: f64| trim_point(face, &trim.curve, t);
     let min = min_segments(&trim.curve, t0, t1);
@@ -158,7 +161,7 @@ fn free_trim(face: &Face, trim: &Trim, more: &[f64], options: &Options) -> Vec<B
         ts.sort_by(|a, b| (sign * a).total_cmp(&(sign * b)));
         ts.dedup();
     }
-    with_segments(&ts, Source::Free(0, 0), |_, t| {
+    with_segments(&ts, source, |_, t| {
         let uv = trim.curve.point(t);
         BoundaryPoint {
             uv,
@@ -228,7 +231,7 @@ fn shared_trim(
     };
     let n = order.len();
     let edge_ts: Vec<f64> = order.iter().map(|&i| params[i]).collect();
-    with_segments(&edge_ts, Source::Edge(id), |k, _| {
+    with_segments(&edge_ts, Some(Source::Edge(id)), |k, _| {
         let i = order[k];
         let t = if k == 0 {
             t0
