@@ -22,8 +22,12 @@ import json
 import math
 import os
 import statistics
+import sys
 from collections import Counter, defaultdict
 from pathlib import Path
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from report_common import gmean, machine, yes  # noqa: E402
 
 import matplotlib
 
@@ -85,11 +89,6 @@ def pct(x):
     return "–" if x is None else f"{100 * x:.2f} %"
 
 
-def gmean(xs):
-    xs = [x for x in xs if x and x > 0 and math.isfinite(x)]
-    return math.exp(sum(map(math.log, xs)) / len(xs)) if xs else float("nan")
-
-
 def pctl(xs, q):
     xs = sorted(xs)
     if not xs:
@@ -97,29 +96,6 @@ def pctl(xs, q):
     k = (len(xs) - 1) * q
     lo, hi = math.floor(k), math.ceil(k)
     return xs[lo] + (xs[hi] - xs[lo]) * (k - lo)
-
-
-def yes(flag):
-    return "yes" if flag else "**no**"
-
-
-def machine():
-    model = "unknown CPU"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    mem = None
-    try:
-        for line in open("/proc/meminfo"):
-            if line.startswith("MemTotal"):
-                mem = int(line.split()[1]) / 1024 / 1024
-    except OSError:
-        pass
-    return f"{os.cpu_count()} cores ({model})" + (f", {mem:.0f} GiB RAM" if mem else "")
 
 
 class Data:

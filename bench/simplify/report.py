@@ -16,8 +16,13 @@ import argparse
 import datetime
 import json
 import math
+import os
+import sys
 from collections import defaultdict
 from pathlib import Path
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from report_common import gmean  # noqa: E402
 
 import matplotlib
 
@@ -57,11 +62,6 @@ ERROR_MIN_TARGET = 50
 
 def matched(a, b):
     return abs(a["deviation"]) <= MATCH_DEVIATION and abs(b["deviation"]) <= MATCH_DEVIATION
-
-
-def gmean(xs):
-    xs = [x for x in xs if x and x > 0 and math.isfinite(x)]
-    return math.exp(sum(map(math.log, xs)) / len(xs)) if xs else float("nan")
 
 
 def fmt(x, digits=3):

@@ -17,8 +17,12 @@ import datetime
 import json
 import math
 import os
+import sys
 from collections import defaultdict
 from pathlib import Path
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from report_common import gmean, machine, yes  # noqa: E402
 
 import matplotlib
 
@@ -62,15 +66,6 @@ def fmt(x, sig=3):
 
 def mb(kib):
     return None if kib is None else kib / 1024.0
-
-
-def gmean(xs):
-    xs = [x for x in xs if x and x > 0 and math.isfinite(x)]
-    return math.exp(sum(map(math.log, xs)) / len(xs)) if xs else float("nan")
-
-
-def yes(flag):
-    return "yes" if flag else "**no**"
 
 
 def load(path):
@@ -125,25 +120,6 @@ class Data:
             if v:
                 return v
         return None
-
-
-def machine():
-    model = "unknown CPU"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    mem = None
-    try:
-        for line in open("/proc/meminfo"):
-            if line.startswith("MemTotal"):
-                mem = int(line.split()[1]) / 1024 / 1024
-    except OSError:
-        pass
-    return f"{os.cpu_count()} cores ({model})" + (f", {mem:.0f} GiB RAM" if mem else "")
 
 
 def runs_range(d, tool, *keys):
