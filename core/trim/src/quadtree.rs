@@ -84,6 +84,19 @@ impl Node {
     pub fn size(&self) -> f64 {
         (0.5f64).powi(self.depth as i32)
     }
+
+    /// The node's square `[u0, u1, v0, v1]` widened by 1e-9 of its side: the rectangle curves
+    /// are clipped to, so that a curve along a cell side counts in both neighbours.
+    pub fn clip_rect(&self) -> [f64; 4] {
+        let h = self.size();
+        let m = 1e-9 * h;
+        [
+            self.origin[0] - m,
+            self.origin[0] + h + m,
+            self.origin[1] - m,
+            self.origin[1] + h + m,
+        ]
+    }
 }
 
 /// The quadtree of one face, in coordinates normalised to its domain.
@@ -187,13 +200,7 @@ impl Quadtree {
         while i < self.nodes.len() {
             let node = self.nodes[i];
             let h = node.size();
-            let m = 1e-9 * h;
-            let rect = [
-                node.origin[0] - m,
-                node.origin[0] + h + m,
-                node.origin[1] - m,
-                node.origin[1] + h + m,
-            ];
+            let rect = node.clip_rect();
             let mine = std::mem::take(&mut candidates[i]);
             let crossing: Vec<(u32, [f64; 2])> = mine
                 .iter()

@@ -115,13 +115,7 @@ fn diagnose_failures() {
                 );
                 for n in t.tree.nodes.iter().filter(|n| n.kind == NodeKind::Failed) {
                     let s = n.size();
-                    let m = 1e-9 * s;
-                    let rect = [
-                        n.origin[0] - m,
-                        n.origin[0] + s + m,
-                        n.origin[1] - m,
-                        n.origin[1] + s + m,
-                    ];
+                    let rect = n.clip_rect();
                     let box_uv = [
                         d[0] + w * n.origin[0],
                         d[0] + w * (n.origin[0] + s),

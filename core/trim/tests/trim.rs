@@ -419,13 +419,7 @@ fn check_invariants(t: &TrimStructure) {
     let mut leaves = 0;
     for (i, n) in tree.nodes.iter().enumerate() {
         let h = n.size();
-        let m = 1e-9 * h;
-        let rect = [
-            n.origin[0] - m,
-            n.origin[0] + h + m,
-            n.origin[1] - m,
-            n.origin[1] + h + m,
-        ];
+        let rect = n.clip_rect();
         let crossing: Vec<u32> = (0..tree.curves.len() as u32)
             .filter(|&c| tree.curves[c as usize].clip(rect).is_some())
             .collect();
