@@ -304,7 +304,7 @@ struct Limits {
 impl Limits {
     fn new(plan: &Plan, options: &Options) -> Limits {
         let step = [0, 1]
-            .map(|k| plan.curvature[k] * plan.metric[k])
+            .map(|k| plan.survey.curvature[k] * plan.survey.metric[k])
             .into_iter()
             .fold(f64::INFINITY, f64::min);
         let floor = if step.is_finite() { 0.25 * step } else { 0.0 };
@@ -312,7 +312,7 @@ impl Limits {
             tol: options.tolerance,
             cos_angle: options.angle.cos(),
             angle_floor: floor.max(4.0 * options.tolerance),
-            metric: plan.metric,
+            metric: plan.survey.metric,
         }
     }
 }

@@ -34,22 +34,13 @@ pub fn uv_box(loops: &[Polyline]) -> [f64; 4] {
 }
 
 /// What a face's triangulation needs to know about its surface over the loops' box, measured
-/// once: the box, the metric scale, the curvature steps and the Delaunay plane's scale.
+/// once: the box, the [`Survey`] of the surface there and the Delaunay plane's scale.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
     /// The loops' (u, v) box, `[u0, u1, v0, v1]`.
     pub bounds: [f64; 4],
-    /// The average |S_u|, |S_v| over the box: scale factors that make (u, v) distances
-    /// roughly metric, for distance tests in (u, v).
-    pub metric: [f64; 2],
-    /// The parameter steps `[du, dv]` that the chordal tolerance and the angle allow along
-    /// each direction (infinite where the surface does not bend): the least of
-    /// [`Plan::profiles`].
-    pub curvature: [f64; 2],
-    /// The curvature steps across the box: `profiles[0][j]` the u step the survey's row `j`
-    /// (at the `j`-th of its evenly spaced v) asks for, `profiles[1][i]` the v step of its
-    /// column `i` (a sphere's u step grows towards the poles, where its rows shrink).
-    pub profiles: [Vec<f64>; 2],
+    /// The surface's metric scale and curvature steps over the box.
+    pub survey: Survey,
     /// [`delaunay_scale`] over the box.
     pub delaunay: [f64; 2],
 }
@@ -69,10 +60,8 @@ pub fn plan(face: &Face, loops: &[Polyline], options: &Options) -> Plan {
     };
     Plan {
         bounds,
-        metric: s.metric,
-        curvature: s.curvature,
         delaunay: delaunay_scale(bounds, s.metric, s.curvature),
-        profiles: s.profiles,
+        survey: s,
     }
 }
 
@@ -173,14 +162,18 @@ pub fn survey(face: &Face, b: [f64; 4], n: usize, options: &Options) -> Survey {
     }
 }
 
-/// What [`survey`] measured (see [`Plan`]'s fields of the same names).
+/// What [`survey`] measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Survey {
-    /// The average |S_u|, |S_v|.
+    /// The average |S_u|, |S_v|: scale factors that make (u, v) distances roughly metric, for
+    /// distance tests in (u, v).
     pub metric: [f64; 2],
-    /// The least curvature steps.
+    /// The parameter steps `[du, dv]` that the chordal tolerance and the angle allow along
+    /// each direction (infinite where the surface does not bend): the least of `profiles`.
     pub curvature: [f64; 2],
-    /// The curvature steps by row (u) and column (v).
+    /// The curvature steps across the box: `profiles[0][j]` the u step the survey's row `j`
+    /// (at the `j`-th of its evenly spaced v) asks for, `profiles[1][i]` the v step of its
+    /// column `i` (a sphere's u step grows towards the poles, where its rows shrink).
     pub profiles: [Vec<f64>; 2],
 }
 
@@ -195,7 +188,7 @@ pub struct Survey {
 pub fn grid_steps(plan: &Plan) -> [f64; 2] {
     let b = plan.bounds;
     let extent = [b[1] - b[0], b[3] - b[2]];
-    let h = plan.curvature;
+    let h = plan.survey.curvature;
     // The share of the tolerance a direction spends: all of it with grid lines across it,
     // (extent / step)² when a single cell spans it.
     let share = |k: usize| {
@@ -221,7 +214,7 @@ pub fn grid_steps(plan: &Plan) -> [f64; 2] {
 
 /// The interior sample points of a face, in (u, v): rows of points, evenly spaced at the
 /// [`grid_steps`] across them and, along each row, at the step the curvature there asks for
-/// ([`Plan::profiles`], the finer of the two survey rows around it) — or columns, whichever
+/// ([`Survey::profiles`], the finer of the two survey rows around it) — or columns, whichever
 /// gives fewer points. On a tensor grid a sphere's cells shrink to slivers towards its poles,
 /// where its u step could grow as the rows shorten (a fillet's R3 sphere octant at 0.01 mm:
 /// 544 → 472 triangles).
@@ -240,13 +233,13 @@ pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<[f64; 2]> {
             .ceil()
             .clamp(1.0, MAX_PER_DIRECTION as f64) as usize;
         // The grid step along `dir` is the curvature step times the tolerance share.
-        let share = steps[dir] / plan.curvature[dir];
+        let share = steps[dir] / plan.survey.curvature[dir];
         let share = if share.is_finite() && share > 0.0 {
             share.min(1.0)
         } else {
             1.0
         };
-        let profile = &plan.profiles[dir];
+        let profile = &plan.survey.profiles[dir];
         let m = profile.len().saturating_sub(1).max(1);
         (1..lines)
             .map(|k| {
@@ -280,7 +273,7 @@ pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<[f64; 2]> {
     }
     // Thin out evenly where a face would get too many.
     let thin = (count as f64 / MAX_PER_FACE as f64).sqrt().max(1.0);
-    let scale = plan.metric;
+    let scale = plan.survey.metric;
     let spacing_across = extent[1 - dir] / (lines.len() + 1) as f64 * thin;
     let finest = lines
         .iter()
@@ -450,10 +443,12 @@ mod tests {
     fn both_directions_bending_share_the_tolerance() {
         let plan = |curvature: [f64; 2]| Plan {
             bounds: [0.0, 1.0, 0.0, 1.0],
-            metric: [1.0, 1.0],
-            curvature,
+            survey: Survey {
+                metric: [1.0, 1.0],
+                curvature,
+                profiles: [vec![curvature[0]; 2], vec![curvature[1]; 2]],
+            },
             delaunay: [1.0, 1.0],
-            profiles: [vec![curvature[0]; 2], vec![curvature[1]; 2]],
         };
         let h = 0.01;
         let both = grid_steps(&plan([h, h]));
