@@ -133,8 +133,13 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
             src.data = mesh
         common.select_only(context, results)
         r = [req.result for req in requests]
-        return "tessd simplify: %d object(s), %d -> %d vertices" % (
+        summary = "tessd simplify: %d object(s), %d -> %d vertices" % (
             len(r), sum(x["input_vertices"] for x in r), sum(x["output_vertices"] for x in r))
+        # The verified distance between each input and its result (null for polygon results).
+        errors = [x["surface_error"] for x in r if x.get("surface_error") is not None]
+        if errors:
+            summary += ", surfaces within %.4g of the input" % max(errors)
+        return summary
 
 
 def register():

@@ -6,7 +6,9 @@
 //!
 //! - **quality goal** (section 3): a cell whose largest vertex displacement to its
 //!   representative exceeds the tolerance is split, recursively, until none does. Every vertex
-//!   then lies within the tolerance of its representative.
+//!   then lies within the tolerance of its representative. Beyond the paper, named cells can be
+//!   split further ([`Adaptive::split_clusters`]) until the surfaces, not only the vertices, are
+//!   within the tolerance (`coverage.rs`).
 //! - **complexity goal** (section 4): the cell with the largest displacement is split, one at a
 //!   time (a priority queue), until the number of cells reaches the target.
 //!
@@ -29,6 +31,14 @@ struct Eval {
     err: f64,
     lo: [f32; 3],
     hi: [f32; 3],
+}
+
+/// A quality partition that can still be refined: the vertices in leaf order and the leaves
+/// (sorted by range; leaf `i` is cluster `i`).
+pub(crate) struct Refinable {
+    order: Vec<Point>,
+    leaves: Vec<Node>,
+    tolerance: f64,
 }
 
 /// A cell during refinement: its range of the index array, its box and its evaluation.
@@ -183,17 +193,57 @@ impl<'a> Adaptive<'a> {
     }
 
     /// Quality goal: refines until every vertex is within `tolerance` of its cell's
-    /// representative.
+    /// representative. The result can be refined further ([`Adaptive::split_clusters`]) and
+    /// read as a partition ([`Adaptive::partition`]).
     pub(crate) fn quality(
         &self,
         classes: Option<&[u8]>,
         bounds: &Cell,
         tolerance: f64,
-        keep_cells: bool,
-    ) -> Result<Partition, Stop> {
+    ) -> Result<Refinable, Stop> {
         let (mut order, roots) = self.roots(classes, bounds);
         let leaves = self.refine_all(&mut order, &roots, tolerance)?;
-        Ok(self.finish(&order, leaves.iter(), keep_cells))
+        Ok(Refinable {
+            order,
+            leaves,
+            tolerance,
+        })
+    }
+
+    /// The partition of a quality refinement: cluster `i` is its `i`-th leaf.
+    pub(crate) fn partition(&self, r: &Refinable, keep_cells: bool) -> Partition {
+        self.finish(&r.order, r.leaves.iter(), keep_cells)
+    }
+
+    /// Splits each of `clusters` (sorted leaf indices of `r`) once and refines both halves to
+    /// the tolerance again (a half's new representative can be farther from some of its
+    /// vertices than the parent's was). Returns how many were split: cells whose vertices all
+    /// coincide cannot be, so a result of 0 means no further progress is possible.
+    pub(crate) fn split_clusters(
+        &self,
+        r: &mut Refinable,
+        clusters: &[u32],
+    ) -> Result<usize, Stop> {
+        let mut split = vec![false; r.leaves.len()];
+        let mut halves = Vec::with_capacity(2 * clusters.len());
+        for &c in clusters {
+            if let Some((left, right)) = self.split(&mut r.order, &r.leaves[c as usize]) {
+                split[c as usize] = true;
+                halves.extend([left, right]);
+            }
+        }
+        let count = halves.len() / 2;
+        if count > 0 {
+            let refined = self.refine_all(&mut r.order, &halves, r.tolerance)?;
+            let mut leaves: Vec<Node> = (r.leaves.iter().zip(&split))
+                .filter(|(_, s)| !**s)
+                .map(|(n, _)| *n)
+                .chain(refined)
+                .collect();
+            leaves.sort_unstable_by_key(|n| n.start);
+            r.leaves = leaves;
+        }
+        Ok(count)
     }
 
     /// Refines each of `cells` (disjoint ranges of `order`, sorted by start) until every
@@ -603,7 +653,7 @@ mod tests {
     fn quality_bounds_every_displacement() {
         let (p, w, b) = line(100);
         let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
-        let part = a.quality(None, &b, 2.0, true).unwrap();
+        let part = a.partition(&a.quality(None, &b, 2.0).unwrap(), true);
         let mut sum = vec![[0f64; 2]; part.clusters];
         for (v, &c) in part.cluster_of.iter().enumerate() {
             sum[c as usize][0] += p[v][0] as f64;
@@ -632,7 +682,7 @@ mod tests {
             max: [999.0, (n / 1000) as f32, 0.0],
         };
         let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
-        let part = a.quality(None, &b, 3.0, false).unwrap();
+        let part = a.partition(&a.quality(None, &b, 3.0).unwrap(), false);
         let mut sum = vec![[0f64; 3]; part.clusters];
         for (v, &c) in part.cluster_of.iter().enumerate() {
             sum[c as usize][0] += p[v][0] as f64;
@@ -645,6 +695,31 @@ mod tests {
                 + (p[v][1] as f64 - s[1] / s[2]).powi(2))
             .sqrt();
             assert!(d <= 3.0 + 1e-4, "vertex {v} moves {d}");
+        }
+    }
+
+    #[test]
+    fn split_clusters_splits_the_named_leaves_and_keeps_the_bound() {
+        let (p, w, b) = line(100);
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
+        let mut r = a.quality(None, &b, 2.0).unwrap();
+        let before = a.partition(&r, true);
+        assert_eq!(a.split_clusters(&mut r, &[0, 3]).unwrap(), 2);
+        let after = a.partition(&r, true);
+        assert!(after.clusters >= before.clusters + 2);
+        // Leaves still partition the line in order, each cell's vertices inside its box.
+        for (v, &c) in after.cluster_of.iter().enumerate() {
+            let cell = after.cells[c as usize];
+            assert!(cell.min[0] <= p[v][0] && p[v][0] <= cell.max[0]);
+        }
+        // Cells other than 0 and 3 are unchanged.
+        for cell in before
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| ![0, 3].contains(i))
+        {
+            assert!(after.cells.contains(cell.1));
         }
     }
 
@@ -665,7 +740,9 @@ mod tests {
             max: [1.0; 3],
         };
         let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
-        assert_eq!(a.quality(None, &b, 1e-9, false).unwrap().clusters, 1);
+        let mut r = a.quality(None, &b, 1e-9).unwrap();
+        assert_eq!(a.partition(&r, false).clusters, 1);
+        assert_eq!(a.split_clusters(&mut r, &[0]).unwrap(), 0);
         assert_eq!(a.complexity(None, &b, 5, false, |_| 1).unwrap().clusters, 1);
     }
 

@@ -18,8 +18,12 @@ pub(crate) struct Eliminated {
     pub source_face: Vec<u32>,
     /// The input corner (index into the input's `face_indices`) of each output corner.
     pub source_corner: Vec<u32>,
+    /// The input faces that collapsed (their image is a segment or a point, see `coverage.rs`).
+    pub collapsed: Vec<u32>,
     /// Faces removed because they collapsed (fewer than 3 distinct corners or zero area).
     pub degenerate: u64,
+    /// Of those, faces with 3 distinct clusters whose representatives are collinear.
+    pub flattened: u64,
     /// Faces removed as duplicates of an earlier face.
     pub duplicates: u64,
 }
@@ -92,8 +96,11 @@ fn collapse_faces(
         if e - s == 3 {
             // Triangles, the common case: no ring to collapse, only three ids to compare.
             let v = [0, 1, 2].map(|k| cluster_of[mesh.face_indices[s as usize + k] as usize]);
-            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] || zero_area_triangle(v, reps) {
+            let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
+            if !distinct || zero_area_triangle(v, reps) {
                 out.degenerate += 1;
+                out.flattened += u64::from(distinct);
+                out.collapsed.push(f as u32);
                 continue;
             }
             out.face_indices.extend_from_slice(&v);
@@ -110,6 +117,8 @@ fn collapse_faces(
             collapse_ring(&mut ring);
             if ring.len() < 3 || zero_area(&ring, reps) {
                 out.degenerate += 1;
+                out.flattened += u64::from(ring.len() >= 3);
+                out.collapsed.push(f as u32);
                 continue;
             }
             out.face_indices.extend(ring.iter().map(|r| r.0));
@@ -297,6 +306,7 @@ mod tests {
         let e = eliminate(&m, &ids, &m.positions, true);
         assert_eq!(e.source_face, vec![0, 3]);
         assert_eq!((e.duplicates, e.degenerate), (3, 1));
+        assert_eq!(e.collapsed, vec![5]);
     }
 
     #[test]

@@ -16,6 +16,9 @@
 //! 4. a representative per cell — weighted barycentre or heaviest vertex (the paper), or the
 //!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000);
 //! 5. elimination of what collapsed (`elimination.rs`);
+//! 6. beyond the paper, for the quality goal: cells split further until every collapsed face's
+//!    image lies on the output (`coverage.rs`), so the tolerance bounds the distance between the
+//!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`);
 //!
 //! and beyond the paper: boundary/feature preservation ([`features`]), normals, UVs and face
 //! groups carried through (`attributes.rs`), the partition as boxes for "show partition"
@@ -40,6 +43,7 @@ mod adaptive_partition;
 mod area_vector;
 mod attributes;
 mod cell_table;
+mod coverage;
 mod elimination;
 mod error;
 pub mod features;
@@ -50,6 +54,7 @@ mod partition;
 pub mod partition_boxes;
 mod quadric;
 mod representative;
+mod surface_bound;
 pub mod triangulate;
 pub mod weights;
 
@@ -85,6 +90,18 @@ pub struct Report {
     pub duplicate_faces: u64,
     /// Largest distance from an input vertex to the representative it merged into.
     pub max_displacement: f64,
+    /// A verified upper bound on the symmetric Hausdorff distance between the input and the
+    /// output surfaces (every point of either within this distance of the other; see
+    /// `surface_bound.rs`). Quality and complexity goals; `None` for the grid goal (the fast
+    /// path) and when the output has no faces left.
+    pub surface_error: Option<f64>,
+    /// Quality goal: rounds of splitting cells whose collapsed faces' images were not on the
+    /// output (see `coverage.rs`); 0 when the paper's partition already covered the input.
+    pub refinement_rounds: u32,
+    /// Input faces whose image is not on the output (collapsed onto a segment that is no
+    /// output edge or a point that is no output vertex). The quality goal refines until there
+    /// are none, unless the cells involved cannot be split (their vertices coincide).
+    pub uncovered_faces: u64,
     /// The quality goal's tolerance in model units, when that method was used.
     pub tolerance: Option<f64>,
     /// The complexity goal's vertex count, when that method was used.
@@ -114,7 +131,7 @@ pub fn simplify(
     options: &SimplifyOptions,
     progress: &mut ProgressFn,
 ) -> Result<Simplified, SimplifyError> {
-    let prepared = Prepared::new(mesh, options)?;
+    let prepared = Prepared::new(mesh, options, needs_triangles(options.method))?;
     prepared.run(options, progress)
 }
 
@@ -130,13 +147,19 @@ pub(crate) struct Prepared<'a> {
 }
 
 impl<'a> Prepared<'a> {
-    /// Validates `mesh` and prepares it as `options` say (triangulation, weighting, features).
-    pub(crate) fn new(mesh: &'a Mesh, options: &SimplifyOptions) -> Result<Self, SimplifyError> {
+    /// Validates `mesh` and prepares it as `options` say (triangulation, weighting, features);
+    /// `force_triangles`: fan-triangulate polygons whatever `options.triangulate` says.
+    pub(crate) fn new(
+        mesh: &'a Mesh,
+        options: &SimplifyOptions,
+        force_triangles: bool,
+    ) -> Result<Self, SimplifyError> {
         mesh.validate()?;
         if mesh.face_count() == 0 {
             return Err(SimplifyError::Empty);
         }
-        let work: Cow<Mesh> = if options.triangulate && mesh.faces().any(|f| f.len() > 3) {
+        let triangulate = options.triangulate || force_triangles;
+        let work: Cow<Mesh> = if triangulate && mesh.faces().any(|f| f.len() > 3) {
             Cow::Owned(triangulate::triangulate(mesh))
         } else {
             Cow::Borrowed(mesh)
@@ -186,7 +209,9 @@ impl<'a> Prepared<'a> {
         step(0.1, "partition")?;
         let adaptive = Adaptive::new(&work.positions, weights, options.representative, cancel);
         let stopped = |_: Stop| SimplifyError::Cancelled;
-        let (partition, tolerance) = match options.method {
+        // The quality goal's refinement, kept for the coverage rounds below.
+        let mut refinable = None;
+        let (mut partition, tolerance) = match options.method {
             Method::Grid(grid) => {
                 let ok = match grid {
                     GridSize::CellsPerAxis(n) => n >= 1,
@@ -230,13 +255,12 @@ impl<'a> Prepared<'a> {
                 report.tolerance = Some(tol);
                 // Keep a margin for rounding the representatives to f32.
                 let inner = tol - 4.0 * f64::from(f32::EPSILON) * max_abs(bounds);
-                let p = adaptive.quality(
-                    classes,
-                    bounds,
-                    inner.max(tol * 0.5),
-                    options.keep_partition,
-                );
-                (p.map_err(stopped)?, Some(tol))
+                let r = adaptive
+                    .quality(classes, bounds, inner.max(tol * 0.5))
+                    .map_err(stopped)?;
+                let p = adaptive.partition(&r, options.keep_partition);
+                refinable = Some(r);
+                (p, Some(tol))
             }
             Method::Complexity(count) => {
                 let target = count.resolve(self.input_vertices);
@@ -259,11 +283,63 @@ impl<'a> Prepared<'a> {
             }
         };
         step(0.6, "merge")?;
-        let reps =
-            representative::place(work, weights, &partition, options.representative, tolerance);
-        step(0.75, "eliminate")?;
         let attributes = work.normals.is_some() || work.uvs.is_some();
-        let kept = elimination::eliminate(work, &partition.cluster_of, &reps, attributes);
+        // Coverage rounds (quality goal): while some collapsed input face's image is off the
+        // output, split the cells of its uncovered segments and points and check again. Each
+        // round splits at least one cell, and cells whose vertices coincide cannot split, so
+        // at most (distinct positions − clusters) rounds can follow; in practice 0 to 5 (see
+        // bench/results/simplify_guarantee.md). The rounds read the clusters alone
+        // (`coverage::gaps_by_clusters`); the output after placing and eliminating is checked
+        // again only where that can differ: faces whose representatives came out collinear.
+        // The adaptive goals work on triangles (`needs_triangles`) and bound the surfaces.
+        let bounded = needs_triangles(options.method);
+        let mut stuck = false;
+        let (reps, kept, gaps) = loop {
+            if let Some(r) = refinable.as_mut() {
+                loop {
+                    let gaps =
+                        coverage::gaps_by_clusters(work, &partition.cluster_of, partition.clusters);
+                    if gaps.is_empty() {
+                        break;
+                    }
+                    step(0.6, "cover")?;
+                    if adaptive
+                        .split_clusters(r, &gaps.clusters)
+                        .map_err(stopped)?
+                        == 0
+                    {
+                        stuck = true;
+                        break;
+                    }
+                    partition = adaptive.partition(r, options.keep_partition);
+                    report.refinement_rounds += 1;
+                }
+            }
+            let reps =
+                representative::place(work, weights, &partition, options.representative, tolerance);
+            let kept = elimination::eliminate(work, &partition.cluster_of, &reps, attributes);
+            // The grid goal is the fast path: it reports no surface bound.
+            let check = bounded && (refinable.is_none() || stuck || kept.flattened > 0);
+            let gaps = if check {
+                coverage::find_gaps(work, &partition.cluster_of, &kept, partition.clusters)
+            } else {
+                coverage::Gaps::default()
+            };
+            let Some(r) = refinable.as_mut().filter(|_| !gaps.is_empty() && !stuck) else {
+                break (reps, kept, gaps);
+            };
+            step(0.6, "cover")?;
+            if adaptive
+                .split_clusters(r, &gaps.clusters)
+                .map_err(stopped)?
+                == 0
+            {
+                break (reps, kept, gaps);
+            }
+            partition = adaptive.partition(r, options.keep_partition);
+            report.refinement_rounds += 1;
+        };
+        step(0.75, "eliminate")?;
         let (new_id, used) = used_clusters(&kept, partition.clusters);
         step(0.9, "attributes")?;
         let cluster_of = &partition.cluster_of;
@@ -306,6 +382,19 @@ impl<'a> Prepared<'a> {
             .filter(|(_, c)| **c != UNUSED)
             .map(|(p, &c)| dist(*p, reps[c as usize]))
             .fold(0.0, f64::max);
+        report.uncovered_faces = gaps.faces.len() as u64;
+        report.surface_error = if bounded {
+            surface_bound::surface_bound(
+                work,
+                cluster_of,
+                &reps,
+                &out,
+                &gaps,
+                report.max_displacement,
+            )
+        } else {
+            None
+        };
         report.clusters = partition.clusters as u64;
         report.output_vertices = used as u64;
         report.output_faces = out.face_count() as u64;
@@ -323,6 +412,14 @@ impl<'a> Prepared<'a> {
             report,
         })
     }
+}
+
+/// Whether `method` works on triangles only: the adaptive goals bound and report the distance
+/// between the surfaces, which needs a surface that does not depend on how a reader splits
+/// the polygons that merging made non-planar (the paper, section 2, triangulates for that
+/// reason). Polygons are fan-triangulated, as `tessd compare` and most readers do.
+pub(crate) fn needs_triangles(method: Method) -> bool {
+    !matches!(method, Method::Grid(_))
 }
 
 /// New index of every cluster that surviving faces use (in cluster order), and their count.

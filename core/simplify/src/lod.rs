@@ -4,7 +4,7 @@
 //! against the level before it.
 
 use crate::options::{Method, ProgressFn, SimplifyOptions};
-use crate::{Prepared, Simplified, SimplifyError};
+use crate::{Prepared, Simplified, SimplifyError, needs_triangles};
 use tessd_mesh::Mesh;
 
 /// Simplifies `mesh` once per goal in `levels` (in the given order), with the other settings
@@ -18,7 +18,8 @@ pub fn lod_chain(
     options: &SimplifyOptions,
     progress: &mut ProgressFn,
 ) -> Result<Vec<Simplified>, SimplifyError> {
-    let prepared = Prepared::new(mesh, options)?;
+    let force_triangles = levels.iter().any(|&m| needs_triangles(m));
+    let prepared = Prepared::new(mesh, options, force_triangles)?;
     let n = levels.len().max(1) as f64;
     levels
         .iter()

@@ -225,7 +225,7 @@ struct ClusterArgs {
     /// Vertex weights.
     #[arg(long, value_parser = ["longest_edge", "curvature", "uniform"])]
     weighting: Option<String>,
-    /// Fan-triangulate polygons first.
+    /// Fan-triangulate polygons first (grid; the quality and complexity goals always do).
     #[arg(long)]
     triangulate: bool,
     /// Never merge boundary or feature-edge vertices with other vertices.

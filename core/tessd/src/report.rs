@@ -17,8 +17,14 @@ pub fn print_simplify(output: &Path, r: &serde_json::Value) {
         r["clusters"],
     );
     let mut line = format!("  max displacement {}", r["max_displacement"]);
+    if let Some(e) = r["surface_error"].as_f64() {
+        line += &format!(", surface error {e}");
+    }
     if let Some(t) = r["tolerance"].as_f64() {
         line += &format!(" (tolerance {t})");
+    }
+    if let Some(n) = r["refinement_rounds"].as_u64().filter(|&n| n > 0) {
+        line += &format!(", {n} coverage rounds");
     }
     if let Some(t) = r["target_vertices"].as_u64() {
         line += &format!(", target {t} vertices");
@@ -48,11 +54,12 @@ pub fn print_lod(response: &Response) {
             other => other.to_string(),
         };
         println!(
-            "LOD{}: {} vertices, {} faces (goal {goal}, max displacement {})",
+            "LOD{}: {} vertices, {} faces (goal {goal}, max displacement {}, surface error {})",
             level["level"],
             level["output_vertices"],
             level["output_faces"],
-            level["max_displacement"]
+            level["max_displacement"],
+            level["surface_error"]
         );
         if let Some(n) = level["note"].as_str() {
             println!("  note: {n}");

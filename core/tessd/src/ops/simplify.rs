@@ -186,6 +186,9 @@ pub fn report_json(r: &Report) -> Value {
         "degenerate_faces": r.degenerate_faces,
         "duplicate_faces": r.duplicate_faces,
         "max_displacement": r.max_displacement,
+        "surface_error": r.surface_error,
+        "refinement_rounds": r.refinement_rounds,
+        "uncovered_faces": r.uncovered_faces,
         "tolerance": r.tolerance,
         "target_vertices": r.target_vertices,
     })
