@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine for tessd: system packages, the Rust build, and the Python venvs with
 # pinned versions. Safe to run again; it only does what is missing. `--demo`: only what
-# `tessd demo` needs.
+# `tessd demo` needs, the release build (its inputs are compiled into the binary and it runs
+# nothing else: no apt package, no venv, nothing downloaded but the crates).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,16 +21,14 @@ apt_install() {
   fi
 }
 
-# System packages the tests need (none are needed by the build itself yet).
-APT_PACKAGES=(mesa-vulkan-drivers libvulkan1)
-apt_install "${APT_PACKAGES[@]}"
-
 # Python venvs, pinned; each is rebuilt only when its requirements file changes.
-#   .venv        tests: usd-core, numpy, pytest            (python/requirements-test.txt)
+#   .venv        tests: usd-core, numpy, bpy, pytest       (python/requirements-test.txt)
 #   .venv-bench  peer tools for cross-checks and benchmarks: pymeshlab, matplotlib
 #                                                          (bench/requirements-bench.txt)
 #   .venv-cad    B-Rep export tests: cadquery 2.8 + cadquery-ocp 7.9, pytest
 #                                                          (python/requirements-cad.txt)
+#   .venv-b123d  B-Rep export tests: build123d 0.13 + OCP 8.0 (cadquery-ocp-novtk), pytest
+#                                                          (python/requirements-build123d.txt)
 make_venv() {
   local dir=$1 reqs=$2
   if [ ! -x "$dir/bin/python" ]; then
@@ -43,11 +42,15 @@ make_venv() {
     cp "$reqs" "$dir/.requirements-installed"
   fi
 }
-make_venv .venv python/requirements-test.txt
-# `setup.sh --demo` skips the peer tools, the CAD venv and FreeCAD (the demo needs none of them).
+# `setup.sh --demo` skips all of this: the demo needs only the binary.
 if [ "${1:-}" != "--demo" ]; then
+  # System packages the tests need (none are needed by the build itself yet).
+  APT_PACKAGES=(mesa-vulkan-drivers libvulkan1)
+  apt_install "${APT_PACKAGES[@]}"
+  make_venv .venv python/requirements-test.txt
   make_venv .venv-bench bench/requirements-bench.txt
   make_venv .venv-cad python/requirements-cad.txt
+  make_venv .venv-b123d python/requirements-build123d.txt
   # FreeCAD 0.20's Python modules (FreeCAD.so, Part.so in /usr/lib/freecad-python3/lib; not the
   # GUI) for the FreeCAD exporter's tests (tests/brep_freecad), which the system python3 they
   # are built for runs, with its pytest and numpy.

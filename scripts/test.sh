@@ -10,10 +10,12 @@ echo "== cargo test"
 cargo test --workspace --release
 echo "== pytest (daemon, USD, demo, simplification)"
 .venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
-  --ignore=tests/brep_freecad
+  --ignore=tests/brep_build123d --ignore=tests/brep_freecad
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
 echo "== pytest (B-Rep export on real OpenCASCADE: cadquery / OCP 7.9)"
 .venv-cad/bin/python -m pytest tests/brep -q -p no:cacheprovider
+echo "== pytest (B-Rep export on build123d 0.13 / OCP 8.0)"
+.venv-b123d/bin/python -m pytest tests/brep_build123d -q -p no:cacheprovider
 echo "== pytest (B-Rep export from FreeCAD 0.20, system python)"
 PYTHONPATH=python:tests /usr/bin/python3 -m pytest tests/brep_freecad -q -p no:cacheprovider

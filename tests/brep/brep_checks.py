@@ -27,12 +27,21 @@ from OCP.Geom2d import Geom2d_BSplineCurve
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cone, GeomAbs_Cylinder, GeomAbs_Sphere, GeomAbs_Torus
 from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt, gp_Pnt2d
-from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array1OfPnt2d, TColgp_Array2OfPnt
-from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
-from OCP.TopTools import TopTools_IndexedMapOfShape
+
+# OCP 7.9 and 8.0 (build123d) both: the collections OCP 8.0 moved, the static methods' spelling
+from tessd.brep.ocp_compat import (
+    TColgp_Array1OfPnt,
+    TColgp_Array1OfPnt2d,
+    TColgp_Array2OfPnt,
+    TColStd_Array1OfInteger,
+    TColStd_Array1OfReal,
+    TColStd_Array2OfReal,
+    TopTools_IndexedMapOfShape,
+)
+from tessd.brep.ocp_compat import static as _s
 
 TWO_PI = 2.0 * math.pi
 SURFACE_TYPES = {"plane", "cylinder", "cone", "sphere", "torus", "revolution", "extrusion", "bspline"}
@@ -41,11 +50,6 @@ UNITS = {"mm", "cm", "m", "in"}
 TRIM_SAMPLES = 8
 # (name, faces, edges, read ms, export ms, stats) of every export, printed by tests/brep/conftest.py
 TIMINGS: List[Tuple[str, int, int, float, float, Any]] = []
-
-
-def _s(cls: Any, name: str) -> Any:
-    f = getattr(cls, name + "_s", None)
-    return f if f is not None else getattr(cls, name)
 
 
 # ------------------------------------------------------------------------------------------
@@ -343,8 +347,8 @@ def check_document(doc: Dict[str, Any], ev: Evaluator) -> Dict[str, float]:
 def shape_size(shape: Any) -> float:
     box = Bnd_Box()
     _s(BRepBndLib, "Add")(shape, box)
-    x0, y0, z0, x1, y1, z1 = box.Get()
-    return math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
+    lo, hi = box.CornerMin(), box.CornerMax()  # (OCP 8.0 cannot return Get()'s Bnd_Box::Limits)
+    return dist(_pt(lo), _pt(hi))
 
 
 def ocp_maps(shape: Any) -> Tuple[Any, Any]:

@@ -1,26 +1,20 @@
 """Trimmed tessellation (core/tessellate, the daemon's `tessellate`) against OCP: every shared
 STEP / IGES / .brep part is exported (python/tessd/brep), tessellated through the daemon, and
-each face's mesh area compared with OCP's `BRepGProp.SurfaceProperties_s` of that face; closed
+each face's mesh area compared with OCP's `BRepGProp.SurfaceProperties` of that face; closed
 solids must weld watertight (no edge used by a single triangle after merging equal positions).
-Runs in the CAD venv (.venv-cad)."""
+Runs in the CAD venv (.venv-cad); the checks are in tessellation_checks.py (shared with
+tests/brep_build123d)."""
 
 from __future__ import annotations
 
 import math
-from collections import Counter
 
-import numpy as np
 import pytest
 
 import tessd
 from tessd.brep import ocp as brep_ocp
 
-from OCP.BRepGProp import BRepGProp
-from OCP.GProp import GProp_GProps
-from OCP.TopAbs import TopAbs_FACE
-from OCP.TopExp import TopExp_Explorer
-from OCP.TopoDS import TopoDS
-
+from tessellation_checks import face_areas, is_closed, mesh_group_areas, open_edges
 from test_brep_export import BREP_DIR, FILES
 
 # Faces below this share of the part's area are left out of the per-face comparison (their
@@ -28,50 +22,6 @@ from test_brep_export import BREP_DIR, FILES
 SMALL_FACE = 1e-4
 # The normal deviation bounds the area error (about angle²/2): 0.1 rad keeps it near 0.5 %.
 ANGLE = 0.1
-
-
-def face_areas(shape):
-    """OCP's area of each face, in the exporter's face order (TopExp_Explorer)."""
-    out = []
-    exp = TopExp_Explorer(shape, TopAbs_FACE)
-    while exp.More():
-        props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(TopoDS.Face_s(exp.Current()), props)
-        out.append(props.Mass())
-        exp.Next()
-    return out
-
-
-def mesh_group_areas(arrays, groups):
-    p = np.asarray(arrays["positions"], dtype=np.float64).reshape(-1, 3)
-    tri = np.asarray(arrays["face_indices"], dtype=np.int64).reshape(-1, 3)
-    g = np.asarray(arrays["face_groups"], dtype=np.int64)
-    a, b, c = p[tri[:, 0]], p[tri[:, 1]], p[tri[:, 2]]
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    return np.bincount(g, weights=area, minlength=groups)
-
-
-def open_edges(arrays):
-    p = np.asarray(arrays["positions"], dtype=np.float32).reshape(-1, 3)
-    _, weld = np.unique(p, axis=0, return_inverse=True)
-    weld = weld.reshape(-1)
-    tri = weld[np.asarray(arrays["face_indices"], dtype=np.int64).reshape(-1, 3)]
-    count = Counter()
-    for t in tri:
-        if t[0] == t[1] or t[1] == t[2] or t[0] == t[2]:
-            continue
-        for k in range(3):
-            u, v = int(t[k]), int(t[(k + 1) % 3])
-            count[(min(u, v), max(u, v))] += 1
-    return sum(1 for n in count.values() if n == 1)
-
-
-def is_closed(doc):
-    """Whether every edge with a curve is used by exactly two trims (a seam twice by one face)."""
-    uses = Counter(t["edge"] for f in doc["faces"] for lp in f["loops"] for t in lp["edges"]
-                   if t.get("edge") is not None)
-    curved = [e["id"] for e in doc.get("edges") or [] if e.get("curve") is not None]
-    return bool(curved) and all(uses[e] == 2 for e in curved)
 
 
 # The per-face area check runs at 2e-5 of the part's size and an angle of 0.05 rad, where every

@@ -6,7 +6,8 @@
     json.dump(doc, f)
 
 or from the command line: `python -m tessd.brep export PART.step OUT.json [--units mm]`
-(STEP, IGES, OpenCASCADE .brep). OCP shapes need OCP (cadquery-ocp; the CAD venv `.venv-cad`),
+(STEP, IGES, OpenCASCADE .brep). OCP shapes need OCP: 7.9 (cadquery 2.8, the CAD venv
+`.venv-cad`) or 8.0 (build123d 0.13, `.venv-b123d`; ocp_compat.py resolves what 8.0 renamed).
 FreeCAD shapes go through FreeCAD's own Part API (freecad.py); either is imported only when
 something is exported, so `import tessd.brep` works without them.
 """

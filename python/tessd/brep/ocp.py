@@ -1,8 +1,9 @@
 """The OCP (OpenCASCADE) walk: a `TopoDS_Shape` → a `tessd-brep` v1 document (docs/brep-format.md).
 
-Written against cadquery-ocp 7.9 (`import OCP`); the few names that OCP 8.0 renamed (static
-methods lose their `_s` suffix there, e.g. `TopoDS.Face_s` → `TopoDS.Face`) go through `_static`,
-so the module also loads under OCP 8.0. Nothing here uses `BRepTopAdaptor_FClass2d` (dropped in 8.0).
+Runs on cadquery-ocp 7.9 (cadquery 2.8) and on OCP 8.0 (build123d 0.13) alike: the names that
+8.0 moved or respelled (`TopTools_IndexedMapOfShape`, now in `OCP.collections`; the `TopoDS`
+casts, `TopoDS.Face_s` → `TopoDS.Face`) are resolved in ocp_compat.py, the one place that knows
+both. Nothing here uses `BRepTopAdaptor_FClass2d` (dropped in 8.0).
 
 How the OCP model maps onto the format:
 - faces are numbered by `TopExp::MapShapes(shape, FACE)` (1-based, FreeCAD's "FaceN"), edges by
@@ -78,7 +79,6 @@ from OCP.TopAbs import (
 )
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
-from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from .document import (  # FORMAT, VERSION, UNITS, ExportError: also this module's names
     FORMAT,  # noqa: F401
@@ -95,6 +95,8 @@ from .document import (  # FORMAT, VERSION, UNITS, ExportError: also this module
     outer_first,
     same_parameter,
 )
+from .ocp_compat import TopTools_IndexedMapOfShape
+from .ocp_compat import static as _static
 
 # The mirror that turns OCP's u into 2π - u (the axis u = π).
 _MIRROR_U = gp_Ax2d(gp_Pnt2d(math.pi, 0.0), gp_Dir2d(0.0, 1.0))
@@ -102,12 +104,6 @@ _MIRROR_U = gp_Ax2d(gp_Pnt2d(math.pi, 0.0), gp_Dir2d(0.0, 1.0))
 # change the parameter (hyperbolas) or that have none (offset curves): they are approximated on
 # their own parameter instead.
 _APPROX_TOL = 1e-9
-
-
-def _static(cls: Any, name: str) -> Any:
-    """`cls.name_s` (OCP 7.x) or `cls.name` (OCP 8.0 dropped the suffix)."""
-    f = getattr(cls, name + "_s", None)
-    return f if f is not None else getattr(cls, name)
 
 
 _face = _static(TopoDS, "Face")
