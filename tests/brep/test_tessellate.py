@@ -2,6 +2,8 @@
 STEP / IGES / .brep part is exported (python/tessd/brep), tessellated through the daemon, and
 each face's mesh area compared with OCP's `BRepGProp.SurfaceProperties` of that face; closed
 solids must weld watertight (no edge used by a single triangle after merging equal positions).
+A tolerance relative to the part (`"0.05%"` of its bounding-box diagonal) is checked against
+OCP's bounding box, on each part and on its copy scaled by 1e-3.
 Runs in the CAD venv (.venv-cad); the checks are in tessellation_checks.py (shared with
 tests/brep_build123d)."""
 
@@ -13,6 +15,12 @@ import pytest
 
 import tessd
 from tessd.brep import ocp as brep_ocp
+
+from OCP.Bnd import Bnd_Box
+from OCP.BRepBndLib import BRepBndLib
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+from OCP.gp import gp_Pnt, gp_Trsf
+from tessd.brep.ocp_compat import static
 
 from tessellation_checks import face_areas, is_closed, mesh_group_areas, open_edges
 from test_brep_export import BREP_DIR, FILES
@@ -80,3 +88,45 @@ def test_shared_part_watertight(daemon, name):
     assert abs(areas.sum() - total) / total < 0.005
     if is_closed(doc):
         assert open_edges(arrays) == 0
+
+
+def _diagonal(shape):
+    """The diagonal of OCP's precise bounding box of `shape` (its geometry, not a triangulation,
+    nor enlarged by the shape's tolerances)."""
+    box = Bnd_Box()
+    static(BRepBndLib, "AddOptimal")(shape, box, False, False)
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return math.dist((x0, y0, z0), (x1, y1, z1))
+
+
+def _scaled(shape, factor):
+    """`shape` scaled by `factor` about the origin (its geometry rewritten, as a part modelled
+    in other units would be)."""
+    trsf = gp_Trsf()
+    trsf.SetScale(gp_Pnt(0, 0, 0), factor)
+    return BRepBuilderAPI_Transform(shape, trsf, True).Shape()
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_relative_tolerance(daemon, name):
+    """`"tolerance": "0.05%"` is 0.0005 × the part's bounding-box diagonal, that diagonal is
+    OCP's (within 1 %, never above it), and the part scaled by 1e-3 gets the same mesh relative
+    to its size: triangles within 3 %, area / OCP's area within 0.5 % of the unscaled part's."""
+    shape = brep_ocp.read_file(str(BREP_DIR / name))
+    runs = []
+    for factor in (1.0, 1e-3):
+        part = shape if factor == 1.0 else _scaled(shape, factor)
+        doc = brep_ocp.export_topods(part, source=name)
+        with tessd.Client(daemon.socket, timeout=300) as c:
+            result, arrays = c.call("tessellate", {"brep": doc, "tolerance": "0.05%"})
+        exact = _diagonal(part)
+        assert result["tolerance_relative"] == 0.0005
+        assert result["tolerance"] == pytest.approx(0.0005 * result["diagonal"], rel=1e-12)
+        assert 0.99 * exact <= result["diagonal"] <= (1 + 1e-5) * exact, (result["diagonal"], exact)
+        area = mesh_group_areas(arrays, len(doc["faces"])).sum() / sum(face_areas(part))
+        runs.append((result, area, exact))
+        print(f"{name} x{factor:g}: diagonal {result['diagonal']:.6g} (OCP {exact:.6g}), tolerance "
+              f"{result['tolerance']:.4g}: {result['triangles']} triangles, area {100 * (area - 1):+.3f} %")
+    (one, area_one, _), (tiny, area_tiny, _) = runs
+    assert abs(tiny["triangles"] - one["triangles"]) <= 0.03 * one["triangles"]
+    assert abs(area_tiny - area_one) < 0.005

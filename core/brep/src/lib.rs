@@ -19,6 +19,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bounds;
 pub mod bspline;
 pub mod curve;
 pub mod model;
@@ -27,6 +28,7 @@ pub mod surface;
 pub mod validate;
 pub mod vector;
 
+pub use bounds::BoundingBox;
 pub use model::{
     BSplineCurve, BSplineSurface, Curve, Curve2, Curve3, Document, Edge, FORMAT, Face, Frame, Loop,
     Surface, Trim, Units, VERSION,

@@ -197,8 +197,9 @@ enum Command {
         input: PathBuf,
         /// Output mesh: a USD stage (.usda, a GeomSubset per face) or OBJ, PLY, STL, OFF.
         output: PathBuf,
-        /// Chordal tolerance: a length with a unit (0.1mm, 0.01in, 1cm, 0.001m) or a plain
-        /// number in the document's units.
+        /// Chordal tolerance: a length with a unit (0.1mm, 0.01in, 1cm, 0.001m), a plain
+        /// number in the document's units, or a percentage of the part's bounding-box diagonal
+        /// (0.05%).
         #[arg(long)]
         tolerance: String,
         /// The largest angle, radians, between neighbouring facets' normals (default 0.5).
@@ -442,12 +443,20 @@ fn run(cli: Cli) -> Result<()> {
             });
             report_or_json(run_local("tessellate", params)?, json, |r| {
                 let r = &r.result;
+                let units = r["units"].as_str().unwrap_or("");
+                let shown = match (r["tolerance_relative"].as_f64(), r["diagonal"].as_f64()) {
+                    (Some(rel), Some(d)) => format!(
+                        "{} {units}, {} % of the {} {units} diagonal",
+                        significant(r["tolerance"].as_f64().unwrap_or(f64::NAN)),
+                        significant(rel * 100.0),
+                        significant(d)
+                    ),
+                    _ => format!("{} {units}", r["tolerance"]),
+                };
                 println!(
-                    "tessellate: {} faces, {} triangles (tolerance {} {}) -> {} ({:.1} ms)",
+                    "tessellate: {} faces, {} triangles (tolerance {shown}) -> {} ({:.1} ms)",
                     r["faces"],
                     r["triangles"],
-                    r["tolerance"],
-                    r["units"].as_str().unwrap_or(""),
                     output.display(),
                     r["time_ms"].as_f64().unwrap_or(0.0)
                 );
@@ -488,6 +497,21 @@ fn report_or_json(response: Response, json: bool, summary: impl FnOnce(&Response
         summary(&response);
     }
     Ok(())
+}
+
+/// `x` to 4 significant digits without trailing zeros (`0.01234`, `24.6`, `0.05`), for the
+/// summary of a relative tessellation tolerance.
+fn significant(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return x.to_string();
+    }
+    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 17) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// Runs one operation in this process with a progress bar on a terminal — the same registry

@@ -1,7 +1,7 @@
 //! `tessellate`: trimmed tessellation of a B-Rep document (`tessd-tessellate`): the document
 //! from a file or inline (arrays by reference resolved as for `brep.load`), validated, each
-//! face tessellated to `tolerance` (world units, or a length with a unit suffix) and `angle`,
-//! shared edges discretised once; the mesh (a face group per B-Rep face, `face<id>`) as a file
+//! face tessellated to `tolerance` (world units, a length with a unit suffix, or a percentage
+//! of the part's bounding-box diagonal) and `angle`, shared edges discretised once; the mesh (a face group per B-Rep face, `face<id>`) as a file
 //! (`.usda` with a GeomSubset per face, `.obj`, `.ply`, ...) or arrays.
 //!
 //! Parameters are described in docs/protocol.md ("tessellate").
@@ -56,6 +56,73 @@ pub fn parse_length(what: &str, v: &Value, units: Units) -> Result<f64, OpError>
     }
 }
 
+/// A chordal tolerance as a request gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tolerance {
+    /// A length in the document's units.
+    Length(f64),
+    /// A percentage of the part's bounding-box diagonal (`"0.05%"` is `Percent(0.05)`).
+    Percent(f64),
+}
+
+/// Parses `tolerance`: a length as [`parse_length`] reads it, or a string holding a positive
+/// percentage (`"0.05%"`, `" 0.05 % "`) of the part's bounding-box diagonal.
+///
+/// # Errors
+/// `invalid_request` naming `tolerance` and the value for anything else (zero, negative, NaN or
+/// infinite percentages included).
+pub fn parse_tolerance(v: &Value, units: Units) -> Result<Tolerance, OpError> {
+    if let Some(digits) = v.as_str().and_then(|s| s.trim().strip_suffix('%')) {
+        return match plain_number(digits.trim_end()) {
+            Some(p) if p.is_finite() && p > 0.0 => Ok(Tolerance::Percent(p)),
+            _ => Err(OpError::request(format!(
+                "`tolerance` must be a positive percentage of the part's bounding-box diagonal, such as \"0.05%\", got {v}"
+            ))),
+        };
+    }
+    parse_length("tolerance", v, units)
+        .map(Tolerance::Length)
+        .map_err(|_| {
+            OpError::request(format!(
+                "`tolerance` must be a positive length (a number in the document's units, {}, or a string such as \"0.1mm\": mm, cm, m, in) or a percentage of the part's bounding-box diagonal such as \"0.05%\", got {v}",
+                units.name()
+            ))
+        })
+}
+
+/// The absolute tolerance `asked` means for `doc`, with, for a percentage, the bounding-box
+/// diagonal it was taken of.
+///
+/// # Errors
+/// `invalid_request` naming `tolerance` and the value when a percentage has no geometry to be
+/// taken of (no faces, or a box of zero size); `invalid_brep` when that is because the
+/// document does not validate.
+pub fn absolute_tolerance(asked: Tolerance, doc: &Document) -> Result<(f64, Option<f64>), OpError> {
+    let p = match asked {
+        Tolerance::Length(x) => return Ok((x, None)),
+        Tolerance::Percent(p) => p,
+    };
+    let diagonal = doc.bounding_box().map_or(0.0, |b| b.diagonal());
+    let tolerance = p / 100.0 * diagonal;
+    if tolerance.is_finite() && tolerance > 0.0 {
+        return Ok((tolerance, Some(diagonal)));
+    }
+    if let Some(e) = doc.errors().into_iter().next() {
+        return Err(brep_error(e));
+    }
+    if diagonal.is_finite() && diagonal > 0.0 {
+        return Err(OpError::request(format!(
+            "`tolerance` \"{p}%\" of the part's {diagonal} {} diagonal is not a finite length",
+            doc.units.name()
+        )));
+    }
+    Err(OpError::request(format!(
+        "`tolerance` \"{p}%\" is a percentage of the part's bounding-box diagonal, but the document ({} faces) has no extent to take it of (diagonal {diagonal} {})",
+        doc.faces.len(),
+        doc.units.name()
+    )))
+}
+
 /// The operation.
 ///
 /// # Errors
@@ -71,13 +138,13 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     let value = request_document(&mut request)?;
     let doc = Document::from_value(&value).map_err(brep_error)?;
     drop(value);
-    let tolerance = match request.params.get("tolerance") {
+    let asked = match request.params.get("tolerance") {
         None | Some(Value::Null) => {
             return Err(OpError::request(
-                "`tolerance` (the chordal tolerance, a length) is required",
+                "`tolerance` (the chordal tolerance, a length or a percentage of the part's bounding-box diagonal) is required",
             ));
         }
-        Some(v) => parse_length("tolerance", v, doc.units)?,
+        Some(v) => parse_tolerance(v, doc.units)?,
     };
     let angle = match request.f64_param("angle")? {
         None => Options::DEFAULT_ANGLE,
@@ -88,6 +155,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             )));
         }
     };
+    let (tolerance, diagonal) = absolute_tolerance(asked, &doc)?;
     ctx.progress(0.05, "validate", "")?;
     let total = doc.faces.len();
     let progress = |done: usize, total: usize| {
@@ -118,6 +186,10 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         "time_ms": stats.time_ms,
         "groups": t.mesh.group_names,
     });
+    if let (Tolerance::Percent(p), Some(d)) = (asked, diagonal) {
+        result["tolerance_relative"] = json!(p / 100.0);
+        result["diagonal"] = json!(d);
+    }
     match output {
         Some(path) => {
             ctx.progress(0.9, "write", "")?;
@@ -171,5 +243,92 @@ mod tests {
             let e = parse_length("tolerance", &bad, mm).unwrap_err();
             assert_eq!(e.code, ErrorCode::InvalidRequest, "{bad}");
         }
+        // `trim.classify` shares parse_length: a percentage is not a length there.
+        assert!(parse_length("tolerance", &json!("0.05%"), mm).is_err());
+    }
+
+    #[test]
+    fn tolerances() {
+        let mm = Units::Millimetres;
+        let ok = |v: Value| parse_tolerance(&v, mm).unwrap();
+        assert_eq!(ok(json!("0.05%")), Tolerance::Percent(0.05));
+        assert_eq!(ok(json!(" 0.05 % ")), Tolerance::Percent(0.05));
+        assert_eq!(ok(json!("5e-2%")), Tolerance::Percent(0.05));
+        assert_eq!(ok(json!("2%")), Tolerance::Percent(2.0));
+        assert_eq!(ok(json!(0.1)), Tolerance::Length(0.1));
+        assert_eq!(ok(json!("0.1")), Tolerance::Length(0.1));
+        match ok(json!("0.1mm")) {
+            Tolerance::Length(x) => assert!((x - 0.1).abs() < 1e-12),
+            other => panic!("{other:?}"),
+        }
+        match parse_tolerance(&json!("1cm"), Units::Metres).unwrap() {
+            Tolerance::Length(x) => assert!((x - 0.01).abs() < 1e-15),
+            other => panic!("{other:?}"),
+        }
+        for (bad, shown) in [
+            (json!("0%"), r#""0%""#),
+            (json!("-0.05%"), r#""-0.05%""#),
+            (json!("NaN%"), r#""NaN%""#),
+            (json!("inf%"), r#""inf%""#),
+            (json!("1e400%"), r#""1e400%""#),
+            (json!("%"), r#""%""#),
+            (json!("0.05%%"), r#""0.05%%""#),
+            (json!("abc%"), r#""abc%""#),
+            (json!("0.05 %mm"), r#""0.05 %mm""#),
+            (json!("0.1ft"), r#""0.1ft""#),
+            (json!(-1), "-1"),
+            (json!(0), "0"),
+            (json!(true), "true"),
+        ] {
+            let e = parse_tolerance(&bad, mm).unwrap_err();
+            assert_eq!(e.code, ErrorCode::InvalidRequest, "{bad}");
+            assert!(e.message.starts_with("`tolerance` "), "{}", e.message);
+            assert!(
+                e.message.ends_with(&format!("got {shown}")),
+                "{}",
+                e.message
+            );
+        }
+        assert_eq!(
+            parse_tolerance(&json!("0%"), mm).unwrap_err().message,
+            r#"`tolerance` must be a positive percentage of the part's bounding-box diagonal, such as "0.05%", got "0%""#
+        );
+    }
+
+    fn plate(scale: f64) -> Document {
+        // A 40 × 30 plane face at z = 10 (times `scale`): a 50 diagonal.
+        Document::from_value(&json!({
+            "format": "tessd-brep", "version": 1, "units": "mm",
+            "faces": [{"id": 0, "surface": {"type": "plane", "origin": [0, 0, 10.0 * scale],
+                       "x_dir": [1, 0, 0], "y_dir": [0, 1, 0]},
+                       "bounds": [0, 40.0 * scale, 0, 30.0 * scale]}]
+        }))
+        .unwrap()
+    }
+
+    #[test]
+    fn percent_of_the_diagonal() {
+        let (t, d) = absolute_tolerance(Tolerance::Percent(0.05), &plate(1.0)).unwrap();
+        assert!((d.unwrap() - 50.0).abs() < 1e-12 && (t - 0.025).abs() < 1e-12);
+        let (t, d) = absolute_tolerance(Tolerance::Percent(0.05), &plate(1e-3)).unwrap();
+        assert!((d.unwrap() - 0.05).abs() < 1e-15 && (t - 2.5e-5).abs() < 1e-15);
+        assert_eq!(
+            absolute_tolerance(Tolerance::Length(0.1), &plate(1e-3)).unwrap(),
+            (0.1, None)
+        );
+        let mut empty = plate(1.0);
+        empty.faces.clear();
+        let e = absolute_tolerance(Tolerance::Percent(0.05), &empty).unwrap_err();
+        assert_eq!(e.code, ErrorCode::InvalidRequest);
+        assert!(
+            e.message
+                .starts_with(r#"`tolerance` "0.05%" is a percentage"#)
+                && e.message.contains("0 faces"),
+            "{}",
+            e.message
+        );
+        // A face of zero size does not validate: that error, not the missing extent.
+        let e = absolute_tolerance(Tolerance::Percent(1.0), &plate(0.0)).unwrap_err();
+        assert_eq!(e.code, ErrorCode::InvalidBrep, "{}", e.message);
     }
 }
