@@ -234,13 +234,20 @@ impl<'a> Adaptive<'a> {
         }
         let count = halves.len() / 2;
         if count > 0 {
+            // Both the kept leaves and the refined halves are in range order: merge them.
             let refined = self.refine_all(&mut r.order, &halves, r.tolerance)?;
-            let mut leaves: Vec<Node> = (r.leaves.iter().zip(&split))
+            let mut kept = (r.leaves.iter().zip(&split))
                 .filter(|(_, s)| !**s)
                 .map(|(n, _)| *n)
-                .chain(refined)
-                .collect();
-            leaves.sort_unstable_by_key(|n| n.start);
+                .peekable();
+            let mut leaves = Vec::with_capacity(r.leaves.len() + refined.len() - count);
+            for n in refined {
+                while let Some(k) = kept.next_if(|k| k.start < n.start) {
+                    leaves.push(k);
+                }
+                leaves.push(n);
+            }
+            leaves.extend(kept);
             r.leaves = leaves;
         }
         Ok(count)

@@ -22,6 +22,7 @@
 //! image is; it only refines a little more.)
 
 use crate::elimination::Eliminated;
+use crate::partition::UNUSED;
 use tessd_mesh::Mesh;
 
 /// The collapsed input faces whose image is not on the output.
@@ -175,10 +176,22 @@ impl Gaps {
 /// keeps, except a face whose three representatives happen to be collinear (it reports those,
 /// and then [`find_gaps`] checks the real output). Cheaper than placing and eliminating, so
 /// the coverage rounds of the quality goal run on it; `faces` is left empty.
-pub(crate) fn gaps_by_clusters(mesh: &Mesh, cluster_of: &[u32], clusters: usize) -> Gaps {
+///
+/// `moved`: after a round, only faces with a vertex in a cell that was split (`moved[v]`) are
+/// read. The others' pieces were covered before, by a kept face with those two clusters, and
+/// that face stays kept: a split gives its third cluster a new id, never one of those two.
+pub(crate) fn gaps_by_clusters(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    clusters: usize,
+    moved: Option<&[bool]>,
+) -> Gaps {
     let mut kept: Vec<[u32; 3]> = Vec::new();
     let mut pieces: Vec<Piece> = Vec::new();
     for t in mesh.face_indices.chunks_exact(3) {
+        if moved.is_some_and(|m| !t.iter().any(|&v| m[v as usize])) {
+            continue;
+        }
         let t = [0, 1, 2].map(|k| cluster_of[t[k] as usize]);
         if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
             kept.push(t);
@@ -201,6 +214,17 @@ pub(crate) fn gaps_by_clusters(mesh: &Mesh, cluster_of: &[u32], clusters: usize)
         }
     }
     gaps.finish(&involved)
+}
+
+/// Marks the vertices of `split` (sorted cluster ids under `cluster_of`, as [`Gaps::clusters`]
+/// lists them): those a round of splitting can move.
+pub(crate) fn vertices_of(cluster_of: &[u32], split: &[u32], clusters: usize) -> Vec<bool> {
+    let mut in_split = vec![false; clusters];
+    split.iter().for_each(|&c| in_split[c as usize] = true);
+    cluster_of
+        .iter()
+        .map(|&c| c != UNUSED && in_split[c as usize])
+        .collect()
 }
 
 /// The collapsed faces of `mesh` (as `kept.collapsed` lists them) whose image under

@@ -296,13 +296,15 @@ impl<'a> Prepared<'a> {
         let mut stuck = false;
         let (reps, kept, gaps) = loop {
             if let Some(r) = refinable.as_mut() {
+                let mut moved = None;
                 loop {
-                    let gaps =
-                        coverage::gaps_by_clusters(work, &partition.cluster_of, partition.clusters);
+                    let (cluster_of, n) = (&partition.cluster_of, partition.clusters);
+                    let gaps = coverage::gaps_by_clusters(work, cluster_of, n, moved.as_deref());
                     if gaps.is_empty() {
                         break;
                     }
                     step(0.6, "cover")?;
+                    moved = Some(coverage::vertices_of(cluster_of, &gaps.clusters, n));
                     if adaptive
                         .split_clusters(r, &gaps.clusters)
                         .map_err(stopped)?
