@@ -9,7 +9,7 @@ mod support;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use support::{Daemon, run_ok, tessd};
-use tessd_brep::{Curve, Curve2, Curve3, Document, Surface, Units};
+use tessd_brep::{Curve, Document, Surface, Units};
 use tessd_ipc::client::{Client, ClientError};
 use tessd_ipc::error::ErrorCode;
 
@@ -27,55 +27,29 @@ fn scale_point<const N: usize>(p: [f64; N], s: [f64; N]) -> [f64; N] {
     std::array::from_fn(|k| p[k] * s[k])
 }
 
-/// A 3D curve scaled by `s` about the origin, and the factor its parameter scales by (a
-/// line's parameter is a length; conics' and B-splines' are not).
-fn scale_curve3(c: &Curve3, s: f64) -> (Curve3, f64) {
-    let mut c = c.clone();
-    let t = match &mut c {
-        Curve::Line { origin, .. } => {
-            *origin = origin.map(|x| x * s);
-            s
-        }
-        Curve::Circle { center, radius, .. } => {
-            *center = center.map(|x| x * s);
-            *radius *= s;
-            1.0
-        }
-        Curve::Ellipse {
-            center,
-            major_radius,
-            minor_radius,
-            ..
-        } => {
-            *center = center.map(|x| x * s);
-            *major_radius *= s;
-            *minor_radius *= s;
-            1.0
-        }
-        Curve::Bspline(b) => {
-            b.poles = b.poles.iter().map(|p| p.map(|x| x * s)).collect();
-            1.0
-        }
+/// A curve (3D edge or trim) under the map `p → (s₀·p₀, s₁·p₁, …)` about the origin, and the
+/// factor its parameter range scales by: a line's parameter is a length, conics' and
+/// B-splines' are not. Conics only under a uniform map (all `s` equal).
+fn scale_curve<const N: usize>(c: &Curve<[f64; N]>, s: [f64; N]) -> (Curve<[f64; N]>, f64) {
+    let uniform = |what: &str| {
+        assert!(
+            s.iter().all(|&x| x == s[0]),
+            "{what} under an anisotropic map"
+        );
+        s[0]
     };
-    (c, t)
-}
-
-/// A trim curve under the parameter plane's map `(u, v) → (su·u, sv·v)`, and the factor its
-/// range scales by.
-fn scale_curve2(c: &Curve2, s: [f64; 2]) -> (Curve2, f64) {
     let mut c = c.clone();
     let t = match &mut c {
         Curve::Line { origin, dir } => {
             *origin = scale_point(*origin, s);
             let d = scale_point(*dir, s);
-            let len = d[0].hypot(d[1]);
+            let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
             *dir = d.map(|x| x / len);
             len
         }
         Curve::Circle { center, radius, .. } => {
-            assert_eq!(s[0], s[1], "a circle trim under an anisotropic map");
+            *radius *= uniform("a circle");
             *center = scale_point(*center, s);
-            *radius *= s[0];
             1.0
         }
         Curve::Ellipse {
@@ -84,10 +58,10 @@ fn scale_curve2(c: &Curve2, s: [f64; 2]) -> (Curve2, f64) {
             minor_radius,
             ..
         } => {
-            assert_eq!(s[0], s[1], "an ellipse trim under an anisotropic map");
+            let k = uniform("an ellipse");
             *center = scale_point(*center, s);
-            *major_radius *= s[0];
-            *minor_radius *= s[0];
+            *major_radius *= k;
+            *minor_radius *= k;
             1.0
         }
         Curve::Bspline(b) => {
@@ -138,12 +112,12 @@ fn scaled(doc: &Document, s: f64, units: Units) -> Document {
                 axis_origin, curve, ..
             } => {
                 *axis_origin = axis_origin.map(|x| x * s);
-                let (c, t) = scale_curve3(curve, s);
+                let (c, t) = scale_curve(curve, [s; 3]);
                 **curve = c;
                 [1.0, t]
             }
             Surface::Extrusion { curve, .. } => {
-                let (c, t) = scale_curve3(curve, s);
+                let (c, t) = scale_curve(curve, [s; 3]);
                 **curve = c;
                 [t, s]
             }
@@ -159,14 +133,14 @@ fn scaled(doc: &Document, s: f64, units: Units) -> Document {
         let [u0, u1, v0, v1] = face.bounds;
         face.bounds = [u0 * uv[0], u1 * uv[0], v0 * uv[1], v1 * uv[1]];
         for trim in face.loops.iter_mut().flat_map(|l| &mut l.trims) {
-            let (c, t) = scale_curve2(&trim.curve, uv);
+            let (c, t) = scale_curve(&trim.curve, uv);
             trim.curve = c;
             trim.range = trim.range.map(|x| x * t);
         }
     }
     for edge in doc.edges.iter_mut().flatten() {
         if let Some(curve) = &edge.curve {
-            let (c, t) = scale_curve3(curve, s);
+            let (c, t) = scale_curve(curve, [s; 3]);
             edge.curve = Some(c);
             edge.range = edge.range.map(|x| x * t);
         }
