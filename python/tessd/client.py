@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import collections
 import itertools
+import os
 import threading
 import time
 import weakref
@@ -359,8 +360,26 @@ class Client:
         return result.get("echo")
 
     def hello(self) -> Dict[str, Any]:
-        """The daemon's ``hello`` result (server, version, protocol, ops, capabilities, pid)."""
+        """The daemon's ``hello`` result (server, version, protocol, ops, capabilities, pid,
+        holders)."""
         return self.call("hello")[0]
+
+    def hold(self, host: str = "python", pid: Optional[int] = None) -> int:
+        """Declares that process ``pid`` (default: this one), a program called ``host``, uses
+        the daemon (``session.hold``); returns the number of live holders.
+
+        A host that started a shared daemon stops it on exit only when no holder is left
+        (see :func:`tessd.daemon.stop_daemon` with ``only_if_unheld``). A process holds at
+        most once; the daemon forgets holders whose process has exited.
+        """
+        params = {"pid": os.getpid() if pid is None else int(pid), "host": str(host)}
+        return int(self.call("session.hold", params)[0]["holders"])
+
+    def release(self, pid: Optional[int] = None) -> int:
+        """Withdraws process ``pid``'s hold (default: this process; ``session.release``);
+        returns the number of live holders left."""
+        params = {"pid": os.getpid() if pid is None else int(pid)}
+        return int(self.call("session.release", params)[0]["holders"])
 
     # -- receiving ---------------------------------------------------------------------------
 

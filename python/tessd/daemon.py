@@ -1,7 +1,8 @@
 """Starting and stopping the daemon from a host tool.
 
 :func:`ensure_daemon` returns the socket of a running daemon, starting ``tessd serve`` in the
-background first when none answers; :func:`stop_daemon` asks one to shut down.
+background first when none answers; :func:`stop_daemon` asks one to shut down (with
+``only_if_unheld``: unless another program holds it, see :meth:`tessd.Client.hold`).
 """
 
 from __future__ import annotations
@@ -56,6 +57,23 @@ def find_binary(binary: Optional[str] = None) -> str:
         return found
     raise DaemonStartError("cannot find the tessd executable: pass binary=..., set TESSD_BIN, "
                            "or put tessd on PATH")
+
+
+def binary_version(binary: Optional[str] = None, timeout: float = 10.0) -> str:
+    """The version a tessd executable reports (``tessd --version`` prints ``tessd X.Y.Z``),
+    e.g. to tell whether a running daemon (``hello``'s ``version``) is the one a host
+    bundles. Raises :class:`DaemonStartError` when it cannot be run or says something else."""
+    exe = find_binary(binary)
+    try:
+        out = subprocess.run([exe, "--version"], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             timeout=timeout, check=False).stdout.decode("utf-8", "replace")
+    except (OSError, subprocess.SubprocessError) as e:
+        raise DaemonStartError("cannot run %s --version: %s" % (exe, e)) from e
+    words = out.split()
+    if len(words) < 2 or words[0] != "tessd":
+        raise DaemonStartError("%s --version printed %r, not `tessd <version>`" % (exe, out.strip()))
+    return words[1]
 
 
 def _log_path(socket_path: str) -> Optional[str]:
@@ -165,17 +183,24 @@ def _start_failure(what: str, log_path: Optional[str]) -> str:
     return what
 
 
-def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0) -> bool:
+def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0, *,
+                only_if_unheld: bool = False) -> bool:
     """Asks the daemon on ``socket`` to shut down and waits until it stops answering.
 
-    Returns False if no daemon was running there. Raises ``TimeoutError`` if it still
-    answers after ``timeout`` seconds.
+    With ``only_if_unheld``, the daemon stops only when no live process holds it
+    (``session.hold``; the daemon decides, so a hold arriving meanwhile is never overrun).
+    Returns True when the daemon stopped, False if no daemon was running there or (with
+    ``only_if_unheld``) it is still held and keeps running. Raises ``TimeoutError`` if it
+    still answers after ``timeout`` seconds.
     """
     path = resolve_socket(socket)
+    params = {"if_unheld": True} if only_if_unheld else None
     try:
         with Client(path, timeout=timeout) as client:
-            client.call("shutdown", timeout=timeout)
+            result, _ = client.call("shutdown", params, timeout=timeout)
     except DaemonUnavailable:
+        return False
+    if result.get("ok") is False:
         return False
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -189,7 +214,8 @@ def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0) -> bool:
                        % (path, timeout))
 
 
-__all__ = ["DaemonStartError", "ensure_daemon", "find_binary", "ping", "stop_daemon"]
+__all__ = ["DaemonStartError", "binary_version", "ensure_daemon", "find_binary", "ping",
+           "stop_daemon"]
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use: python -m tessd.daemon [socket]

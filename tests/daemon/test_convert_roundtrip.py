@@ -87,7 +87,7 @@ def test_convert_arrays_to_arrays_is_identity(client):
     faces = [list(rng.choice(50, size=int(n), replace=False)) for n in rng.integers(3, 7, size=40)]
     sent = mesh_to_arrays(positions, faces)
     result, arrays = client.call("mesh.convert", arrays=sent)
-    assert result == {"vertices": 50, "faces": 40}
+    assert result == {"vertices": 50, "faces": 40, "dropped_attributes": []}
     for name in ("positions", "face_indices", "face_sizes"):
         assert arrays[name].dtype == sent[name].dtype, name
         assert np.array_equal(arrays[name], sent[name]), name

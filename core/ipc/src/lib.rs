@@ -2,8 +2,8 @@
 //!
 //! The wire protocol of docs/protocol.md: [`frame`]s (header + JSON + aligned binary
 //! [`arrays`]), the local-socket [`server`] and a blocking [`client`], the [`job`] model
-//! (progress and cancellation) shared with [`job_file`]s, and the operation [`registry`] the
-//! binary fills. Nothing here knows about meshes: operations are registered from above.
+//! (progress and cancellation) shared with [`job_file`]s, the [`holders`] that share one daemon
+//! between host programs, and the operation [`registry`] the binary fills. Nothing here knows about meshes: operations are registered from above.
 //!
 //! ```no_run
 //! use tessd_ipc::{registry::{Registry, Response}, server::{Server, ServerOptions}, socket};
@@ -21,6 +21,7 @@ pub mod arrays;
 pub mod client;
 pub mod error;
 pub mod frame;
+pub mod holders;
 pub mod job;
 pub mod job_file;
 pub mod registry;

@@ -1,15 +1,18 @@
 //! The local-socket server: one reader thread per connection, one thread per request, replies
 //! multiplexed on the connection by request id (docs/protocol.md).
 //!
-//! The daemon keeps no per-client state beyond the connection. Operations come from the
-//! [`Registry`]; `hello`, `ping`, `cancel` and `shutdown` are built in because they concern
-//! the server itself.
+//! The daemon keeps no per-client state beyond the connection, except the [`Holders`]: the
+//! host processes that declared they use it (`session.hold`), so that a host that started a
+//! shared daemon can tell whether stopping it would pull it from under another program.
+//! Operations come from the [`Registry`]; `hello`, `ping`, `cancel`, `shutdown`,
+//! `session.hold` and `session.release` are built in because they concern the server itself.
 
 use crate::arrays::{Arrays, OwnedArray};
 use crate::error::{ErrorCode, OpError};
 use crate::frame::{
     Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame,
 };
+use crate::holders::Holders;
 use crate::job::{CancelToken, JobContext, Progress};
 use crate::registry::{Registry, Request, Response, run_guarded, unknown_op};
 use interprocess::local_socket::{Listener, Stream, traits::ListenerExt as _};
@@ -22,7 +25,14 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Operations the server answers itself.
-const BUILTIN_OPS: [&str; 4] = ["cancel", "hello", "ping", "shutdown"];
+const BUILTIN_OPS: [&str; 6] = [
+    "cancel",
+    "hello",
+    "ping",
+    "session.hold",
+    "session.release",
+    "shutdown",
+];
 
 /// Server settings.
 #[derive(Clone, Debug)]
@@ -60,6 +70,7 @@ struct Shared {
     socket: PathBuf,
     stopping: AtomicBool,
     in_flight: AtomicUsize,
+    holders: Holders,
 }
 
 /// Stops a running server from another thread (signal handler, `shutdown` op).
@@ -97,6 +108,7 @@ impl Server {
             socket: socket.to_path_buf(),
             stopping: AtomicBool::new(false),
             in_flight: AtomicUsize::new(0),
+            holders: Holders::new(),
         });
         Server { shared, listener }
     }
@@ -226,9 +238,53 @@ impl Connection {
                 };
                 self.reply(&raw_id, result)
             }
-            "shutdown" => {
-                self.reply(&raw_id, Ok(Response::json(json!({"ok": true}))));
-                ShutdownHandle(self.shared.clone()).trigger();
+            "shutdown" => match bool_param(&params, "if_unheld") {
+                Err(e) => self.reply(&raw_id, Err(e)),
+                Ok(if_unheld) => {
+                    // Counting and deciding under one call keeps "stop unless someone holds
+                    // it" free of the race a separate `hello` then `shutdown` would have.
+                    let holders = self.shared.holders.count();
+                    if if_unheld && holders > 0 {
+                        let result = json!({"ok": false, "stopping": false, "holders": holders});
+                        self.reply(&raw_id, Ok(Response::json(result)));
+                    } else {
+                        // A plain `shutdown` answers as it always did, for older clients.
+                        let result = if if_unheld {
+                            json!({"ok": true, "stopping": true, "holders": holders})
+                        } else {
+                            json!({"ok": true})
+                        };
+                        self.reply(&raw_id, Ok(Response::json(result)));
+                        ShutdownHandle(self.shared.clone()).trigger();
+                    }
+                }
+            },
+            "session.hold" => {
+                let result = holder_pid(&params, "session.hold").and_then(|pid| {
+                    let host = match params.get("host") {
+                        None | Some(Value::Null) => "",
+                        Some(Value::String(s)) => s.as_str(),
+                        Some(v) => {
+                            return Err(OpError::request(format!(
+                                "parameter `host` must be a string (the holding program, e.g. \
+                                 \"blender\"), got {}",
+                                json_kind(v)
+                            )));
+                        }
+                    };
+                    let n = self.shared.holders.hold(pid, host);
+                    log::info!("held by {host} (pid {pid}); {n} holder(s)");
+                    Ok(Response::json(json!({"holders": n})))
+                });
+                self.reply(&raw_id, result)
+            }
+            "session.release" => {
+                let result = holder_pid(&params, "session.release").map(|pid| {
+                    let n = self.shared.holders.release(pid);
+                    log::info!("released by pid {pid}; {n} holder(s) left");
+                    Response::json(json!({"holders": n}))
+                });
+                self.reply(&raw_id, result)
             }
             _ => self.start_job(id, raw_id, op, params, arrays),
         }
@@ -242,6 +298,8 @@ impl Connection {
             "ops": self.known_ops(),
             "capabilities": self.shared.registry.capabilities(),
             "pid": std::process::id(),
+            "holders": self.shared.holders.count(),
+            "held_by": self.shared.holders.describe(),
         })
     }
 
@@ -425,6 +483,36 @@ fn parse_envelope(
         }
     };
     Ok((id, op, params))
+}
+
+/// The `pid` parameter of `session.hold` / `session.release`: a positive process id.
+fn holder_pid(params: &Map<String, Value>, op: &str) -> Result<u32, OpError> {
+    let Some(v) = params.get("pid") else {
+        return Err(OpError::request(format!(
+            "{op} needs `params.pid`, the holding program's process id"
+        )));
+    };
+    v.as_u64()
+        .and_then(|n| u32::try_from(n).ok())
+        .filter(|&n| n > 0 && i32::try_from(n).is_ok())
+        .ok_or_else(|| {
+            OpError::request(format!(
+                "parameter `pid` must be a positive integer (a process id), got {}",
+                describe(v)
+            ))
+        })
+}
+
+/// An optional boolean parameter (absent or null: false).
+fn bool_param(params: &Map<String, Value>, key: &str) -> Result<bool, OpError> {
+    match params.get(key) {
+        None | Some(Value::Null) => Ok(false),
+        Some(Value::Bool(b)) => Ok(*b),
+        Some(v) => Err(OpError::request(format!(
+            "parameter `{key}` must be true or false, got {}",
+            json_kind(v)
+        ))),
+    }
 }
 
 fn describe(v: &Value) -> String {

@@ -2,7 +2,8 @@
 //!
 //! The first stage of the mesh pipeline (`mesh → simplify / subdiv / codec`): an indexed
 //! polygon mesh that keeps n-gons (quads matter for subdivision), with optional face-varying
-//! normals and UVs, per-edge creases and face groups (a material or a CAD face id).
+//! normals and UVs, per-edge creases, face groups (a material or a CAD face id), sharp edges
+//! and generic float [`attribute`]s on points, corners or faces.
 //!
 //! [`io`] reads and writes OBJ, PLY, STL and OFF (streaming, bounded allocation, errors that
 //! name the line or element; writes are atomic), and [`stats`] computes counts and topology
@@ -18,10 +19,12 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod attribute;
 mod error;
 pub mod io;
 mod mesh;
 pub mod stats;
 
+pub use attribute::{Attribute, Domain};
 pub use error::MeshError;
 pub use mesh::{Crease, FaceVarying, Mesh};

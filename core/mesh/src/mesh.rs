@@ -6,6 +6,7 @@
 //! what subdivision needs for UV seams.
 
 use crate::MeshError;
+use crate::attribute::Attribute;
 
 /// A face-varying attribute: `values`, and for each face corner (same order as
 /// [`Mesh::face_indices`]) the index of its value.
@@ -52,6 +53,12 @@ pub struct Mesh {
     pub face_groups: Vec<u32>,
     /// Names of the face groups (materials, CAD face ids).
     pub group_names: Vec<String>,
+    /// Generic attributes on points, corners or faces (empty when none).
+    pub attributes: Vec<Attribute>,
+    /// Edges marked sharp for shading (Blender's `sharp_edge`): vertex pairs in either order.
+    /// Unlike creases they do not change the subdivided surface; hosts split their shading
+    /// normals there.
+    pub sharp_edges: Vec<[u32; 2]>,
 }
 
 impl Default for Mesh {
@@ -65,6 +72,8 @@ impl Default for Mesh {
             creases: Vec::new(),
             face_groups: Vec::new(),
             group_names: Vec::new(),
+            attributes: Vec::new(),
+            sharp_edges: Vec::new(),
         }
     }
 }
@@ -234,7 +243,39 @@ impl Mesh {
                 ));
             }
         }
+        for a in &self.attributes {
+            a.check(a.domain.rows_on(self))?;
+        }
+        if let Some((i, &v)) = self
+            .sharp_edges
+            .iter()
+            .flatten()
+            .enumerate()
+            .find(|(_, v)| **v as usize >= nv)
+        {
+            return bad(format!(
+                "sharp_edges[{}] names vertex {v}; the mesh has {nv}",
+                i / 2
+            ));
+        }
         Ok(())
+    }
+
+    /// The protocol names of what this mesh carries besides positions and faces (`normals`,
+    /// `uvs`, `crease_edges`, `face_groups`, `sharp_edges`, and each attribute's
+    /// `domain:name`), for operations to report what an output could not hold.
+    pub fn carried_names(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let fixed = [
+            ("normals", self.normals.is_some()),
+            ("uvs", self.uvs.is_some()),
+            ("crease_edges", !self.creases.is_empty()),
+            ("face_groups", !self.face_groups.is_empty()),
+            ("sharp_edges", !self.sharp_edges.is_empty()),
+        ];
+        out.extend(fixed.iter().filter(|f| f.1).map(|f| f.0.to_string()));
+        out.extend(self.attributes.iter().map(Attribute::label));
+        out
     }
 }
 
@@ -302,6 +343,31 @@ mod tests {
             m.validate().unwrap_err().to_string(),
             "face 1 has 2 vertices; a face needs at least 3"
         );
+    }
+
+    #[test]
+    fn attributes_and_sharp_edges_are_checked() {
+        use crate::{Attribute, Domain};
+        let mut m = quad();
+        m.sharp_edges = vec![[0, 1], [1, 2], [2, 3], [3, 99]];
+        assert_eq!(
+            m.validate().unwrap_err().to_string(),
+            "sharp_edges[3] names vertex 99; the mesh has 4"
+        );
+        m.sharp_edges.pop();
+        m.attributes = vec![Attribute::new("id", Domain::Face, 1, vec![0.0, 1.0])];
+        assert_eq!(
+            m.validate().unwrap_err().to_string(),
+            "array \"face:id\" has 2 rows; the mesh has 1 faces"
+        );
+        m.attributes = vec![Attribute::new("uv", Domain::Corner, 2, vec![0.0; 8])];
+        m.validate().unwrap();
+        m.attributes[0].values[5] = f32::INFINITY;
+        assert_eq!(
+            m.validate().unwrap_err().to_string(),
+            "corner:uv row 2 is inf"
+        );
+        assert_eq!(m.carried_names(), ["sharp_edges", "corner:uv"]);
     }
 
     #[test]

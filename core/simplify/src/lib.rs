@@ -20,8 +20,9 @@
 //!    image lies on the output (`coverage.rs`), so the tolerance bounds the distance between the
 //!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`);
 //!
-//! and beyond the paper: boundary/feature preservation ([`features`]), normals, UVs and face
-//! groups carried through (`attributes.rs`), the partition as boxes for "show partition"
+//! and beyond the paper: boundary/feature preservation ([`features`]), normals, UVs, face
+//! groups and generic attributes carried through (`attributes.rs`), sharp edges and creases
+//! carried onto the output's edges (`edges.rs`), the partition as boxes for "show partition"
 //! ([`partition_boxes`]), and LOD chains ([`lod`]).
 //!
 //! ```
@@ -44,6 +45,7 @@ mod area_vector;
 mod attributes;
 mod cell_table;
 mod coverage;
+mod edges;
 mod elimination;
 mod error;
 pub mod features;
@@ -69,7 +71,7 @@ use adaptive_partition::{Adaptive, Stop};
 use partition::{UNUSED, weighted_bounds};
 use std::borrow::Cow;
 use std::sync::atomic::Ordering;
-use tessd_mesh::Mesh;
+use tessd_mesh::{Domain, Mesh};
 
 /// Figures about one simplification.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -283,7 +285,8 @@ impl<'a> Prepared<'a> {
             }
         };
         step(0.6, "merge")?;
-        let attributes = work.normals.is_some() || work.uvs.is_some();
+        let corner_attributes = work.attributes.iter().any(|a| a.domain == Domain::Corner);
+        let attributes = work.normals.is_some() || work.uvs.is_some() || corner_attributes;
         // Coverage rounds (quality goal): while some collapsed input face's image is off the
         // output, split the cells of its uncovered segments and points and check again. Each
         // round splits at least one cell, and cells whose vertices coincide cannot split, so
@@ -346,21 +349,27 @@ impl<'a> Prepared<'a> {
         step(0.9, "attributes")?;
         let cluster_of = &partition.cluster_of;
         // Attributes read the elimination's bookkeeping; then its buffers become the mesh.
+        let slots = attributes.then(|| attributes::CornerSlots::new(work, cluster_of, &kept));
         let normals = work
             .normals
             .as_ref()
-            .map(|n| attributes::carry_face_varying(work, n, cluster_of, &kept, true));
+            .zip(slots.as_ref())
+            .map(|(n, s)| attributes::carry_face_varying(n, s, true));
         let uvs = work
             .uvs
             .as_ref()
-            .map(|t| attributes::carry_face_varying(work, t, cluster_of, &kept, false));
+            .zip(slots.as_ref())
+            .map(|(t, s)| attributes::carry_face_varying(t, s, false));
         let face_groups = attributes::carry_groups(work, &kept);
+        let generic =
+            attributes::carry_attributes(work, cluster_of, &new_id, used, &kept, slots.as_ref());
+        drop(slots);
         let (degenerate, duplicates) = (kept.degenerate, kept.duplicates);
         let mut face_indices = kept.face_indices;
         face_indices
             .iter_mut()
             .for_each(|c| *c = new_id[*c as usize]);
-        let out = Mesh {
+        let mut out = Mesh {
             positions: (0..partition.clusters)
                 .filter(|&c| new_id[c] != UNUSED)
                 .map(|c| reps[c])
@@ -376,7 +385,20 @@ impl<'a> Prepared<'a> {
             } else {
                 work.group_names.clone()
             },
+            attributes: generic,
+            sharp_edges: Vec::new(),
         };
+        // Sharp edges and creases need the output's faces to tell which images are edges.
+        let vertex_of = |v: u32| match cluster_of[v as usize] {
+            UNUSED => UNUSED,
+            c => new_id[c as usize],
+        };
+        if !work.sharp_edges.is_empty() {
+            out.sharp_edges = edges::carry_sharp_edges(work, vertex_of, &out);
+        }
+        if !work.creases.is_empty() {
+            out.creases = edges::carry_creases(work, vertex_of, &out);
+        }
         report.max_displacement = work
             .positions
             .iter()

@@ -35,8 +35,6 @@
 //! Like Blender's converter, corners of one vertex with equal UVs are one value (see
 //! [`weld_by_value`]); Blender welds within 1e-4 while we weld exact equals only.
 
-use std::collections::HashMap;
-
 use crate::catmull_clark::{self, Boundary, decrement};
 use crate::error::SubdivError;
 use crate::level::{RowBuilder, table_for};
@@ -160,15 +158,51 @@ impl Rules {
 /// first such corner's: the UV topology is then that of the values, as Blender's converter
 /// builds it, not of however the indices were written (per-corner UVs, duplicated indices).
 pub fn weld_by_value<const N: usize>(face_indices: &[u32], fv: &FaceVarying<[f32; N]>) -> Vec<u32> {
-    let mut first: HashMap<(u32, [u32; N]), u32> = HashMap::with_capacity(face_indices.len());
-    face_indices
-        .iter()
-        .zip(&fv.indices)
-        .map(|(&v, &i)| {
-            let bits = fv.values[i as usize].map(|x| if x == 0.0 { 0 } else { x.to_bits() });
-            *first.entry((v, bits)).or_insert(i)
-        })
-        .collect()
+    weld_rows(face_indices, &fv.indices, fv.values.as_flattened(), N)
+}
+
+/// [`weld_by_value`] for rows of any width: corner `c` holds row `rows[c]` of `values`
+/// (`components` floats per row); the result gives each corner the row of the first corner of
+/// its vertex holding an equal row. Corners are sorted by (vertex, row bits, corner), so the
+/// first of each run of equals is the first in corner order; no per-corner allocation.
+pub fn weld_rows(
+    face_indices: &[u32],
+    rows: &[u32],
+    values: &[f32],
+    components: usize,
+) -> Vec<u32> {
+    let c = components.max(1);
+    let row = |k: usize| &values[rows[k] as usize * c..rows[k] as usize * c + c];
+    let bits = |x: f32| if x == 0.0 { 0 } else { x.to_bits() };
+    let same_row =
+        |a: usize, b: usize| row(a).iter().zip(row(b)).all(|(&x, &y)| bits(x) == bits(y));
+    let mut order: Vec<u32> = (0..face_indices.len() as u32).collect();
+    order.sort_unstable_by(|&a, &b| {
+        let (a, b) = (a as usize, b as usize);
+        face_indices[a]
+            .cmp(&face_indices[b])
+            .then_with(|| {
+                row(a)
+                    .iter()
+                    .zip(row(b))
+                    .map(|(&x, &y)| bits(x).cmp(&bits(y)))
+                    .find(|o| o.is_ne())
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            })
+            .then(a.cmp(&b))
+    });
+    let mut out = vec![0u32; face_indices.len()];
+    let mut first = usize::MAX;
+    for &k in &order {
+        let k = k as usize;
+        let new_run =
+            first == usize::MAX || face_indices[first] != face_indices[k] || !same_row(first, k);
+        if new_run {
+            first = k;
+        }
+        out[k] = rows[first];
+    }
+    out
 }
 
 /// The topology phase for one face-varying channel: one stencil table per level over the
@@ -254,24 +288,45 @@ impl FaceVaryingRefiner {
     /// # Errors
     /// When `values` does not hold the channel's value count.
     pub fn apply<const N: usize>(&self, values: &[[f32; N]]) -> Result<Vec<[f32; N]>, SubdivError> {
-        if values.len() != self.source_count {
-            return Err(SubdivError::InvalidOption(format!(
-                "{} face-varying values given; the channel has {}",
-                values.len(),
-                self.source_count
-            )));
-        }
         if N == 0 {
+            self.check_count(values.len())?;
             return Ok(vec![
                 [0.0; N];
                 self.tables.last().map_or(values.len(), |t| t.len())
             ]);
         }
-        let flat = StencilTable::apply_chain(&self.tables, values.as_flattened(), N);
+        let flat = self.apply_rows(values.as_flattened(), N)?;
         Ok(flat
             .chunks_exact(N)
             .map(|c| std::array::from_fn(|k| c[k]))
             .collect())
+    }
+
+    /// [`FaceVaryingRefiner::apply`] for rows of `components` floats (≥ 1) stored one after
+    /// the other: generic attributes of any width.
+    ///
+    /// # Errors
+    /// When `values` does not hold the channel's value count.
+    pub fn apply_rows(&self, values: &[f32], components: usize) -> Result<Vec<f32>, SubdivError> {
+        let c = components.max(1);
+        if values.len() / c * c != values.len() {
+            return Err(SubdivError::InvalidOption(format!(
+                "{} face-varying floats are not rows of {c}",
+                values.len()
+            )));
+        }
+        self.check_count(values.len() / c)?;
+        Ok(StencilTable::apply_chain(&self.tables, values, c))
+    }
+
+    fn check_count(&self, rows: usize) -> Result<(), SubdivError> {
+        if rows != self.source_count {
+            return Err(SubdivError::InvalidOption(format!(
+                "{rows} face-varying values given; the channel has {}",
+                self.source_count
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -311,6 +366,27 @@ pub fn refine_uvs(
         )));
     }
     let welded = weld_by_value(&cage.face_indices, uvs);
+    let Some(channel) = cage_channel(cage, refiner, &welded, uvs.values.len(), options)? else {
+        return Ok(None);
+    };
+    Ok(Some(FaceVarying {
+        values: channel.apply(&uvs.values)?,
+        indices: channel.indices,
+    }))
+}
+
+/// The channel of `cage` whose corners use values `indices` (of `value_count`), refined as
+/// `refiner` was (`None` when the scheme carries no face-varying data).
+///
+/// # Errors
+/// Indices that do not fit the cage; a `refiner` not built from this cage and scheme.
+pub fn cage_channel(
+    cage: &Mesh,
+    refiner: &Refiner,
+    indices: &[u32],
+    value_count: usize,
+    options: &SubdivOptions,
+) -> Result<Option<FaceVaryingRefiner>, SubdivError> {
     let faces = Faces {
         offsets: cage.face_offsets.clone(),
         indices: cage.face_indices.clone(),
@@ -318,8 +394,7 @@ pub fn refine_uvs(
     };
     let creases: Vec<([u32; 2], f32)> =
         cage.creases.iter().map(|c| ([c.a, c.b], c.value)).collect();
-    let Some(channel) =
-        FaceVaryingRefiner::new(&faces, &creases, &welded, uvs.values.len(), options)?
+    let Some(channel) = FaceVaryingRefiner::new(&faces, &creases, indices, value_count, options)?
     else {
         return Ok(None);
     };
@@ -331,10 +406,7 @@ pub fn refine_uvs(
                 .to_string(),
         ));
     }
-    Ok(Some(FaceVarying {
-        values: channel.apply(&uvs.values)?,
-        indices: channel.indices,
-    }))
+    Ok(Some(channel))
 }
 
 /// One level of a channel: the faces, their adjacency and the value of every corner.

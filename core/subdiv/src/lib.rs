@@ -6,6 +6,7 @@
 
 #![warn(missing_docs)]
 
+pub mod attributes;
 pub mod bilinear;
 pub mod butterfly;
 pub mod catmull_clark;
@@ -17,6 +18,7 @@ pub mod halfedges;
 pub mod level;
 pub mod loop_scheme;
 pub mod normals;
+pub mod sharp_edges;
 pub mod sqrt3;
 pub mod stencil;
 pub mod topology;
@@ -163,6 +165,9 @@ pub struct Refiner {
     pub creases: Vec<([u32; 2], f32)>,
     /// The cage face each last-level face comes from.
     pub face_origin: Vec<u32>,
+    /// Edges of the last level lying on the cage's sharp edges (empty when the cage has none
+    /// or the scheme keeps none: [`sharp_edges::carries_sharp_edges`]).
+    pub sharp_edges: Vec<[u32; 2]>,
     /// Vertices of the cage.
     pub cage_vertices: usize,
 }
@@ -222,9 +227,23 @@ impl Refiner {
             cage.creases.iter().map(|c| ([c.a, c.b], c.value)).collect();
         let mut origin: Vec<u32> = (0..faces.len() as u32).collect();
         let mut tables = Vec::with_capacity(options.levels as usize);
+        // Sharp edges, each once, self-loops left out; none when the scheme cannot keep them.
+        let mut sharp: Vec<[u32; 2]> = Vec::new();
+        if sharp_edges::carries_sharp_edges(options.scheme) {
+            sharp = cage
+                .sharp_edges
+                .iter()
+                .filter(|e| e[0] != e[1])
+                .map(|&[a, b]| [a.min(b), a.max(b)])
+                .collect();
+            sharp.sort_unstable();
+            sharp.dedup();
+        }
         if options.scheme == Scheme::CatmullClark {
             // Index arithmetic after the cage: no per-level adjacency rebuild.
             let mut h = Halfedges::from_cage(&faces, &creases)?;
+            let mut tracked =
+                (!sharp.is_empty()).then(|| sharp_edges::HalfedgeSharp::new(&h, &sharp));
             for level in 1..=options.levels {
                 tables.push(catmull_clark::stencils(&h, options.boundary));
                 // Child face c is parent corner c.
@@ -234,15 +253,29 @@ impl Refiner {
                 if level == options.levels {
                     // The last level needs its faces and creases only.
                     creases = h.refined_creases();
+                    if let Some(t) = &tracked {
+                        sharp = t.last(&h);
+                    }
                     faces = h.refine_faces();
                 } else {
                     h = h.refine();
+                    if let Some(t) = tracked.as_mut() {
+                        t.refine();
+                    }
                 }
             }
         } else {
             for _ in 0..options.levels {
                 let topo = Topology::build(&faces, &creases)?;
                 let level = options.scheme.refine(&faces, &topo, options.boundary)?;
+                if !sharp.is_empty() {
+                    let (ep, vp) = sharp_edges::numbering(
+                        options.scheme,
+                        faces.len(),
+                        topo.edge_vertices.len(),
+                    );
+                    sharp = sharp_edges::split(&topo, &sharp, ep, vp);
+                }
                 origin = level
                     .face_parent
                     .iter()
@@ -258,6 +291,7 @@ impl Refiner {
             faces,
             creases,
             face_origin: origin,
+            sharp_edges: sharp,
             cage_vertices: cage.positions.len(),
         })
     }
@@ -319,8 +353,9 @@ impl Refiner {
 
     /// The refined mesh with `positions` (already refined): last level's faces, face groups
     /// of the cage carried to its faces, creases still sharp, the cage's UVs refined by
-    /// `options.uv_interpolation` (schemes that carry them: [`face_varying::refine_uvs`]) and,
-    /// with `options.normals`, smooth shading normals.
+    /// `options.uv_interpolation` (schemes that carry them: [`face_varying::refine_uvs`]),
+    /// its generic attributes ([`attributes::refine_attributes`]), its sharp edges' halves
+    /// ([`sharp_edges`]) and, with `options.normals`, smooth shading normals.
     ///
     /// # Errors
     /// UVs that do not fit the cage, or a refiner built from another cage or options.
@@ -350,6 +385,8 @@ impl Refiner {
             .map(|&([a, b], value)| Crease { a, b, value })
             .collect();
         m.uvs = face_varying::refine_uvs(cage, self, options)?;
+        m.attributes = attributes::refine_attributes(cage, self, options)?;
+        m.sharp_edges = self.sharp_edges.clone();
         if options.normals {
             m.normals = Some(normals::smooth_normals(&m));
         }

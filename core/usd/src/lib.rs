@@ -19,7 +19,9 @@
 //! subdivision cage), normals and UVs as indexed face-varying primvars (`primvars:normals`,
 //! `primvars:st`), creases (`creaseIndices` / `creaseLengths` / `creaseSharpnesses`, one edge
 //! per crease, the crease value written as the USD/OpenSubdiv sharpness unchanged) and its
-//! face groups as `GeomSubset`s of the `materialBind` family (a `partition` of the faces).
+//! face groups as `GeomSubset`s of the `materialBind` family (a `partition` of the faces), and
+//! its generic attributes as primvars (`vertex`, `faceVarying` or `uniform` interpolation by
+//! domain; see `primvars.rs`). Sharp edges have no USD form ([`dropped_by_usd`]).
 //! Prim names are sanitized into valid USD identifiers ([`sanitize_identifier`]) and made
 //! unique among siblings.
 //!
@@ -50,6 +52,7 @@ mod error;
 mod file;
 mod names;
 mod options;
+mod primvars;
 mod writer;
 
 pub use error::UsdError;
@@ -58,6 +61,7 @@ pub use names::sanitize_identifier;
 pub use options::{
     LodSchemaOptions, MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme, UpAxis,
 };
+pub use primvars::dropped_by_usd;
 pub use writer::{write_lod_schema, write_lod_variants, write_mesh_stage, write_stage};
 
 #[cfg(test)]

@@ -523,6 +523,18 @@ fn write_mesh(
         out.push_fmt(format_args!("{pad1}int[] primvars:{uv}:indices = "));
         out.push_int_array(t.indices.iter().copied())?;
     }
+    for p in crate::primvars::attribute_primvars(mesh, options) {
+        out.push_fmt(format_args!("{pad1}{} primvars:{} = ", p.type_name, p.name));
+        out.push_rows(&p.attribute.values, p.attribute.components)?;
+        out.push_fmt(format_args!(" (\n"));
+        if let Some(n) = p.element_size {
+            out.push_fmt(format_args!("{pad1}    elementSize = {n}\n"));
+        }
+        out.push_fmt(format_args!(
+            "{pad1}    interpolation = \"{}\"\n{pad1})\n",
+            p.interpolation
+        ));
+    }
     if !mesh.creases.is_empty() {
         // One crease per edge: lengths of 2, one sharpness each.
         out.push_fmt(format_args!("{pad1}int[] creaseIndices = "));
@@ -734,6 +746,33 @@ impl<'w> Out<'w> {
     }
 
     /// `[(x, y, z), ...]` without the newline (metadata may follow).
+    /// `[a, b, ...]` for rows of one float or more than four (a flat list), `[(a, b), ...]`
+    /// for rows of 2 to 4 (tuples); no newline.
+    fn push_rows(&mut self, values: &[f32], components: usize) -> Result<(), UsdError> {
+        let tuples = (2..=4).contains(&components);
+        self.buf.push('[');
+        for (i, row) in values.chunks_exact(components.max(1)).enumerate() {
+            if i > 0 {
+                self.buf.push_str(", ");
+            }
+            if tuples {
+                self.buf.push('(');
+            }
+            for (k, &v) in row.iter().enumerate() {
+                if k > 0 {
+                    self.buf.push_str(", ");
+                }
+                self.push_f32(v);
+            }
+            if tuples {
+                self.buf.push(')');
+            }
+            self.spill()?;
+        }
+        self.buf.push(']');
+        Ok(())
+    }
+
     fn push_tuple_array_open<const N: usize>(
         &mut self,
         values: &[[f32; N]],

@@ -14,7 +14,8 @@
 //! | STL | triangles (ASCII or binary), equal positions welded | binary, fan-triangulated |
 //! | OFF | positions, n-gons (`OFF`, `COFF`, `NOFF`, `STOFF` headers) | ASCII `OFF` |
 //!
-//! Creases are carried by none of these formats. Writing goes through [`write_atomic`], so a
+//! Creases, sharp edges and generic attributes are carried by none of these formats
+//! ([`dropped_by_format`] lists what a write leaves out). Writing goes through [`write_atomic`], so a
 //! failed write never leaves a partial file behind.
 
 mod atomic;
@@ -230,6 +231,29 @@ fn write_named(mesh: &Mesh, w: impl Write, format: Format, name: &str) -> Result
         Format::Off => off::write(mesh, &mut w).map_err(io_err)?,
     }
     w.flush().map_err(io_err)
+}
+
+/// What writing `mesh` as `format` leaves out, by protocol name (see
+/// [`Mesh::carried_names`]): no format here holds creases, sharp edges or generic attributes;
+/// OBJ keeps normals, UVs and face groups; PLY keeps normals and UVs only when they are per
+/// vertex; STL and OFF keep positions and faces alone.
+pub fn dropped_by_format(mesh: &Mesh, format: Format) -> Vec<String> {
+    let kept = |name: &str| match (format, name) {
+        (Format::Obj, "normals" | "uvs" | "face_groups") => true,
+        (Format::Ply, "normals") => mesh
+            .normals
+            .as_ref()
+            .is_some_and(|n| per_vertex(mesh, n).is_some()),
+        (Format::Ply, "uvs") => mesh
+            .uvs
+            .as_ref()
+            .is_some_and(|t| per_vertex(mesh, t).is_some()),
+        _ => false,
+    };
+    mesh.carried_names()
+        .into_iter()
+        .filter(|n| !kept(n))
+        .collect()
 }
 
 /// Per-vertex values for a face-varying attribute, when every corner of a vertex uses the same

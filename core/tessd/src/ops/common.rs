@@ -95,6 +95,29 @@ pub fn write_mesh_file(
     }
 }
 
+/// What writing `mesh` to `path` with [`write_mesh_file`] leaves out, by protocol name (the
+/// results' `dropped_attributes`): for a USD stage, sharp edges; for OBJ / PLY / STL / OFF,
+/// what the format cannot hold ([`tessd_mesh::io::dropped_by_format`]).
+pub fn file_dropped(mesh: &Mesh, path: &Path) -> Vec<String> {
+    if is_usda(path) {
+        tessd_usd::dropped_by_usd(mesh, &MeshPrimOptions::default())
+    } else {
+        tessd_mesh::io::Format::from_path(path)
+            .map(|f| tessd_mesh::io::dropped_by_format(mesh, f))
+            .unwrap_or_default()
+    }
+}
+
+/// `a` followed by the names of `b` it does not hold yet.
+pub fn merge_names(mut a: Vec<String>, b: Vec<String>) -> Vec<String> {
+    for name in b {
+        if !a.contains(&name) {
+            a.push(name);
+        }
+    }
+    a
+}
+
 /// Reads the mesh file named by the string parameter `key` (resolved against the request's
 /// folder), stopping early when the job is cancelled.
 ///

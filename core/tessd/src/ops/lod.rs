@@ -1,10 +1,15 @@
 //! `lod`: a chain of levels of detail from one mesh in one call (`tessd_simplify::lod::lod_chain`
 //! prepares the mesh once for all levels), written as one USD stage — a variant set `LOD` or
-//! the native `UsdLod` schema — and optionally one mesh file per level.
+//! the native `UsdLod` schema — and optionally one mesh file per level; the levels come back
+//! as `lod<i>.*` arrays without file outputs, or with them when `return_arrays` is set (the
+//! chain is computed once for both).
 //!
 //! The parameters are described in docs/protocol.md ("lod").
 
-use super::common::{as_u64, is_usda, stage_options, stem, usd_error, write_mesh_file};
+use super::common::{
+    as_u64, bool_param, file_dropped, is_usda, merge_names, stage_options, stem, usd_error,
+    write_mesh_file,
+};
 use super::mesh_arrays::{input_mesh, mesh_to_prefixed_arrays, output_path};
 use super::simplify::{MethodKind, base_options, remove_all, report_json, simplify_error};
 use serde_json::{Value, json};
@@ -156,6 +161,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         ));
     }
     let per_level = per_level_dir(&request, output.as_ref())?;
+    let return_arrays = bool_param(&request, "return_arrays")?.unwrap_or(false);
     let format = per_level_format(&request)?;
     let stage = stage_options(&request)?;
     let input_path = request.str_param("input")?.map(|p| request.resolve(p));
@@ -198,7 +204,11 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         .chain(chain.iter().map(|s| &s.mesh))
         .collect();
     let mut files: Vec<PathBuf> = Vec::new();
+    // What the files cannot hold (the levels themselves carry everything: see each level's
+    // report); every level holds what LOD0 holds.
+    let mut dropped: Vec<String> = Vec::new();
     if let Some(path) = &output {
+        dropped = merge_names(dropped, file_dropped(&mesh, path));
         let prim = MeshPrimOptions::default().with_name(name.clone());
         let lod = LodSchemaOptions::default().with_default_index(default_index);
         tessd_usd::write_usda_file(path, |w| match schema {
@@ -221,6 +231,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
                         remove_all(&paths);
                         return Err(e);
                     }
+                    dropped = merge_names(std::mem::take(&mut dropped), file_dropped(m, &path));
                     paths.push(path);
                 }
                 Ok(paths)
@@ -241,8 +252,9 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             }
         }
     }
+    result["dropped_attributes"] = json!(dropped);
     let mut arrays = Vec::new();
-    if output.is_none() && per_level.is_none() {
+    if return_arrays || (output.is_none() && per_level.is_none()) {
         for (i, s) in chain.into_iter().enumerate() {
             arrays.extend(mesh_to_prefixed_arrays(s.mesh, &format!("lod{}.", i + 1)));
         }

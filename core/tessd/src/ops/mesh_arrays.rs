@@ -1,13 +1,15 @@
 //! Meshes in and out of requests: a file path (`params.input`) or the protocol's mesh arrays
-//! (docs/protocol.md, "Mesh arrays"), and results as arrays or a written file.
+//! (docs/protocol.md, "Mesh arrays": also the generic `point:` / `corner:` / `face:`
+//! attributes and `sharp_edges`), and results as arrays or a written file.
 
 use std::path::PathBuf;
 use tessd_ipc::arrays::{Arrays, Element, OwnedArray, TypedView};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::Request;
+use tessd_mesh::attribute::{check_components, check_name, check_rows};
 use tessd_mesh::io::ReadOptions;
-use tessd_mesh::{Crease, FaceVarying, Mesh, MeshError};
+use tessd_mesh::{Attribute, Crease, Domain, FaceVarying, Mesh, MeshError};
 
 /// Maps a mesh-crate error onto the protocol's codes.
 pub fn mesh_error(e: MeshError) -> OpError {
@@ -185,6 +187,23 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
             group_names.extend((group_names.len()..needed).map(|i| format!("group{i}")));
         }
     }
+    let counts = [
+        (Domain::Point, positions.len()),
+        (Domain::Corner, corners),
+        (Domain::Face, face_offsets.len() - 1),
+    ];
+    let attributes = attributes_from_arrays(arrays, &counts)?;
+    let sharp_edges = match view::<u32>(arrays, "sharp_edges")? {
+        None => Vec::new(),
+        Some((edges, shape)) => {
+            if shape.len() != 2 || shape[1] != 2 {
+                return Err(invalid(format!(
+                    "array \"sharp_edges\" must have shape [n, 2], got {shape:?}"
+                )));
+            }
+            bytemuck::cast_slice::<u32, [u32; 2]>(edges).to_vec()
+        }
+    };
     Ok(Mesh {
         positions,
         face_offsets,
@@ -194,7 +213,52 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
         creases,
         face_groups,
         group_names,
+        attributes,
+        sharp_edges,
     })
+}
+
+/// The `point:<name>`, `corner:<name>` and `face:<name>` arrays (f32, [rows] or [rows, C]),
+/// in the order they were sent. Dtype, name, components and the row count (`counts`: rows
+/// expected per domain) are checked from the array's table before its data is copied, so a
+/// hostile shape never sizes an allocation; values are checked by [`Mesh::validate`].
+///
+/// # Errors
+/// `invalid_mesh` naming the array.
+fn attributes_from_arrays(
+    arrays: &Arrays,
+    counts: &[(Domain, usize); 3],
+) -> Result<Vec<Attribute>, OpError> {
+    let mut out = Vec::new();
+    for desc in arrays.descs() {
+        let Some((domain, name)) = Domain::split_label(&desc.name) else {
+            continue;
+        };
+        let label = desc.name.as_str();
+        check_name(label, name).map_err(mesh_error)?;
+        let (data, shape) = view::<f32>(arrays, label)?.expect("the array is in the table");
+        let (rows, components, flat) = match *shape {
+            [rows] => (rows, 1, true),
+            [rows, c] => (rows, c, false),
+            _ => {
+                return Err(invalid(format!(
+                    "array {label:?} must have shape [rows] or [rows, components], got {shape:?}"
+                )));
+            }
+        };
+        check_components(label, usize::try_from(components).unwrap_or(usize::MAX))
+            .map_err(mesh_error)?;
+        let expected = counts
+            .iter()
+            .find(|c| c.0 == domain)
+            .expect("every domain")
+            .1;
+        check_rows(label, domain, rows as usize, expected).map_err(mesh_error)?;
+        let mut attribute = Attribute::new(name, domain, components as usize, data.to_vec());
+        attribute.flat = flat;
+        out.push(attribute);
+    }
+    Ok(out)
 }
 
 fn face_varying<const N: usize>(
@@ -274,6 +338,18 @@ pub fn mesh_to_prefixed_arrays(mesh: Mesh, prefix: &str) -> Vec<OwnedArray> {
             vec![mesh.face_groups.len() as u64],
             mesh.face_groups,
         ));
+    }
+    if !mesh.sharp_edges.is_empty() {
+        out.push(OwnedArray::rows(&named("sharp_edges"), mesh.sharp_edges));
+    }
+    for a in mesh.attributes {
+        let rows = a.rows() as u64;
+        let shape = if a.flat && a.components == 1 {
+            vec![rows]
+        } else {
+            vec![rows, a.components as u64]
+        };
+        out.push(OwnedArray::new(&named(&a.label()), shape, a.values));
     }
     out
 }

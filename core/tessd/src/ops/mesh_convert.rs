@@ -1,7 +1,8 @@
 //! `mesh.convert`: re-encodes a mesh into another format (OBJ, PLY, STL, OFF, or a USD
-//! stage for `.usda`), or returns it as arrays.
+//! stage for `.usda`), or returns it as arrays; `dropped_attributes` names what the output
+//! format could not hold.
 
-use super::common::{check_mesh_output, stem, write_mesh_file};
+use super::common::{check_mesh_output, file_dropped, stem, write_mesh_file};
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::json;
 use tessd_ipc::error::OpError;
@@ -36,6 +37,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             ctx.progress(1.0, "done", "")?;
             let mut result = counts;
             result["output"] = json!(path.display().to_string());
+            result["dropped_attributes"] = json!(file_dropped(&mesh, &path));
             Ok(Response {
                 result,
                 files: vec![path],
@@ -43,7 +45,12 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             })
         }
         None => Ok(Response {
-            result: counts,
+            // Arrays carry everything the mesh holds.
+            result: {
+                let mut r = counts;
+                r["dropped_attributes"] = json!([]);
+                r
+            },
             arrays: mesh_to_arrays(mesh),
             files: Vec::new(),
         }),

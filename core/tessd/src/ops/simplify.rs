@@ -5,7 +5,7 @@
 //! the settings the `lod` operation shares.
 
 use super::common::{
-    Amount, as_u64, bool_param, check_mesh_output, parse_amount, stage_options, stem,
+    Amount, as_u64, bool_param, check_mesh_output, file_dropped, parse_amount, stage_options, stem,
     write_mesh_file,
 };
 use super::mesh_arrays::{input_mesh, mesh_error, mesh_to_arrays, output_path};
@@ -174,9 +174,13 @@ pub fn target_note(r: &Report) -> Option<String> {
     })
 }
 
-/// The report's figures as JSON, with [`target_note`] as `note` (`null` when there is none).
+/// The report's figures as JSON, with [`target_note`] as `note` (`null` when there is none)
+/// and `dropped_attributes`: simplification carries everything a mesh holds (normals, UVs,
+/// creases, face groups, sharp edges, generic attributes), so the list starts empty; a file
+/// output adds what its format cannot hold.
 pub fn report_json(r: &Report) -> Value {
     json!({
+        "dropped_attributes": [],
         "note": target_note(r),
         "input_vertices": r.input_vertices,
         "input_faces": r.input_faces,
@@ -369,6 +373,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
                 return Err(e);
             }
             result["output"] = json!(path.display().to_string());
+            result["dropped_attributes"] = json!(file_dropped(&simplified.mesh, &path));
             files.push(path);
         }
         None => arrays = mesh_to_arrays(simplified.mesh),

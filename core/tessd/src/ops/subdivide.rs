@@ -4,7 +4,8 @@
 //! Parameters are described in docs/protocol.md ("subdivide").
 
 use super::common::{
-    as_u64, bool_param, check_mesh_output, is_usda, stage_options, stem, usd_error, write_mesh_file,
+    as_u64, bool_param, check_mesh_output, file_dropped, is_usda, merge_names, stage_options, stem,
+    usd_error, write_mesh_file,
 };
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::json;
@@ -172,6 +173,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         "topology_ms": topology_ms,
         "apply_ms": apply.first_ms + frame_ms.iter().sum::<f64>(),
         "gpu": apply.device(),
+        "dropped_attributes": tessd_subdiv::attributes::dropped(&cage, &options),
     });
     if let Some(f) = &frames {
         result["frames"] = json!(f.len());
@@ -183,6 +185,10 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             write_refined(&request, &mesh, refined_frames.as_deref(), &path, &name)?;
             ctx.progress(1.0, "done", "")?;
             result["output"] = json!(path.display().to_string());
+            result["dropped_attributes"] = json!(merge_names(
+                tessd_subdiv::attributes::dropped(&cage, &options),
+                file_dropped(&mesh, &path)
+            ));
             Ok(Response {
                 result,
                 files: vec![path],
@@ -406,6 +412,7 @@ fn write_cage(
         "cage_vertices": cage.vertex_count(),
         "cage_faces": cage.face_count(),
         "output": path.display().to_string(),
+        "dropped_attributes": file_dropped(cage, &path),
     });
     if let Some(f) = &frames {
         result["frames"] = json!(f.len());
