@@ -9,15 +9,15 @@ do (tests/blender_addon/addon_env.py), a real daemon (target/release/tessd or $T
 Every number comes from the one real `bpy.ops.tessd.simplify(...)` call, instrumented from the
 outside (nothing in the add-on is changed):
 
-- export: the operator's `prepare` (evaluated mesh -> protocol arrays, `foreach_get` + numpy;
-  of which `convert.mesh_to_arrays` alone);
+- export: the conversion of the object, `common.arrays_of` (evaluated mesh -> protocol arrays,
+  `foreach_get` + numpy; of which `convert.mesh_to_arrays` alone), run from the job's tick;
 - request round trip: the add-on job's submit -> reply (`jobs.Job.timings`), which includes
   sending the input arrays and receiving the reply's arrays;
 - daemon work: the daemon's own time of that request (`elapsed_ms` of its `ok` frame, the
   client's `tessd.Job.elapsed_ms`);
 - transfer (both directions) = request round trip - daemon work;
-- import: the operator's `apply` (arrays -> mesh with `foreach_set`, object creation, selection;
-  of which `convert.mesh_from_arrays` alone);
+- import: the operator's `apply_task` (arrays -> mesh with `foreach_set`, attributes, object
+  creation; of which `convert.mesh_from_arrays` alone);
 - remainder: whole call - export - round trip - import (connecting to the daemon, operator
   dispatch, the undo push).
 
@@ -58,7 +58,9 @@ class Probe:
         self.ops = sys.modules[addon_name + ".ops_simplify"].TESSD_OT_simplify
         self.jobs = sys.modules[addon_name + ".jobs"]
         self.convert = sys.modules[addon_name + ".convert"]
-        self.saved = [(self.ops, "prepare", self.ops.prepare), (self.ops, "apply", self.ops.apply),
+        self.common = sys.modules[addon_name + ".common"]
+        self.saved = [(self.common, "arrays_of", self.common.arrays_of),
+                      (self.ops, "apply_task", self.ops.apply_task),
                       (self.jobs.Job, "_submit", self.jobs.Job._submit),
                       (self.convert, "mesh_to_arrays", self.convert.mesh_to_arrays),
                       (self.convert, "mesh_from_arrays", self.convert.mesh_from_arrays)]
@@ -74,26 +76,25 @@ class Probe:
                     probe.t[key] = probe.t.get(key, 0.0) + time.perf_counter() - t0
             return wrapper
 
-        prepare, apply, submit = self.ops.prepare, self.ops.apply, self.jobs.Job._submit
+        arrays_of, apply_task, submit = self.common.arrays_of, self.ops.apply_task, self.jobs.Job._submit
 
-        def prepare_w(op, context):
-            reqs = timed("export", prepare)(op, context)
-            probe.requests = reqs
-            probe.sent = sum(nbytes(r.arrays) for r in reqs)
-            probe.inputs = [r.arrays for r in reqs]
-            return reqs
+        def arrays_of_w(*a, **kw):
+            arrays, params, sent = timed("export", arrays_of)(*a, **kw)
+            probe.sent += nbytes(arrays)
+            probe.inputs.append(arrays)
+            return arrays, params, sent
 
-        def apply_w(op, context, requests, created):
-            probe.received = sum(nbytes(r.arrays_out) for r in requests)
-            probe.outputs = [r.arrays_out for r in requests]
-            return timed("import", apply)(op, context, requests, created)
+        def apply_w(op, context, task, created):
+            probe.received += sum(nbytes(r.arrays_out) for r in task.requests)
+            probe.outputs += [r.arrays_out for r in task.requests]
+            return timed("import", apply_task)(op, context, task, created)
 
-        def submit_w(job):
-            submit(job)
+        def submit_w(job, task):
+            submit(job, task)
             probe.job = job
             probe.client_jobs.append(job._current)
 
-        self.ops.prepare, self.ops.apply, self.jobs.Job._submit = prepare_w, apply_w, submit_w
+        self.common.arrays_of, self.ops.apply_task, self.jobs.Job._submit = arrays_of_w, apply_w, submit_w
         self.convert.mesh_to_arrays = timed("mesh_to_arrays", self.convert.mesh_to_arrays)
         self.convert.mesh_from_arrays = timed("mesh_from_arrays", self.convert.mesh_from_arrays)
 
@@ -101,7 +102,7 @@ class Probe:
         self.t = {}
         self.job = None
         self.client_jobs = []
-        self.requests = self.inputs = self.outputs = None
+        self.inputs, self.outputs = [], []
         self.sent = self.received = 0
 
     def close(self):
@@ -171,6 +172,7 @@ def main():
                         c.call("debug.echo", {}, probe.inputs[0])
                         c.call("debug.echo", {}, probe.outputs[0])
                         echo = time.perf_counter() - t1
+                    sent_names = sorted(probe.inputs[0])
                     row = {"total": total, "export": probe.t["export"],
                            "mesh_to_arrays": probe.t["mesh_to_arrays"], "round_trip": round_trip,
                            "daemon": daemon, "transfer": round_trip - daemon,
@@ -185,7 +187,7 @@ def main():
                     bpy.data.objects.remove(result)
                     bpy.data.meshes.remove(mesh)
                     bpy.context.view_layer.update()
-                    probe.inputs = probe.outputs = None
+                    probe.inputs, probe.outputs = [], []
             finally:
                 probe.close()
             uninstall_addon()
@@ -218,28 +220,29 @@ def main():
         "",
         "Input: ico sphere, %s vertices, %s triangles, through `bpy.ops.tessd.simplify(method="
         "'COMPLEXITY', target=%g, target_is_percent=True)` (barycentre representatives; the "
-        "evaluated mesh with its corner normals) → %s triangles. Arrays sent: %.1f MiB "
-        "(positions, face indices and sizes, corner normals); received: %.1f MiB." % (
+        "evaluated mesh; Blender's normals, so no corner normals are sent) → %s triangles. "
+        "Arrays sent: %.1f MiB (%s); received: %.1f MiB." % (
             format(n_verts, ",").replace(",", " "), format(n_tris, ",").replace(",", " "),
             args.target, format(int(med["out_tris"]), ",").replace(",", " "),
-            med["sent"] / mib, med["received"] / mib),
+            med["sent"] / mib, ", ".join("`%s`" % n for n in sent_names), med["received"] / mib),
         "",
         "Median of %d calls (ms; range min–max):" % len(rows),
         "",
         "| step | median | range | share | what |",
         "|---|---|---|---|---|",
         line("**whole operator**", "total", "`bpy.ops.tessd.simplify(...)` call to the new object"),
-        line("Blender export", "export", "the operator's `prepare`: evaluated mesh → arrays, "
+        line("Blender export", "export", "`common.arrays_of` (from the job's tick): evaluated mesh → arrays, "
              "`foreach_get` + numpy"),
         line("  of which `mesh_to_arrays`", "mesh_to_arrays", "the `foreach_get` reads alone "
              "(the rest: `to_mesh` of the evaluated object)"),
         line("transfer (both directions)", "transfer", "request round trip − daemon work"),
         line("daemon work", "daemon", "`elapsed_ms` of the daemon's `ok` frame (`Job.elapsed_ms`)"),
-        line("Blender import", "import", "the operator's `apply`: arrays → mesh with "
+        line("Blender import", "import", "the operator's `apply_task`: arrays → mesh with "
              "`foreach_set`, object creation"),
         line("  of which `mesh_from_arrays`", "mesh_from_arrays", "the `foreach_set` writes and "
              "`mesh.update`"),
-        line("remainder", "remainder", "connect, operator dispatch, undo push"),
+        line("remainder", "remainder", "connect, the complexity target from the arrays, operator "
+             "dispatch, undo push"),
         "",
         "Request round trip (submit → reply, = transfer + daemon work): %.0f ms. Cross-check of "
         "the transfer: `debug.echo` of the same input arrays and then of the output arrays, on a "

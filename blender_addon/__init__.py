@@ -8,9 +8,9 @@ operators and menus. All geometry is computed by the `tessd` daemon, reached thr
 Scripting contract (public API): bpy.ops.tessd.simplify, generate_lods, subdivide, export_usd.
 """
 
-from . import daemon, menus, ops_export, ops_lods, ops_simplify, ops_subdivide, preferences
+from . import daemon, jobs, menus, ops_export, ops_lods, ops_simplify, ops_subdivide, preferences
 
-_MODULES = (preferences, ops_simplify, ops_lods, ops_subdivide, ops_export, menus)
+_MODULES = (preferences, jobs, ops_simplify, ops_lods, ops_subdivide, ops_export, menus)
 
 
 def register():

@@ -1,35 +1,131 @@
-"""What the operators share: the selection, result objects and USD paths."""
+"""What the operators share: the selection as units of work, conversion, result objects,
+world-space distances and USD paths."""
 
 import os
 import re
 
 import bpy
+import numpy as np
 
-from . import convert
+from . import attributes, convert
 from .jobs import UserError
 
 
-def selected_meshes(context):
-    """The selected mesh objects (sorted by name, so results come in a stable order)."""
-    objs = [o for o in context.selected_objects if o.type == 'MESH']
-    return sorted(objs, key=lambda o: o.name)
+class Unit:
+    """The objects whose results come from one conversion: one object, or every selected
+    object sharing one mesh (sent once; its result mesh is shared again)."""
+
+    def __init__(self, objects):
+        self.names = [o.name for o in objects]
+
+    @property
+    def objects(self):
+        return [get_object(n) for n in self.names]
+
+    @property
+    def label(self):
+        if len(self.names) == 1:
+            return self.names[0]
+        return "%s (+%d sharing its mesh)" % (self.names[0], len(self.names) - 1)
+
+    def scale(self):
+        """The largest scale factor of the objects' world matrices: an object-space distance
+        d is at most d × scale in world space, for every one of them."""
+        return max(world_scale(o) for o in self.objects)
 
 
-def require_meshes(context):
-    objs = selected_meshes(context)
-    if not objs:
+def world_scale(obj):
+    """The largest singular value of the object's world matrix (its largest stretch)."""
+    m = np.array(obj.matrix_world.to_3x3(), dtype=np.float64)
+    s = float(np.linalg.svd(m, compute_uv=False)[0])
+    return s if s > 0 else 1.0
+
+
+def has_modifiers(obj):
+    return any(m.show_viewport for m in obj.modifiers)
+
+
+def has_shape_keys(obj):
+    keys = obj.data.shape_keys
+    return keys is not None and len(keys.key_blocks) > 1
+
+
+def linked_reason(obj):
+    """Why `obj`'s mesh cannot be changed in place (linked from a library), or None."""
+    for block in (obj, obj.data):
+        if block.library is not None:
+            return ("%s is linked from %s and cannot be changed here (Object > Relations > "
+                    "Make Local first, or turn off Replace)" % (block.name, block.library.filepath))
+        if not block.is_editable:
+            return "%s is not editable (a library override); turn off Replace" % block.name
+    return None
+
+
+def gather(context, use_modifiers, replace=False):
+    """The selection as units of work, and (name, why) of the selected objects skipped:
+    instances and other non-mesh objects, and with `replace` linked or non-editable data.
+    Objects sharing a mesh form one unit unless their modifiers make their meshes differ."""
+    skipped, units, by_mesh = [], [], {}
+    for obj in sorted(context.selected_objects, key=lambda o: o.name):
+        if obj.type != 'MESH':
+            if obj.instance_type == 'COLLECTION' and obj.instance_collection is not None:
+                skipped.append((obj.name, "an instance of the collection %s (Object > Apply > "
+                                          "Make Instances Real to process its meshes)"
+                                % obj.instance_collection.name))
+            else:
+                skipped.append((obj.name, "a %s, not a mesh" % obj.type.lower()))
+            continue
+        why = linked_reason(obj) if replace else None
+        if why:
+            skipped.append((obj.name, why))
+            continue
+        if use_modifiers and not replace and has_modifiers(obj):
+            units.append([obj])
+            continue
+        key = obj.data.name_full
+        if key in by_mesh:
+            by_mesh[key].append(obj)
+        else:
+            by_mesh[key] = [obj]
+            units.append(by_mesh[key])
+    return [Unit(objs) for objs in units], skipped
+
+
+def require_units(context, use_modifiers, replace=False):
+    """:func:`gather`, raising UserError when nothing can be processed."""
+    units, skipped = gather(context, use_modifiers, replace)
+    if not units:
+        if skipped:
+            raise UserError("tessd: nothing to process: " + "; ".join(
+                "%s is %s" % s if not s[1].startswith(s[0]) else s[1] for s in skipped))
         raise UserError("tessd: select at least one mesh object (Object mode)")
-    return objs
+    return units, skipped
+
+
+def describe_skipped(skipped):
+    return "; ".join("%s: %s" % s for s in skipped)
 
 
 def arrays_of(context, obj, evaluated, **kw):
-    """(arrays, params) of one object, or a UserError naming it."""
+    """(arrays, params, sent) of one object, or a UserError naming it.
+
+    Shape keys travel only with the object's own mesh: an object with shape keys and no
+    modifiers sends its own mesh (the keys' reference shape) even when modifiers are
+    applied; with modifiers applied, its keys are listed as not carried."""
+    keys = has_shape_keys(obj)
+    if keys and evaluated and not has_modifiers(obj):
+        evaluated = False
     depsgraph = context.evaluated_depsgraph_get()
     try:
         with convert.source_mesh(obj, depsgraph, evaluated) as mesh:
-            return convert.mesh_to_arrays(mesh, obj, **kw)
+            arrays, params, sent = convert.mesh_to_arrays(mesh, obj, shape_keys=keys and not evaluated,
+                                                          **kw)
     except ValueError as e:
-        raise UserError("tessd: %s cannot be sent: %s" % (obj.name, e)) from e
+        raise UserError("%s cannot be sent: %s" % (obj.name, e)) from e
+    if keys and evaluated:
+        sent.dropped.append("shape keys (the modifiers are applied; turn off Apply modifiers "
+                            "to keep them)")
+    return arrays, params, sent
 
 
 def uv_name_of(obj):
@@ -44,40 +140,61 @@ def materials_of(obj):
 def get_object(name):
     obj = bpy.data.objects.get(name)
     if obj is None:
-        raise UserError("tessd: the object %s was deleted while the daemon worked" % name)
+        raise UserError("the object %s was deleted while the daemon worked" % name)
     return obj
+
+
+def editable_collections(collections):
+    return [c for c in collections if c.library is None and c.is_editable]
 
 
 def new_object(created, name, mesh, source, collections=None):
     """A new object with `mesh`, `source`'s world matrix, in `collections` (default: the
-    source's collections)."""
+    source's collections that can take it; the scene's collection when none can)."""
     obj = created.add(bpy.data.objects.new(name, mesh))
     obj.matrix_world = source.matrix_world.copy()
-    for coll in (collections or source.users_collection or [bpy.context.scene.collection]):
+    colls = editable_collections(collections or source.users_collection) or [
+        bpy.context.scene.collection]
+    for coll in colls:
         coll.objects.link(obj)
     return obj
 
 
-def result_object(created, src, arrays, suffix, replace, swaps):
-    """The result of one source object: with `replace`, `src` itself, its new mesh queued in
-    `swaps` for the caller to swap in once nothing can fail any more; else a new object
-    `<name><suffix>` beside it. Either way with the source's materials and UV map name."""
-    name = src.name if replace else src.name + suffix
+def result_mesh(created, name, arrays, src, sent, shading_mode, prefix=""):
+    """The result mesh of `src` from a reply's arrays, with everything `sent` carried:
+    generic attributes, vertex groups and shape keys (these need an object: a temporary one
+    holds the mesh meanwhile; the data stays on the mesh)."""
     mesh = created.add(convert.mesh_from_arrays(name, arrays, materials=materials_of(src),
-                                                uv_name=uv_name_of(src)))
-    if replace:
-        swaps.append((src, mesh))
-        return src
-    return new_object(created, name, mesh, src)
+                                                uv_name=uv_name_of(src), prefix=prefix,
+                                                sent=sent, shading_mode=shading_mode))
+    if sent is not None and (sent.groups or sent.keys):
+        holder = bpy.data.objects.new(name + "_tessd_tmp", mesh)
+        try:
+            sent.missing.update(attributes.apply_object_data(holder, arrays, prefix, sent))
+        finally:
+            bpy.data.objects.remove(holder)
+    return mesh
 
 
-def select_only(context, objects):
-    for o in context.selected_objects:
-        o.select_set(False)
-    for o in objects:
-        o.select_set(True)
-    if objects:
-        context.view_layer.objects.active = objects[0]
+def unit_results(created, unit, mesh, suffix, replace):
+    """The objects of `unit` given their result `mesh`: with `replace`, the objects themselves
+    (the swap queued for when nothing can fail any more; an object in Edit Mode is refused,
+    its edit mesh would overwrite the result); else new objects `<name><suffix>` sharing
+    `mesh`."""
+    out = []
+    for src in unit.objects:
+        if replace:
+            if src.mode == 'EDIT':
+                raise UserError("%s is in Edit Mode, so its mesh was not replaced (leave Edit "
+                                "Mode and run again)" % src.name)
+            why = linked_reason(src)
+            if why:
+                raise UserError(why)
+            created.swap(src, mesh)
+            out.append(src)
+        else:
+            out.append(new_object(created, src.name + suffix, mesh, src))
+    return out
 
 
 def abs_path(path):
@@ -102,6 +219,15 @@ def stage_metadata(context):
     return {"up_axis": "Z", "meters_per_unit": float(context.scene.unit_settings.scale_length)}
 
 
+def length_text(context, value):
+    """A world-space length in the scene's units (`0.012 m`, `1.2 cm`, `0.4 in`)."""
+    units = context.scene.unit_settings
+    if units.system == 'NONE':
+        return "%.4g" % value
+    return bpy.utils.units.to_string(units.system, 'LENGTH', value * units.scale_length,
+                                     precision=4)
+
+
 def write_assembly(path, context, entries):
     """A small .usda stage referencing one file per object, each under an Xform with the
     object's world matrix: `entries` are (object, file path) pairs."""
@@ -119,5 +245,7 @@ def write_assembly(path, context, entries):
                   "        matrix4d xformOp:transform = (%s)" % rows,
                   '        uniform token[] xformOpOrder = ["xformOp:transform"]', "    }", ""]
     lines.append("}")
-    with open(path, "w", encoding="utf-8") as f:
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
         f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)

@@ -1,24 +1,29 @@
 """Blender meshes <-> the protocol's mesh arrays (docs/protocol.md, "Mesh arrays").
 
 Everything goes through `foreach_get` / `foreach_set` and numpy, never a Python loop over
-vertices, faces or corners, so a million-triangle mesh converts in a fraction of a second.
+vertices, faces or corners (vertex group weights are the one exception: Blender has no bulk
+access to them), so a million-triangle mesh converts in a fraction of a second.
 
 Mapping:
 - positions: vertex `co` (object space; the object's transform stays on the object);
 - faces: corner vertex indices in face order (`face_indices`) and `loop_total` (`face_sizes`);
-- UVs: the active UV map, one UV per corner;
-- normals: Blender's corner normals (custom or not), one per corner: the look of the
-  shading survives simplification;
+- UVs: the active UV map as `uvs`, one UV per corner; the other UV maps, colour attributes
+  and every other point / corner / face attribute, vertex groups, shape keys and sharp edges
+  as the protocol's attribute arrays (attributes.py);
+- normals: only when custom normals are asked for (shading.py): by default a result gets
+  Blender's own normals from the carried `sharp_face` / `sharp_edge`;
 - creases: the float edge attribute `crease_edge` (Blender 4+) as OpenSubdiv sharpness
   10·c² (Blender's own `crease_to_sharpness`), and back as c = sqrt(s / 10);
 - materials: `material_index` as `face_groups`, the material slots' names as `group_names`;
-  a result gets the source's materials in the same slots.
-"""
+  a result gets the source's materials in the same slots."""
 
 import contextlib
 
 import bpy
 import numpy as np
+
+from . import attributes as attrs
+from . import shading
 
 SHARPNESS_INFINITE = 10.0
 
@@ -73,10 +78,15 @@ def group_names_of(obj):
     return names
 
 
-def mesh_to_arrays(mesh, obj=None, *, normals=True, uvs=True, creases=False):
-    """The protocol arrays of `mesh` and the params they need (`group_names`).
+def mesh_to_arrays(mesh, obj=None, *, normals=False, uvs=True, creases=True, attributes=True,
+                   shape_keys=False):
+    """The protocol arrays of `mesh`, the params they need (`group_names`) and what was sent
+    besides the geometry (an :class:`attributes.Sent`, for rebuilding the results).
 
-    `obj` gives the material slots (face groups are sent only when it has any)."""
+    `obj` gives the material slots (face groups are sent only when it has any) and the
+    vertex groups; `normals` sends Blender's corner normals (to be carried as custom
+    normals); `shape_keys` sends the mesh's shape keys (only meaningful for the object's own
+    mesh, not an evaluated one)."""
     if len(mesh.polygons) == 0:
         raise ValueError("it has no faces")
     sizes, order = _corner_order(mesh)
@@ -91,16 +101,23 @@ def mesh_to_arrays(mesh, obj=None, *, normals=True, uvs=True, creases=False):
         "face_sizes": sizes.astype(np.uint32),
     }
     params = {}
+    sent = attrs.Sent()
     if uvs and mesh.uv_layers.active is not None:
+        # The active UV map travels as `uvs` (USD writes it as `st`); the others as
+        # generic corner attributes.
         uv = np.empty(n_l * 2, dtype=np.float32)
         mesh.uv_layers.active.data.foreach_get("uv", uv)
         uv = uv.reshape(-1, 2)
         arrays["uvs"] = uv if order is None else uv[order]
+        sent.uv_name = mesh.uv_layers.active.name
     if normals:
         nrm = np.empty(n_l * 3, dtype=np.float32)
         mesh.corner_normals.foreach_get("vector", nrm)
         nrm = nrm.reshape(-1, 3)
         arrays["normals"] = nrm if order is None else nrm[order]
+    elif mesh.has_custom_normals:
+        sent.dropped.append("custom normals (Blender's normals are used; choose Normals: "
+                            "Custom to carry them)")
     if creases:
         attr = mesh.attributes.get("crease_edge")
         if attr is not None and attr.domain == 'EDGE' and len(mesh.edges):
@@ -108,18 +125,20 @@ def mesh_to_arrays(mesh, obj=None, *, normals=True, uvs=True, creases=False):
             attr.data.foreach_get("value", values)
             keep = values > 0.0
             if keep.any():
-                verts = np.empty(len(mesh.edges) * 2, dtype=np.uint32)
-                mesh.edges.foreach_get("vertices", verts)
                 c = np.minimum(values[keep], np.float32(1.0))
-                arrays["crease_edges"] = verts.reshape(-1, 2)[keep]
+                arrays["crease_edges"] = attrs.edge_vertices(mesh)[keep].astype(np.uint32)
                 arrays["crease_values"] = (c * c * np.float32(SHARPNESS_INFINITE)).astype(np.float32)
+    if attributes:
+        attrs.collect(mesh, obj, arrays, order, sent, skip={sent.uv_name} if sent.uv_name else ())
+        if shape_keys:
+            attrs.collect_shape_keys(mesh, arrays, sent)
     if obj is not None and len(obj.material_slots) > 0:
         mat = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get("material_index", mat)
         last = len(obj.material_slots) - 1
         arrays["face_groups"] = np.clip(mat, 0, last).astype(np.uint32)
         params["group_names"] = group_names_of(obj)
-    return arrays, params
+    return arrays, params, sent
 
 
 def _get(arrays, name, prefix):
@@ -137,8 +156,8 @@ def drop_loose(arrays, frames=None):
     """`arrays` (and animation `frames` [F, V, 3]) without the vertices no face uses.
 
     Subdivision has no rule for a loose vertex and the daemon refuses one; Blender meshes often
-    carry a few (leftovers of edits), so they are left out of what is sent. Creases on loose
-    edges go with them."""
+    carry a few (leftovers of edits), so they are left out of what is sent. Point attributes,
+    creases and sharp edges on loose vertices go with them."""
     used = np.zeros(len(arrays["positions"]), dtype=bool)
     used[arrays["face_indices"]] = True
     if used.all():
@@ -146,19 +165,30 @@ def drop_loose(arrays, frames=None):
     remap = np.cumsum(used, dtype=np.int64) - 1
     out = dict(arrays, positions=arrays["positions"][used],
                face_indices=remap[arrays["face_indices"]].astype(np.uint32))
-    if "crease_edges" in arrays:
-        keep = used[arrays["crease_edges"]].all(axis=1)
-        out["crease_edges"] = remap[arrays["crease_edges"][keep]].astype(np.uint32)
-        out["crease_values"] = arrays["crease_values"][keep]
+    for name in [k for k in arrays if k.startswith("point:")]:
+        out[name] = np.ascontiguousarray(arrays[name][used])
+    for edges, values in (("crease_edges", "crease_values"), ("sharp_edges", None)):
+        if edges not in arrays:
+            continue
+        keep = used[arrays[edges]].all(axis=1)
+        out[edges] = remap[arrays[edges][keep]].astype(np.uint32)
+        if values:
+            out[values] = arrays[values][keep]
         if not keep.any():
-            del out["crease_edges"], out["crease_values"]
+            out.pop(edges)
+            out.pop(values, None)
     return out, (None if frames is None else np.ascontiguousarray(frames[:, used]))
 
 
-def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix=""):
+def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix="", sent=None,
+                     shading_mode='BLENDER'):
     """A new mesh from a reply's arrays (`prefix` e.g. "lod1." for the `lod` op).
 
-    `materials` fill the slots in order, so face group i gets material slot i."""
+    `materials` fill the slots in order, so face group i gets material slot i. With `sent`
+    (what the input sent), its generic attributes are restored and the names the reply
+    lacks are added to `sent.missing`. `shading_mode`: 'BLENDER' (Blender's normals from the
+    carried sharp faces and edges) or 'CUSTOM' (the reply's `normals` as custom normals);
+    either way no corner normal is left facing away from its face (shading.py)."""
     pos = np.ascontiguousarray(_get(arrays, "positions", prefix), dtype=np.float32).reshape(-1, 3)
     fi = np.ascontiguousarray(_get(arrays, "face_indices", prefix), dtype=np.int32).reshape(-1)
     fs = _get(arrays, "face_sizes", prefix)
@@ -187,48 +217,35 @@ def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix=""):
         mesh.polygons.foreach_set("material_index", np.ascontiguousarray(idx))
 
     uvs = _per_corner(_get(arrays, "uvs", prefix), _get(arrays, "uv_indices", prefix))
+    uv_name = sent.uv_name if sent is not None and sent.uv_name else uv_name
     if uvs is not None and len(uvs) == len(fi):
         layer = mesh.uv_layers.new(name=uv_name)
         layer.data.foreach_set("uv", np.ascontiguousarray(uvs, dtype=np.float32).reshape(-1))
-
-    normals = _per_corner(_get(arrays, "normals", prefix), _get(arrays, "normal_indices", prefix))
-    if normals is not None and len(normals) == len(fi):
-        set_corner_normals(mesh, np.asarray(normals, dtype=np.float32))
+    elif sent is not None and sent.uv_name:
+        sent.missing.add("UV map " + sent.uv_name)
+    if sent is not None:
+        sent.missing.update(attrs.apply_generic(mesh, arrays, prefix, sent))
 
     crease_edges = _get(arrays, "crease_edges", prefix)
     if crease_edges is not None and len(crease_edges):
         set_creases(mesh, np.asarray(crease_edges), np.asarray(_get(arrays, "crease_values", prefix)))
+    sharp = _get(arrays, "sharp_edges", prefix)
+    if sharp is not None and len(sharp):
+        attrs.set_edge_flags(mesh, sharp)
     mesh.update()
+
+    normals = _per_corner(_get(arrays, "normals", prefix), _get(arrays, "normal_indices", prefix))
+    if shading_mode == 'CUSTOM' and normals is not None and len(normals) == len(fi):
+        shading.set_custom_normals(mesh, normals)
+    else:
+        shading.flatten_inverted(mesh)
     return mesh
-
-
-def set_corner_normals(mesh, normals):
-    """Custom normals, one per corner: Blender 4.5+ stores them as the free `custom_normal`
-    corner attribute (bulk `foreach_set`); older versions through normals_split_custom_set."""
-    mesh.polygons.foreach_set("use_smooth", np.ones(len(mesh.polygons), dtype=bool))
-    if bpy.app.version >= (4, 5, 0):
-        attr = mesh.attributes.new("custom_normal", 'FLOAT_VECTOR', 'CORNER')
-        attr.data.foreach_set("vector", np.ascontiguousarray(normals).reshape(-1))
-    else:  # pragma: no cover - Blender 4.2-4.4
-        mesh.normals_split_custom_set(normals)
 
 
 def set_creases(mesh, crease_edges, sharpness):
     """Edge creases c = sqrt(s / 10) (clamped to 1) from OpenSubdiv sharpness on vertex pairs."""
-    n_e = len(mesh.edges)
-    verts = np.empty(n_e * 2, dtype=np.int64)
-    mesh.edges.foreach_get("vertices", verts)
-    verts = verts.reshape(-1, 2)
-    n_v = max(len(mesh.vertices), 1)
-    keys = verts.min(axis=1) * n_v + verts.max(axis=1)
-    order = np.argsort(keys)
-    ce = crease_edges.astype(np.int64).reshape(-1, 2)
-    want = ce.min(axis=1) * n_v + ce.max(axis=1)
-    pos = np.clip(np.searchsorted(keys[order], want), 0, max(n_e - 1, 0))
-    found = keys[order][pos] == want
-    values = np.zeros(n_e, dtype=np.float32)
-    c = np.sqrt(np.clip(sharpness.astype(np.float32) / SHARPNESS_INFINITE, 0.0, 1.0))
-    values[order[pos[found]]] = c[found]
+    c = np.sqrt(np.clip(np.asarray(sharpness, dtype=np.float32) / SHARPNESS_INFINITE, 0.0, 1.0))
+    values = attrs.edge_values(mesh, crease_edges, c)
     attr = mesh.attributes.get("crease_edge") or mesh.attributes.new("crease_edge", 'FLOAT', 'EDGE')
     attr.data.foreach_set("value", values)
 
@@ -252,10 +269,13 @@ def partition_mesh(name, cells_min, cells_max):
 
 
 def frames_of(obj, scene, depsgraph, frame_start, frame_end):
-    """The evaluated object's vertex positions at every frame of [start, end], [F, V, 3]
-    (the scene's frame is restored afterwards). Raises ValueError when the vertex count changes."""
+    """A generator baking the evaluated object's vertex positions at every frame of
+    [start, end]: yields the fraction done after each frame and returns them as [F, V, 3]
+    (the scene's frame is restored afterwards, also when the generator is closed early).
+    Raises ValueError when the vertex count changes."""
     current = scene.frame_current, scene.frame_subframe
     frames = []
+    count = frame_end - frame_start + 1
     try:
         for f in range(frame_start, frame_end + 1):
             scene.frame_set(f)
@@ -269,6 +289,7 @@ def frames_of(obj, scene, depsgraph, frame_start, frame_end):
                 raise ValueError("its vertex count changes at frame %d (%d, was %d); an "
                                  "animation must keep one topology" % (f, len(co), len(frames[0])))
             frames.append(co)
+            yield len(frames) / count
     finally:
         scene.frame_set(current[0], subframe=current[1])
     return np.stack(frames)

@@ -1,13 +1,41 @@
-"""Reaching the daemon: find its binary, connect, start it when allowed, stop it on exit.
+"""Reaching the daemon: find its binary, connect, start it when allowed, share it, stop it.
 
-The binary is looked up in this order: the preference's path, a `tessd` file next to the
-add-on (or in its `bin/` folder), $TESSD_BIN, `tessd` on PATH. A daemon this add-on started
-is shut down when Blender exits or the add-on is disabled, if the preference says so; a
-daemon someone else started is never stopped.
+**Which binary.** The preference's path when set, else the daemon bundled in the extension at
+``bin/tessd`` (``bin/tessd.exe`` on Windows; build.py puts it there), else $TESSD_BIN, else
+``tessd`` on PATH. The bundled one comes first because a Blender started from a desktop
+launcher has neither a shell PATH nor TESSD_BIN, and because it is the daemon this add-on was
+built and tested with. Blender's installer extracts the zip with Python's zipfile, which drops
+permission bits, so the bundled file is made executable (u+x) before it is run.
+
+**Sharing.** One daemon per user serves Blender, FreeCAD and scripts alike. On the first
+connection to a socket in a Blender session the add-on calls ``hello`` and then holds the
+daemon (``session.hold`` with Blender's pid, docs/protocol.md). On exit, or when the add-on is
+disabled, it releases it and shuts it down only if the add-on started it, the preference "Stop
+it on exit" is on and no other holder is left (the daemon decides that last part itself:
+``shutdown`` with ``if_unheld``). A daemon someone else started is never stopped.
+
+**Version check.** ``hello``'s ``version`` is compared with ``tessd --version`` of the binary
+the add-on would start (the bundled one, normally): that is the daemon the add-on was built
+with, and comparing against the binary rather than the manifest means a developer's own build
+never gets replaced in a loop. A daemon of another version, or one lacking an operation the
+add-on sends, is replaced by the add-on's binary when nobody else holds it and auto-start is
+on; when another program holds it, it is left running and a warning says so once
+(:func:`take_warnings`). Tests and tools may set :data:`EXPECTED_VERSION` to compare against
+another version without building another binary.
+
+**Messages.** A :class:`DaemonError`'s text is written for the artist who clicked a menu entry
+(no Python API words); when the fix is in the add-on's preferences its
+``offer_preferences`` is true, and :func:`offer_preferences` shows the message with a button
+that opens them.
 """
 
 import atexit
 import os
+import platform
+import shutil
+import stat
+import sys
+import textwrap
 
 import bpy
 
@@ -16,32 +44,105 @@ from .client import tessd
 
 ADDON_DIR = os.path.dirname(os.path.abspath(__file__))
 
-#: Sockets of the daemons this add-on started, with whether to stop each on exit.
+#: The bundled daemon, where build.py puts it.
+BUNDLED_BINARY = os.path.join(ADDON_DIR, "bin", "tessd.exe" if sys.platform == "win32" else "tessd")
+
+#: Where to change the binary, in the words of Blender's UI.
+PREFERENCES_PLACE = "Preferences \u203a Add-ons \u203a tessd"
+
+#: Operations the add-on sends; a daemon without one of them is treated like an old version.
+REQUIRED_OPS = frozenset({"simplify", "lod", "subdivide", "mesh.convert", "session.hold",
+                          "session.release"})
+
+#: The daemon version the add-on expects. None: what its binary reports (``tessd --version``).
+#: Set it (tests, tools) to compare against another version.
+EXPECTED_VERSION = None
+
+#: The name the add-on holds daemons under (``session.hold``'s ``host``).
+HOST = "blender"
+
+#: Sockets of the daemons this add-on started, with whether to stop each on exit (the
+#: preference, refreshed at every connection so a change applies without a restart).
 _started = {}
+#: Sockets already checked and held in this session (``hello`` and ``session.hold`` once).
+_held = set()
+#: Warnings not yet shown to the user (see take_warnings).
+_warnings = []
+#: Every warning given in this session, shown or not (for scripts and tests to inspect).
+warned = []
+#: ``tessd --version`` by binary path and modification time.
+_versions = {}
 
 
 class DaemonError(Exception):
-    """The daemon cannot be reached; the message says why and what to do."""
+    """The daemon cannot be reached; the message says why and what to do, in the words of
+    Blender's UI. ``offer_preferences``: the fix is in the add-on's preferences, so a UI may
+    show a button to them (see :func:`offer_preferences`)."""
+
+    def __init__(self, message, offer_preferences=False):
+        super().__init__(message)
+        self.offer_preferences = offer_preferences
+
+
+def this_platform():
+    """This machine's platform in Blender's extension spelling (linux-x64, macos-arm64, ...),
+    the one to name when asking the artist to install the right build."""
+    system = platform.system().lower()
+    system = {"darwin": "macos"}.get(system, system)
+    machine = platform.machine().lower()
+    machine = {"x86_64": "x64", "amd64": "x64", "aarch64": "arm64"}.get(machine, machine)
+    return "%s-%s" % (system, machine)
+
+
+def _executable(path):
+    return os.path.isfile(path) and os.access(path, os.X_OK)
+
+
+def bundled_binary():
+    """The daemon bundled with the extension, made executable if the installer dropped the
+    bit; None when the extension holds none (a source checkout, or another platform's build)."""
+    path = BUNDLED_BINARY
+    if not os.path.isfile(path):
+        return None
+    if not os.access(path, os.X_OK) and sys.platform != "win32":
+        try:
+            os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
+        except OSError:
+            return None
+    return path if _executable(path) else None
+
+
+def _not_found_message(extra=""):
+    # No full stop at the end: operators append "; the scene is unchanged".
+    return ("tessd could not start: the tessd program is not in this add-on%s. Reinstall the "
+            "tessd extension built for %s, or choose the tessd program in %s"
+            % (extra, this_platform(), PREFERENCES_PLACE))
 
 
 def find_binary(prefs):
-    """The tessd executable, or raise DaemonError naming the places that were searched."""
+    """The tessd executable to start, or raise DaemonError (offering the preferences)."""
     path = bpy.path.abspath(prefs.binary_path) if prefs.binary_path else ""
     if path:
-        if os.path.isfile(path) and os.access(path, os.X_OK):
+        if _executable(path):
             return path
-        raise DaemonError("the tessd binary set in the preferences, %s, is not an executable "
-                          "file" % path)
-    for candidate in (os.path.join(ADDON_DIR, "tessd"), os.path.join(ADDON_DIR, "bin", "tessd")):
-        if os.path.isfile(candidate) and os.access(candidate, os.X_OK):
-            return candidate
-    try:
-        return tessd.daemon.find_binary(None)
-    except tessd.DaemonStartError as e:
-        raise DaemonError("%s (or set its path in Preferences > Add-ons > tessd)" % e) from e
+        raise DaemonError("tessd could not start: the tessd program chosen in %s, %s, is not "
+                          "a program file. Choose the tessd program there again, or clear the "
+                          "field to use the one in this add-on" % (PREFERENCES_PLACE, path),
+                          offer_preferences=True)
+    found = bundled_binary()
+    if found:
+        return found
+    env = os.environ.get("TESSD_BIN")
+    if env and _executable(env):
+        return env
+    found = shutil.which("tessd")
+    if found:
+        return found
+    raise DaemonError(_not_found_message(), offer_preferences=True)
 
 
 def describe_binary(prefs):
+    """The binary the add-on would start, or why there is none (for the preferences panel)."""
     try:
         return find_binary(prefs)
     except DaemonError as e:
@@ -52,39 +153,171 @@ def socket_path(prefs):
     return tessd.resolve_socket(prefs.socket or None, create_dir=True)
 
 
-def connect(context=None):
-    """A tessd.Client on the configured socket; starts the daemon first when none answers
-    and the preferences allow it. Raises DaemonError with a message for the user."""
-    prefs = preferences.get(context)
-    path = socket_path(prefs)
+def expected_version(prefs):
+    """The daemon version the add-on expects: :data:`EXPECTED_VERSION`, else what the binary
+    it would start reports; None when there is no binary to ask (then nothing can replace the
+    running daemon anyway)."""
+    if EXPECTED_VERSION is not None:
+        return EXPECTED_VERSION
     try:
-        return tessd.Client(path, timeout=5.0)
-    except (tessd.DaemonUnavailable, OSError) as e:
-        if not prefs.auto_start:
-            raise DaemonError("no tessd daemon answers on %s (%s); start `tessd serve` or turn "
-                              "on \"Start the daemon automatically\" in the add-on's preferences"
-                              % (path, e)) from e
+        binary = find_binary(prefs)
+        key = (binary, os.stat(binary).st_mtime_ns)
+    except (DaemonError, OSError):
+        return None
+    if key not in _versions:
+        try:
+            _versions[key] = tessd.daemon.binary_version(binary)
+        except tessd.DaemonStartError:
+            return None
+    return _versions[key]
+
+
+def _warn(message):
+    """Keeps a warning for the next take_warnings() and prints it to Blender's console."""
+    _warnings.append(message)
+    warned.append(message)
+    print("tessd: warning: %s" % message)
+
+
+def take_warnings():
+    """Warnings about the daemon not yet shown (each is returned once): an operator reports
+    them with ``self.report({'WARNING'}, w)``."""
+    out = list(_warnings)
+    _warnings.clear()
+    return out
+
+
+def _start(prefs, path):
+    """Starts the add-on's binary on ``path`` and records that the add-on started it."""
     binary = find_binary(prefs)
     try:
         tessd.ensure_daemon(path, binary=binary, timeout=prefs.timeout)
     except tessd.DaemonUnavailable as e:
-        raise DaemonError("could not start the tessd daemon: %s" % e) from e
+        raise DaemonError("tessd could not start (%s): %s" % (binary, e)) from e
     _started[path] = bool(prefs.stop_on_exit)
+    _held.discard(path)  # a new daemon: check and hold it again
     try:
         return tessd.Client(path, timeout=5.0)
     except (tessd.DaemonUnavailable, OSError) as e:
-        raise DaemonError("the tessd daemon started on %s but does not answer: %s" % (path, e)) from e
+        raise DaemonError("the tessd daemon started on %s but does not answer: %s"
+                          % (path, e)) from e
+
+
+def _other_holders(hello):
+    """Holders of the daemon other than this Blender process (0 for a daemon too old to
+    count them: nobody can have held it)."""
+    me = os.getpid()
+    held_by = hello.get("held_by")
+    if isinstance(held_by, list):
+        return sum(1 for h in held_by if isinstance(h, dict) and h.get("pid") != me)
+    return int(hello.get("holders") or 0)
+
+
+def _first_contact(client, prefs, path):
+    """The once-per-socket check: version and operations, replacement when allowed, hold."""
+    hello = client.hello()
+    expected = expected_version(prefs)
+    running = str(hello.get("version", "?"))
+    missing = sorted(REQUIRED_OPS - set(hello.get("ops") or ()))
+    problem = None
+    if expected is not None and running != expected:
+        problem = "the running tessd daemon is version %s; this add-on expects %s" % (running,
+                                                                                      expected)
+    elif missing and expected is not None:
+        problem = ("the running tessd daemon (version %s) lacks %s, which this add-on needs"
+                   % (running, ", ".join(missing)))
+    if problem is not None:
+        if _other_holders(hello) == 0 and prefs.auto_start:
+            client.close()
+            if tessd.stop_daemon(path, timeout=prefs.timeout, only_if_unheld=True):
+                print("tessd: %s; replaced it" % problem)
+                client = _start(prefs, path)
+                hello = client.hello()
+            else:  # someone held it in the meantime
+                client = tessd.Client(path, timeout=5.0)
+                _warn("%s; it is shared with another program, so it was left running" % problem)
+        elif _other_holders(hello) > 0:
+            _warn("%s; it is shared with another program, so it was left running" % problem)
+        else:
+            _warn("%s; turn on \"Start the daemon automatically\" in %s to let the add-on "
+                  "replace it" % (problem, PREFERENCES_PLACE))
+    if "session.hold" in (hello.get("ops") or ()):
+        client.hold(HOST)
+    _held.add(path)
+    return client
+
+
+def connect(context=None):
+    """A tessd.Client on the configured socket; starts the daemon first when none answers
+    and the preferences allow it. On the first connection to a socket in this session the
+    daemon is checked and held (see the module's notes); warnings that check gave (each once
+    per session) are on the client as ``tessd_warnings``, a list of strings for the
+    operator's report. Raises DaemonError with a message for the user."""
+    prefs = preferences.get(context)
+    path = socket_path(prefs)
+    try:
+        client = tessd.Client(path, timeout=5.0)
+    except (tessd.DaemonUnavailable, OSError) as e:
+        if not prefs.auto_start:
+            raise DaemonError("no tessd daemon answers on %s (%s); start `tessd serve` or turn "
+                              "on \"Start the daemon automatically\" in %s"
+                              % (path, e, PREFERENCES_PLACE), offer_preferences=True) from e
+        client = _start(prefs, path)
+    if path in _started:
+        _started[path] = bool(prefs.stop_on_exit)
+    if path not in _held:
+        try:
+            client = _first_contact(client, prefs, path)
+        except tessd.TessdError as e:
+            client.close()
+            raise DaemonError("the program answering on %s does not behave like the tessd "
+                              "daemon (%s)" % (path, e)) from e
+        except BaseException:
+            client.close()
+            raise
+    client.tessd_warnings = take_warnings()
+    return client
 
 
 def stop_started():
-    """Shuts down the daemons this add-on started (those marked to stop on exit)."""
-    for path, stop in list(_started.items()):
-        _started.pop(path, None)
-        if stop:
+    """Blender's exit (and the add-on's disable) path: releases every daemon this session
+    held, and shuts down those the add-on started when "Stop it on exit" is on and no other
+    program holds them."""
+    me = os.getpid()
+    for path in sorted(_held | set(_started)):
+        try:
+            with tessd.Client(path, timeout=5.0) as client:
+                client.release(me)
+        except Exception:  # gone already, or too old to know holders: nothing to release
+            pass
+        if _started.get(path):
             try:
-                tessd.stop_daemon(path, timeout=5.0)
+                tessd.stop_daemon(path, timeout=5.0, only_if_unheld=True)
             except Exception:  # exiting: nothing useful to do with the error
                 pass
+    _held.clear()
+    _started.clear()
+
+
+def offer_preferences(context, message):
+    """Shows ``message`` in a popup with a button that opens the add-on's preferences (for a
+    :class:`DaemonError` whose ``offer_preferences`` is true). Returns whether it was shown:
+    without a window (scripts, background mode) nothing is shown and the caller's report is
+    all the user gets."""
+    context = context or bpy.context
+    if bpy.app.background or getattr(context, "window", None) is None:
+        return False
+    lines = textwrap.wrap(message, 72) or [message]
+
+    def draw(menu, _context):
+        layout = menu.layout
+        for line in lines:
+            layout.label(text=line)
+        layout.separator()
+        layout.operator(preferences.OpenPreferences.bl_idname, icon='PREFERENCES')
+
+    context.window_manager.popup_menu(draw, title="tessd", icon='ERROR')
+    return True
 
 
 def register():

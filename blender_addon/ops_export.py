@@ -11,8 +11,8 @@ import os
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from . import common
-from .jobs import JobOperator, Request, UserError
+from . import attributes, common
+from .jobs import JobOperator, Request, Task, UserError, skipped_task
 from .ops_lods import parse_levels
 
 
@@ -42,29 +42,42 @@ class TESSD_OT_export_usd(JobOperator, ExportHelper, bpy.types.Operator):
         path = common.abs_path(self.filepath)
         if not path.lower().endswith(".usda"):
             raise UserError("tessd: tessd writes .usda files, got %s" % path)
-        objs = common.require_meshes(context)
+        units, skipped = common.require_units(context, self.use_modifiers)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         stem = os.path.splitext(path)[0]
-        meta = common.stage_metadata(context)
-        requests = []
-        for obj in objs:
-            arrays, extra = common.arrays_of(context, obj, self.use_modifiers)
-            out = "%s_%s.usda" % (stem, common.usd_name(obj.name))
-            params = dict(extra, output=out, name=common.usd_name(obj.name), **meta)
-            if self.as_lods:
-                params["levels"] = parse_levels(self.levels)
-                requests.append(Request("lod", params, arrays, label=obj.name,
-                                        object_name=obj.name, out=out))
-            else:
-                requests.append(Request("mesh.convert", params, arrays, label=obj.name,
-                                        object_name=obj.name, out=out))
-        return requests
+        tasks = [skipped_task(name, why) for name, why in skipped]
+        for unit in units:
+            out = "%s_%s.usda" % (stem, common.usd_name(unit.names[0]))
+            tasks.append(Task(unit.label, self._steps(context, unit, out), unit=unit, out=out))
+        return tasks
 
-    def apply(self, context, requests, created):
-        path = common.abs_path(self.filepath)
-        entries = [(common.get_object(r.object_name), r.out) for r in requests]
-        common.write_assembly(path, context, entries)
-        return "tessd: wrote %s (%d object(s))" % (path, len(entries))
+    def _steps(self, context, unit, out):
+        yield 0.0
+        src = unit.objects[0]
+        arrays, extra, sent = common.arrays_of(context, src, self.use_modifiers, normals=True)
+        params = dict(extra, output=out, name=common.usd_name(src.name),
+                      **common.stage_metadata(context))
+        if self.as_lods:
+            params["levels"] = parse_levels(self.levels)
+            return [Request("lod", params, arrays, label=unit.label, sent=sent)]
+        return [Request("mesh.convert", params, arrays, label=unit.label, sent=sent)]
+
+    def apply_task(self, context, task, created):
+        task.dropped = attributes.describe_dropped(
+            task.requests[0].sent, task.requests[0].result.get("dropped_attributes"))
+        return []
+
+    def finish(self, context, tasks, results):
+        # Every object of a unit references the unit's file, with its own transform.
+        entries = [(obj, t.out) for t in tasks for obj in t.unit.objects]
+        common.write_assembly(common.abs_path(self.filepath), context, entries)
+        self._entries = len(entries)
+
+    def summary(self, context, tasks):
+        dropped = ["%s: %s" % (t.label, ", ".join(t.dropped)) for t in tasks if t.dropped]
+        if dropped:
+            self.report({'WARNING'}, "tessd USD export: not written: " + "; ".join(dropped))
+        return "tessd: wrote %s (%d object(s))" % (common.abs_path(self.filepath), self._entries)
 
 
 def register():

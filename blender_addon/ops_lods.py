@@ -1,5 +1,8 @@
-"""Generate LODs…: one `lod` request per selected object (every level simplified from the
-input, so each level's bound holds against it). The result is a collection `<name>_LODs`
+"""Generate LODs…: one `lod` request per selected object, or per mesh that selected objects
+share (every level simplified from the input, so each level's bound holds against it; with a
+USD file the same request writes the stage and returns the meshes, so the chain is computed
+once). Every level carries what LOD0 has: UV maps, colour and generic attributes, vertex
+groups, shape keys, sharp faces and edges (attributes.py); what cannot travel is reported. The result is a collection `<name>_LODs`
 holding `<name>_LOD0` (a copy of the input) .. `<name>_LOD<n>`, all with the source's
 transform (or side by side along X with `side_by_side`). With `usd_path`, the daemon also
 writes one stage with the `LOD` variant set (docs/protocol.md, lod); with several selected
@@ -10,9 +13,9 @@ import os
 
 import bpy
 
-from . import common, convert
-from .jobs import JobOperator, Request, UserError
-from .ops_simplify import REPRESENTATIVES
+from . import attributes, common
+from .jobs import JobOperator, Request, Task, UserError, skipped_task
+from .ops_simplify import NORMALS, REPRESENTATIVES, WEIGHTINGS
 
 LOD_METHODS = [
     ('COMPLEXITY', "Complexity goals", "Levels are vertex counts or percentages (50%, 20000)"),
@@ -40,6 +43,9 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
     method: bpy.props.EnumProperty(name="Method", items=LOD_METHODS, default='COMPLEXITY')
     representative: bpy.props.EnumProperty(name="Representative", items=REPRESENTATIVES,
                                            default='BARYCENTER')
+    weighting: bpy.props.EnumProperty(name="Weighting", items=WEIGHTINGS,
+                                      default='LONGEST_EDGE')
+    normals: bpy.props.EnumProperty(name="Normals", items=NORMALS, default='BLENDER')
     usd_path: bpy.props.StringProperty(name="USD file", default="", subtype='FILE_PATH',
                                        description="Also write a .usda with the LOD variant "
                                                    "set (empty: none)")
@@ -55,67 +61,97 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        for name in ("levels", "method", "representative", "usd_path", "lod_schema",
-                     "side_by_side", "use_modifiers"):
+        for name in ("levels", "method", "representative", "weighting", "normals", "usd_path",
+                     "lod_schema", "side_by_side", "use_modifiers"):
             layout.prop(self, name)
 
     def prepare(self, context):
         levels = parse_levels(self.levels)
-        objs = common.require_meshes(context)
-        base = {"levels": levels, "method": self.method.lower(),
-                "representative": self.representative.lower()}
+        units, skipped = common.require_units(context, self.use_modifiers)
         usd = common.abs_path(self.usd_path) if self.usd_path else ""
         if usd and not usd.lower().endswith(".usda"):
             raise UserError("tessd: the USD file must end in .usda, got %s" % usd)
-        requests = []
-        for obj in objs:
-            arrays, extra = common.arrays_of(context, obj, self.use_modifiers)
-            params = dict(base, **extra)
-            requests.append(Request("lod", params, arrays, label=obj.name, object_name=obj.name))
-            if usd:
-                path = common.per_object_path(usd, obj.name, len(objs))
-                os.makedirs(os.path.dirname(path), exist_ok=True)
-                requests.append(Request(
-                    "lod", dict(params, output=path, name=common.usd_name(obj.name),
-                                lod_schema=self.lod_schema.lower(), **common.stage_metadata(context)),
-                    arrays, label=obj.name + " (USD)", object_name=obj.name, usd_file=path))
-        return requests
+        tasks = [skipped_task(name, why) for name, why in skipped]
+        self._unit_count = len(units)
+        for unit in units:
+            path = common.per_object_path(usd, unit.names[0], len(units)) if usd else ""
+            tasks.append(Task(unit.label, self._steps(context, unit, levels, path), unit=unit,
+                              usd_file=path))
+        return tasks
 
-    def apply(self, context, requests, created):
-        results = []
+    def _steps(self, context, unit, levels, usd_file):
+        yield 0.0
+        src = unit.objects[0]
+        arrays, extra, sent = common.arrays_of(context, src, self.use_modifiers,
+                                               normals=self.normals == 'CUSTOM')
+        params = dict({"levels": levels, "method": self.method.lower(),
+                       "representative": self.representative.lower(),
+                       "weighting": self.weighting.lower()}, **extra)
+        if usd_file:
+            # One request gives the stage and the meshes: the chain is computed once.
+            os.makedirs(os.path.dirname(usd_file), exist_ok=True)
+            params.update(output=usd_file, return_arrays=True, name=common.usd_name(src.name),
+                          lod_schema=self.lod_schema.lower(), **common.stage_metadata(context))
+        return [Request("lod", params, arrays, label=unit.label, sent=sent)]
+
+    def apply_task(self, context, task, created):
+        req = task.requests[0]
         depsgraph = context.evaluated_depsgraph_get()
-        usd_files = [(common.get_object(r.object_name), r.usd_file)
-                     for r in requests if getattr(r, "usd_file", None)]
-        for req in (r for r in requests if not getattr(r, "usd_file", None)):
-            src = common.get_object(req.object_name)
-            coll = created.add(bpy.data.collections.new(src.name + "_LODs"))
-            parent = src.users_collection[0] if src.users_collection else context.scene.collection
-            parent.children.link(coll)
-            if self.use_modifiers:
-                lod0 = bpy.data.meshes.new_from_object(src.evaluated_get(depsgraph),
-                                                       preserve_all_data_layers=True,
-                                                       depsgraph=depsgraph)
-            else:
-                lod0 = src.data.copy()
-            lod0.name = src.name + "_LOD0"
-            meshes = [created.add(lod0)]
-            for i, _level in enumerate(req.result.get("levels", []), start=1):
-                meshes.append(created.add(convert.mesh_from_arrays(
-                    "%s_LOD%d" % (src.name, i), req.arrays_out, prefix="lod%d." % i,
-                    materials=common.materials_of(src), uv_name=common.uv_name_of(src))))
-            width = max(src.dimensions.x, 1e-6) * 1.25
+        src = task.unit.objects[0]
+        if self.use_modifiers and common.has_modifiers(src):
+            lod0 = bpy.data.meshes.new_from_object(src.evaluated_get(depsgraph),
+                                                   preserve_all_data_layers=True,
+                                                   depsgraph=depsgraph)
+        else:
+            lod0 = src.data.copy()
+        lod0.name = src.name + "_LOD0"
+        meshes = [created.add(lod0)]
+        for i, _level in enumerate(req.result.get("levels", []), start=1):
+            meshes.append(common.result_mesh(created, "%s_LOD%d" % (src.name, i),
+                                             req.arrays_out, src, req.sent, self.normals,
+                                             prefix="lod%d." % i))
+        results = []
+        for obj_src in task.unit.objects:
+            coll = created.add(bpy.data.collections.new(obj_src.name + "_LODs"))
+            parents = common.editable_collections(obj_src.users_collection)
+            (parents[0] if parents else context.scene.collection).children.link(coll)
+            width = max(obj_src.dimensions.x, 1e-6) * 1.25
             for i, mesh in enumerate(meshes):
-                obj = common.new_object(created, "%s_LOD%d" % (src.name, i), mesh, src, [coll])
+                obj = common.new_object(created, "%s_LOD%d" % (obj_src.name, i), mesh, obj_src,
+                                        [coll])
                 if self.side_by_side and i:
                     m = obj.matrix_world.copy()
                     m.translation.x += i * width
                     obj.matrix_world = m
                 results.append(obj)
-        if len(usd_files) > 1:
-            common.write_assembly(common.abs_path(self.usd_path), context, usd_files)
-        common.select_only(context, results)
-        return "tessd LODs: %d object(s) in %d collection(s)" % (
-            len(results), len(requests) - len(usd_files))
+        task.dropped = attributes.describe_dropped(req.sent, _dropped(req.result))
+        return results
+
+    def finish(self, context, tasks, results):
+        files = [(t.unit.objects[0], t.usd_file) for t in tasks if t.usd_file]
+        if files and self._unit_count > 1:
+            common.write_assembly(common.abs_path(self.usd_path), context, files)
+
+    def summary(self, context, tasks):
+        dropped = ["%s: %s" % (t.label, ", ".join(t.dropped)) for t in tasks if t.dropped]
+        if dropped:
+            self.report({'WARNING'}, "tessd LODs: not carried to the levels: " + "; ".join(dropped))
+        parts = []
+        for t in tasks:
+            levels = t.requests[0].result.get("levels", [])
+            parts.append("%s: LOD0 %d vertices, %s" % (
+                t.label, t.requests[0].result.get("input_vertices", 0),
+                ", ".join("LOD%d %d" % (lv.get("level", i + 1), lv.get("output_vertices", 0))
+                          for i, lv in enumerate(levels))))
+        return "tessd LODs: " + "; ".join(parts)
+
+
+def _dropped(result):
+    """Union of the levels' `dropped_attributes`."""
+    out = set(result.get("dropped_attributes") or ())
+    for level in result.get("levels", []):
+        out.update(level.get("dropped_attributes") or ())
+    return sorted(out)
 
 
 def register():

@@ -23,8 +23,8 @@ import tempfile
 
 import bpy
 
-from . import common, convert
-from .jobs import JobOperator, Request, UserError
+from . import attributes, common, convert
+from .jobs import JobOperator, Request, Task, UserError, skipped_task
 
 SCHEMES = [
     ('CATMULL_CLARK', "Catmull-Clark", "Quads; any polygons (as Blender's modifier)"),
@@ -106,73 +106,90 @@ class TESSD_OT_subdivide(JobOperator, bpy.types.Operator):
         col.prop(self, "cache_path")
 
     def _params(self):
+        # normals: the result gets Blender's normals from the carried sharp faces and edges,
+        # as Blender's own Subdivision Surface modifier gives them.
         return {"scheme": self.scheme.lower().replace("_", "-"), "levels": int(self.levels),
                 "gpu": bool(self.use_gpu), "boundary": self.boundary.lower().replace("_", "-"),
-                "uv_interpolation": {x[0]: x[3] for x in UV_SMOOTH}[self.uv_smooth]}
+                "uv_interpolation": {x[0]: x[3] for x in UV_SMOOTH}[self.uv_smooth],
+                "normals": False}
 
     def prepare(self, context):
-        objs = common.require_meshes(context)
+        evaluated = self.use_modifiers and not self.replace
+        units, skipped = common.require_units(context, evaluated, self.replace)
         if self.use_animation:
             if self.frame_end < self.frame_start:
                 raise UserError("tessd: the frame range %d..%d is empty"
                                 % (self.frame_start, self.frame_end))
             if self.replace:
                 raise UserError("tessd: an animation makes a new object; turn off Replace mesh")
+        tasks = [skipped_task(name, why) for name, why in skipped]
+        for unit in units:
+            tasks.append(Task(unit.label, self._steps(context, unit, evaluated), unit=unit))
+        return tasks
+
+    def _steps(self, context, unit, evaluated):
+        """The requests of one object: its refined mesh, and with an animation the frames,
+        baked one frame per step (progress and Esc between frames)."""
+        yield 0.0
+        obj = unit.objects[0]
         scene = context.scene
         current = scene.frame_current, scene.frame_subframe
         try:
-            return [r for obj in objs for r in self._requests(context, obj)]
-        finally:
             if self.use_animation:
-                scene.frame_set(current[0], subframe=current[1])
-
-    def _requests(self, context, obj):
-        """The requests of one object: its refined mesh, and with an animation the frames."""
-        if self.use_animation:
-            context.scene.frame_set(self.frame_start)  # the rest pose: the first frame
-        try:
-            arrays, extra = common.arrays_of(context, obj, self.use_modifiers and not self.replace,
-                                             normals=False, creases=self.use_creases)
+                scene.frame_set(self.frame_start)  # the rest pose: the first frame
+            arrays, extra, sent = common.arrays_of(context, obj, evaluated,
+                                                   creases=self.use_creases)
             params = dict(self._params(), **extra)
             frames = None
             if self.use_animation:
-                frames = convert.frames_of(obj, context.scene, context.evaluated_depsgraph_get(),
-                                           self.frame_start, self.frame_end)
+                frames = yield from convert.frames_of(obj, scene, context.evaluated_depsgraph_get(),
+                                                      self.frame_start, self.frame_end)
                 if frames.shape[1] != len(arrays["positions"]):
                     raise ValueError("its modifiers change the vertex count between frames")
             arrays, frames = convert.drop_loose(arrays, frames)
-            requests = [Request("subdivide", params, arrays, label=obj.name, object_name=obj.name)]
-            if not self.use_animation:
-                return requests
         except ValueError as e:
-            raise UserError("tessd: %s cannot be sent: %s" % (obj.name, e)) from e
+            raise UserError("%s cannot be sent: %s" % (obj.name, e)) from e
+        finally:
+            if self.use_animation:
+                scene.frame_set(current[0], subframe=current[1])
+        requests = [Request("subdivide", params, arrays, label=unit.label, sent=sent)]
+        if not self.use_animation:
+            return requests
         path = cache_file_path(self, obj)
         os.makedirs(os.path.dirname(path), exist_ok=True)
-        anim = dict(arrays, frames=frames)
-        anim.pop("uvs", None)  # the cache carries points only (read_data = {'VERT'})
+        # The cache carries points only (read_data = {'VERT'}).
+        anim = {k: v for k, v in arrays.items()
+                if k in ("positions", "face_indices", "face_sizes", "crease_edges",
+                         "crease_values")}
+        anim["frames"] = frames
         requests.append(Request(
             "subdivide", dict(params, output=path, name=common.usd_name(obj.name),
                               **common.stage_metadata(context)),
-            anim, label=obj.name + " (%d frames)" % len(frames), object_name=obj.name, cache=path))
+            anim, label=unit.label + " (%d frames)" % len(frames), cache=path))
         return requests
 
-    def apply(self, context, requests, created):
-        results, swaps = [], []
-        caches = {r.object_name: r.cache for r in requests if getattr(r, "cache", None)}
-        for req in (r for r in requests if not getattr(r, "cache", None)):
-            src = common.get_object(req.object_name)
-            obj = common.result_object(created, src, req.arrays_out, "_subdiv", self.replace,
-                                       swaps)
-            results.append(obj)
-            if not self.replace and src.name in caches:
-                self._add_cache(created, obj, caches[src.name], src.name)
-        for src, mesh in swaps:
-            src.data = mesh
-        common.select_only(context, results)
-        r = [req.result for req in requests if "vertices" in req.result]
+    def apply_task(self, context, task, created):
+        req = task.requests[0]
+        src = task.unit.objects[0]
+        mesh = common.result_mesh(created, src.name if self.replace else src.name + "_subdiv",
+                                  req.arrays_out, src, req.sent, 'BLENDER')
+        results = common.unit_results(created, task.unit, mesh, "_subdiv", self.replace)
+        cache = next((r.cache for r in task.requests if getattr(r, "cache", None)), None)
+        if cache and not self.replace:
+            for obj in results:
+                self._add_cache(created, obj, cache, src.name)
+        task.dropped = attributes.describe_dropped(req.sent, req.result.get("dropped_attributes"))
+        return results
+
+    def summary(self, context, tasks):
+        dropped = ["%s: %s" % (t.label, ", ".join(t.dropped)) for t in tasks if t.dropped]
+        if dropped:
+            self.report({'WARNING'}, "tessd subdivide: not carried to the result: "
+                        + "; ".join(dropped))
+        r = [(t.requests[0].result, len(t.unit.names)) for t in tasks]
         return "tessd subdivide: %d object(s), %d vertices, %d faces" % (
-            len(results), sum(x["vertices"] for x in r if "frames" not in x),
-            sum(x["faces"] for x in r if "frames" not in x))
+            sum(n for _, n in r), sum(x["vertices"] * n for x, n in r),
+            sum(x["faces"] * n for x, n in r))
 
     def _add_cache(self, created, obj, path, src_name):
         # bpy.data.cache_files has no load(); the Cache File "open" operator adds one.

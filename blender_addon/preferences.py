@@ -1,5 +1,6 @@
 """Add-on preferences: where the daemon binary is, which socket to use, and whether the
-add-on starts the daemon itself (and stops it again when Blender exits)."""
+add-on starts the daemon itself (and stops it again when Blender exits); and the
+``tessd.open_preferences`` operator, the button a failure offers when the fix is here."""
 
 import bpy
 
@@ -12,8 +13,8 @@ class TessdPreferences(bpy.types.AddonPreferences):
 
     binary_path: bpy.props.StringProperty(
         name="tessd binary",
-        description="Path of the tessd executable. Empty: next to the add-on, then "
-                    "$TESSD_BIN, then `tessd` on PATH",
+        description="The tessd program to start. Empty: the one bundled with this add-on "
+                    "(then $TESSD_BIN, then tessd on PATH)",
         subtype='FILE_PATH', default="")
     socket: bpy.props.StringProperty(
         name="Socket",
@@ -25,7 +26,8 @@ class TessdPreferences(bpy.types.AddonPreferences):
     stop_on_exit: bpy.props.BoolProperty(
         name="Stop it on exit",
         description="Shut down a daemon this add-on started when Blender exits or the "
-                    "add-on is disabled", default=True)
+                    "add-on is disabled, unless another program (FreeCAD, a script) still "
+                    "uses it", default=True)
     timeout: bpy.props.FloatProperty(
         name="Start timeout", description="Seconds to wait for a started daemon to answer",
         default=15.0, min=1.0, soft_max=120.0, subtype='TIME_ABSOLUTE')
@@ -52,6 +54,30 @@ class _Defaults:
     timeout = 15.0
 
 
+class OpenPreferences(bpy.types.Operator):
+    """Open Preferences at the tessd add-on (to choose the tessd program or the socket)"""
+
+    bl_idname = "tessd.open_preferences"
+    bl_label = "Open tessd Preferences"
+    bl_options = {'INTERNAL'}
+
+    @classmethod
+    def poll(cls, context):
+        # Preferences open in a window of their own; background Blender has none.
+        if bpy.app.background or not context.window_manager.windows:
+            cls.poll_message_set("Preferences need a Blender window")
+            return False
+        return True
+
+    def execute(self, context):
+        try:
+            bpy.ops.preferences.addon_show(module=ADDON_ID)
+        except RuntimeError as e:
+            self.report({'ERROR'}, "cannot open Preferences: %s" % e)
+            return {'CANCELLED'}
+        return {'FINISHED'}
+
+
 def get(context=None):
     """The add-on's preferences (or their defaults)."""
     context = context or bpy.context
@@ -61,7 +87,9 @@ def get(context=None):
 
 def register():
     bpy.utils.register_class(TessdPreferences)
+    bpy.utils.register_class(OpenPreferences)
 
 
 def unregister():
+    bpy.utils.unregister_class(OpenPreferences)
     bpy.utils.unregister_class(TessdPreferences)

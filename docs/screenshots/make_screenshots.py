@@ -6,8 +6,9 @@ Builds the extension zip, installs and enables it in a throw-away Blender user f
 tests do, `tests/blender_addon/addon_env.py`), starts `tessd serve` (target/release/tessd or
 $TESSD_BIN), runs the add-on's real operators on real meshes and renders:
 
-- lod_chain.png: the Stanford bunny's LOD chain from `tessd.generate_lods`, LOD0 (the input)
-  .. LOD3, side by side, each labelled with its triangle count;
+- lod_chain.png: the Stanford bunny's LOD chain from `tessd.generate_lods`, LOD0 (the input,
+  shaded smooth) .. LOD3, side by side, each labelled with its triangle count, shaded with
+  Blender's own normals (faces whose corners would face away from them are flat);
 - partition.png: `tessd.simplify(method='QUALITY', show_partition=True)`: the input with the
   partition's cells, the result with the cells, the result alone;
 - subdivided_cage.png: `tessd.subdivide` (Catmull-Clark, level 3): a cube cage with four
@@ -236,6 +237,7 @@ def import_bunny(data):
     b.ops.wm.ply_import(filepath=str(data / "bun_zipper.ply"), forward_axis='Y', up_axis='Z')
     obj = b.context.object
     obj.name = obj.data.name = "Bunny"
+    obj.data.shade_smooth()  # a scan is shown smooth (the importer makes every face flat)
     obj.rotation_euler = (math.radians(90), 0.0, 0.0)  # the scan is Y-up
     obj.scale = (10.0, 10.0, 10.0)
     b.context.view_layer.update()
@@ -301,6 +303,7 @@ def creased_cube():
     obj = b.context.object
     obj.name = obj.data.name = "Cube"
     mesh = obj.data
+    mesh.shade_smooth()  # Blender's cube is flat, and a subdivided flat cage stays flat
     verts = np.empty(len(mesh.edges) * 2, dtype=np.int64)
     mesh.edges.foreach_get("vertices", verts)
     co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)

@@ -27,7 +27,8 @@ from addon_env import REPO, install_addon, uninstall_addon  # noqa: E402
 
 @pytest.fixture(scope="session")
 def addon_zip(tmp_path_factory):
-    """The extension built by `python blender_addon/build.py` (validated by Blender's tool)."""
+    """The extension built by `python blender_addon/build.py` for this platform, bundling
+    target/release/tessd (validated by Blender's tool): (zip path, build log)."""
     out = tmp_path_factory.mktemp("dist")
     proc = subprocess.run([sys.executable, str(REPO / "blender_addon" / "build.py"), "--out", str(out)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

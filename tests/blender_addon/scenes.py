@@ -27,8 +27,8 @@ def empty_scene():
         b.data.collections.remove(coll)
     for mesh in list(b.data.meshes):
         b.data.meshes.remove(mesh)
-    for cf in list(b.data.cache_files):
-        b.data.cache_files.remove(cf)
+    if len(b.data.cache_files):
+        b.data.batch_remove(list(b.data.cache_files))
     b.context.scene.frame_set(1)
 
 

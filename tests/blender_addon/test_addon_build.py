@@ -1,20 +1,42 @@
-"""The extension builds to a zip that Blender's own tool validates, bundles the client, and
-installs and registers as Blender installs extensions."""
+"""The extension builds to a per-platform zip that Blender's own tool validates, bundles the
+client and the daemon (bin/tessd, executable), and installs and registers as Blender installs
+extensions."""
 
 from __future__ import annotations
 
 import importlib.util
+import platform
+import stat
 import subprocess
+import sys
+import tomllib
 import zipfile
 
 from addon_env import ADDON, REPO
 
 
+def _build_module():
+    spec = importlib.util.spec_from_file_location("tessd_addon_build", REPO / "blender_addon" / "build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    return build
+
+
+def _platform():
+    """This machine in Blender's spelling, computed here independently of build.py."""
+    machine = {"x86_64": "x64", "amd64": "x64", "aarch64": "arm64"}.get(
+        platform.machine().lower(), platform.machine().lower())
+    system = {"darwin": "macos"}.get(platform.system().lower(), platform.system().lower())
+    return "%s-%s" % (system, machine)
+
+
 def test_zip_contents_and_validation(addon_zip):
     path, log = addon_zip
-    assert path.name == "tessd-0.1.0.zip"
+    plat = _platform()
+    assert path.name == "tessd-0.1.0-%s.zip" % plat
     assert "Success parsing TOML" in log, log  # blender_ext.py validate (= blender --command extension validate)
-    names = set(zipfile.ZipFile(path).namelist())
+    z = zipfile.ZipFile(path)
+    names = set(z.namelist())
     for required in ("blender_manifest.toml", "__init__.py", "jobs.py", "convert.py",
                      "vendor/__init__.py", "vendor/tessd/__init__.py", "vendor/tessd/client.py"):
         assert required in names
@@ -24,13 +46,54 @@ def test_zip_contents_and_validation(addon_zip):
     tracked = subprocess.run(["git", "ls-files", "--others", "--cached", "--exclude-standard",
                               "blender_addon"], cwd=REPO, stdout=subprocess.PIPE, text=True).stdout
     assert "vendor/" not in tracked and "dist/" not in tracked
+    # The platform: in the zip's manifest only (the one in git lists none).
+    manifest = tomllib.loads(z.read("blender_manifest.toml").decode("utf-8"))
+    assert manifest["platforms"] == [plat]
+    assert manifest["version"] == "0.1.0" and manifest["id"] == "tessd"
+    assert "platforms" not in tomllib.loads((REPO / "blender_addon" / "blender_manifest.toml").read_text())
+    # The daemon: the release binary, rwxr-xr-x in the zip's external attributes.
+    info = z.getinfo("bin/tessd")
+    mode = info.external_attr >> 16
+    assert stat.S_ISREG(mode) and mode & 0o777 == 0o755, oct(mode)
+    assert z.read("bin/tessd") == (REPO / "target" / "release" / "tessd").read_bytes()
+
+
+def test_zip_installs_on_this_platform_only(addon_zip, tmp_path):
+    """Blender's own tool accepts the zip here and refuses it for another platform, so
+    `platforms` really is what Blender checks."""
+    build = _build_module()
+    tool = build.find_blender_ext()
+    other = "windows-x64" if _platform() != "windows-x64" else "linux-x64"
+
+    def install(zip_path, repo):
+        repo.mkdir()
+        return subprocess.run([sys.executable, tool, "install-files", "--local-dir", str(repo),
+                               "--blender-version", "5.0.1", "--python-version", "3.11.0", str(zip_path)],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True).stdout
+
+    log = install(addon_zip[0], tmp_path / "here")
+    assert (tmp_path / "here" / "tessd" / "bin" / "tessd").is_file(), log
+    foreign = build.build(str(tmp_path / "dist"), binary=str(REPO / "target" / "release" / "tessd"),
+                          platform=other)
+    assert foreign.endswith("tessd-0.1.0-%s.zip" % other)
+    assert "bin/tessd.exe" in zipfile.ZipFile(foreign).namelist()
+    log = install(foreign, tmp_path / "there")
+    assert not (tmp_path / "there" / "tessd").exists(), log
+    assert "isn't one of (%s)" % other in log, log
+
+
+def test_build_needs_the_binary(tmp_path):
+    proc = subprocess.run([sys.executable, str(REPO / "blender_addon" / "build.py"), "--out",
+                           str(tmp_path), "--binary", str(tmp_path / "nope" / "tessd")],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert proc.returncode != 0
+    assert "nope/tessd does not exist" in proc.stdout and "cargo build --release" in proc.stdout
+    assert not list(tmp_path.glob("*.zip"))
 
 
 def test_validate_rejects_a_broken_manifest(tmp_path):
     """The validation step really checks: a zip whose manifest lacks `id` is refused."""
-    spec = importlib.util.spec_from_file_location("tessd_addon_build", REPO / "blender_addon" / "build.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
+    build = _build_module()
     bad = tmp_path / "bad.zip"
     with zipfile.ZipFile(bad, "w") as z:
         z.writestr("blender_manifest.toml", 'schema_version = "1.0.0"\nname = "x"\n')
@@ -56,5 +119,6 @@ def test_installed_and_registered(addon):
     schemes = {i.identifier for i in bpy.ops.tessd.subdivide.get_rna_type().properties["scheme"].enum_items}
     assert {"CATMULL_CLARK", "LOOP", "BUTTERFLY", "DOO_SABIN", "SQRT3", "BILINEAR"} <= schemes
     assert hasattr(bpy.types, "VIEW3D_MT_tessd")
+    assert hasattr(bpy.ops.tessd, "open_preferences")  # the button failures offer
     # The vendored client is the one in use (relative import inside the extension).
     assert addon.client.tessd.__name__ == ADDON + ".vendor.tessd"

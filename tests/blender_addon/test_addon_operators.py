@@ -93,6 +93,15 @@ def test_simplify_keeps_transform_materials_uvs_normals(bpy):
     out.data.uv_layers.active.data.foreach_get("uv", uv_out)
     assert uv_out.min() >= uv_src.min() - 1e-6 and uv_out.max() <= uv_src.max() + 1e-6
     assert len(set(map(tuple, uv_out.reshape(-1, 2).round(5)))) > 1
+    # Blender's own normals by default: the cube's flat faces come back flat
+    assert not out.data.has_custom_normals
+    flat = np.zeros(len(out.data.polygons), bool)
+    out.data.attributes["sharp_face"].data.foreach_get("value", flat)
+    assert flat.all()
+    # custom normals on request: the input's corner normals averaged per cell and group
+    select(src)
+    assert bpy.ops.tessd.simplify(method='GRID', cells=4, normals='CUSTOM') == {'FINISHED'}
+    out = bpy.data.objects["Painted_simplified.001"]
     assert out.data.has_custom_normals
     n = np.empty(len(out.data.loops) * 3, np.float32)
     out.data.corner_normals.foreach_get("vector", n)
@@ -247,7 +256,7 @@ def test_subdivide_non_manifold_is_a_clean_error(bpy):
     src = scenes.non_manifold()
     select(src)
     before = scene_state()
-    with pytest.raises(RuntimeError, match=r"Fin .*invalid_mesh.*shared by 3 faces.*scene is unchanged"):
+    with pytest.raises(RuntimeError, match=r"Fin: .*invalid_mesh.*shared by 3 faces.*scene is unchanged"):
         bpy.ops.tessd.subdivide(levels=1)
     assert scene_state() == before
 
