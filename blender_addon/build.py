@@ -9,9 +9,9 @@ PATH and no TESSD_BIN. A compiled binary runs on one platform only, hence one zi
 as `blender --command extension build --split-platforms` makes them: the zip's copy of
 blender_manifest.toml gets `platforms = ["<platform>"]` (Blender refuses to install it
 elsewhere; the manifest in git lists none). `--binary PATH` names the daemon (default the
-repository's target/release/tessd, which must exist: `cargo build --release -p tessd`),
-`--platform` its platform (default this machine's, in Blender's spelling: linux-x64,
-linux-arm64, macos-arm64, macos-x64, windows-x64). Blender's installer extracts with Python's
+release build in cargo's target folder, $CARGO_TARGET_DIR or target/, which must exist:
+`cargo build --release -p tessd`), `--platform` its platform (default this machine's, in
+Blender's spelling: linux-x64, linux-arm64, macos-arm64, macos-x64, windows-x64). Blender's installer extracts with Python's
 zipfile, which drops permission bits, so the add-on makes bin/tessd executable before running
 it; the zip still records mode 0755 for tools that honour it.
 
@@ -57,7 +57,10 @@ def binary_name(platform):
 
 
 def default_binary(platform):
-    return os.path.join(REPO, "target", "release",
+    """The release build of this checkout (cargo's target folder: $CARGO_TARGET_DIR when set,
+    as cargo itself reads it, else the repository's target/)."""
+    target = os.environ.get("CARGO_TARGET_DIR") or os.path.join(REPO, "target")
+    return os.path.join(os.path.abspath(target), "release",
                         "tessd.exe" if platform.startswith("windows-") else "tessd")
 
 
@@ -163,7 +166,7 @@ def main(argv=None):
     ap.add_argument("--no-validate", action="store_true")
     ap.add_argument("--blender-ext", help="path of Blender's bl_pkg/cli/blender_ext.py")
     ap.add_argument("--binary", help="the tessd executable to bundle as bin/tessd (default: "
-                                     "target/release/tessd of this repository)")
+                                     "release/tessd in $CARGO_TARGET_DIR or this repository's target/)")
     ap.add_argument("--platform", default=this_platform(),
                     help="Blender platform of the binary (default: this machine's, %s)"
                          % this_platform())
