@@ -12,6 +12,7 @@ import sys
 import tomllib
 import zipfile
 
+import locate
 from addon_env import ADDON, REPO
 
 
@@ -55,7 +56,7 @@ def test_zip_contents_and_validation(addon_zip):
     info = z.getinfo("bin/tessd")
     mode = info.external_attr >> 16
     assert stat.S_ISREG(mode) and mode & 0o777 == 0o755, oct(mode)
-    assert z.read("bin/tessd") == (REPO / "target" / "release" / "tessd").read_bytes()
+    assert z.read("bin/tessd") == locate.tessd_bin().read_bytes()
 
 
 def test_zip_installs_on_this_platform_only(addon_zip, tmp_path):
@@ -73,7 +74,7 @@ def test_zip_installs_on_this_platform_only(addon_zip, tmp_path):
 
     log = install(addon_zip[0], tmp_path / "here")
     assert (tmp_path / "here" / "tessd" / "bin" / "tessd").is_file(), log
-    foreign = build.build(str(tmp_path / "dist"), binary=str(REPO / "target" / "release" / "tessd"),
+    foreign = build.build(str(tmp_path / "dist"), binary=str(locate.tessd_bin()),
                           platform=other)
     assert foreign.endswith("tessd-0.1.0-%s.zip" % other)
     assert "bin/tessd.exe" in zipfile.ZipFile(foreign).namelist()
