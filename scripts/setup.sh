@@ -25,10 +25,10 @@ apt_install() {
 #   .venv        tests: usd-core, numpy, bpy, pytest       (python/requirements-test.txt)
 #   .venv-bench  peer tools for cross-checks and benchmarks: pymeshlab, matplotlib
 #                                                          (bench/requirements-bench.txt)
-#   .venv-cad    B-Rep export tests: cadquery 2.8 + cadquery-ocp 7.9, pytest
+#   .venv-cad    B-Rep tests (tests/brep) on OCP 7.9: cadquery 2.8 + cadquery-ocp 7.9, pytest
 #                                                          (python/requirements-cad.txt)
-#   .venv-b123d  B-Rep export tests: build123d 0.13 + OCP 8.0 (cadquery-ocp-novtk), pytest
-#                                                          (python/requirements-build123d.txt)
+#   .venv-b123d  B-Rep tests (tests/brep, tests/brep_build123d) on OCP 8.0: build123d 0.13 +
+#                cadquery-ocp-novtk 8.0, numpy, pytest     (python/requirements-build123d.txt)
 make_venv() {
   local dir=$1 reqs=$2
   if [ ! -x "$dir/bin/python" ]; then

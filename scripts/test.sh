@@ -13,9 +13,11 @@ echo "== pytest (daemon, USD, demo, simplification)"
   --ignore=tests/brep_build123d --ignore=tests/brep_freecad
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
-echo "== pytest (B-Rep export on real OpenCASCADE: cadquery / OCP 7.9)"
+# tests/brep (the exporter, the daemon's B-Rep ops against OCP, the real-file fixtures) needs
+# nothing but OCP: it runs whole under both OCP releases the exporter supports.
+echo "== pytest (B-Rep export and tessellation on real OpenCASCADE: OCP 7.9, cadquery 2.8's venv)"
 .venv-cad/bin/python -m pytest tests/brep -q -p no:cacheprovider
-echo "== pytest (B-Rep export on build123d 0.13 / OCP 8.0)"
-.venv-b123d/bin/python -m pytest tests/brep_build123d -q -p no:cacheprovider
+echo "== pytest (B-Rep export and tessellation on real OpenCASCADE: OCP 8.0, build123d 0.13's venv)"
+.venv-b123d/bin/python -m pytest tests/brep tests/brep_build123d -q -p no:cacheprovider
 echo "== pytest (B-Rep export from FreeCAD 0.20, system python)"
 PYTHONPATH=python:tests /usr/bin/python3 -m pytest tests/brep_freecad -q -p no:cacheprovider

@@ -8,16 +8,18 @@ shapes.
                      [--parallel 0,1] [--budget 2] [--min-repeat 3] [--max-repeat 9]
                      [--slow-s 5] [--only NAME,..]
 
-Run with the CAD venv's interpreter (/work/main/.venv-cad/bin/python: cadquery 2.8, OCP 7.9)
-and PYTHONPATH=python (the exporter `tessd.brep`).
+Run with the CAD venv's interpreter (/work/main/.venv-cad/bin/python: OCP 7.9) or the build123d
+venv's (.venv-b123d: OCP 8.0) and PYTHONPATH=python (the exporter `tessd.brep`): the parts are
+built with OCP alone and the OCP names that 8.0 moved come from tessd.brep.ocp_compat.
 
 `export` writes, under WORK: `json/<part>.json` (the document, `tessd.brep` exporter, units mm),
 `shapes/<part>.brep` for the cadquery parts (so that `mesh` re-reads exactly the exported
 shape), and `parts.json` (the manifest: name, kind, source, paths, face count, export time or
-the error, and the faces whose edges OCP tolerates more than 0.01 mm off the surface). The parts: every .step/.stp/.iges/.igs/.brep/.brp file in DIR, the cadquery parts of
-tests/brep/test_brep_export.py (its `PARTS` dict, imported) and `plate_540_holes` built here
-(a plate with 540 through holes, the "face with hundreds of trims" case of the paper's
-figure 1).
+the error, and the faces whose edges OCP tolerates more than 0.01 mm off the surface). The parts:
+every .step/.stp/.iges/.igs/.brep/.brp file in DIR, the OCP-built parts of tests/brep/ocp_parts.py
+(its `PARTS` dict, imported; named `cq_*` as when cadquery built them, so results compare) and
+`plate_540_holes` built here (a plate with 540 through holes, the "face with hundreds of trims"
+case of the paper's figure 1).
 
 `mesh` times `BRepMesh_IncrementalMesh(shape, deflection, False, 0.5, parallel)` (absolute
 linear deflection in the shape's unit, mm; angular deflection 0.5 rad, the default) for each
@@ -53,17 +55,27 @@ EXTENSIONS = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
 
 def plate_540_holes():
     """A 300 × 200 × 5 mm plate with 27 × 20 = 540 through holes of 4 mm: its two large faces
-    carry 541 loops each (the paper's figure 1 case)."""
-    import cadquery as cq
+    carry 541 loops each (the paper's figure 1 case). The holes are cut at once (one compound
+    tool): one boolean, not 540."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
 
-    return cq.Workplane("XY").box(300, 200, 5).faces(">Z").workplane().rarray(10, 9, 27, 20).hole(4)
+    import ocp_parts  # tests/brep
+
+    tools, b = TopoDS_Compound(), BRep_Builder()
+    b.MakeCompound(tools)
+    for i in range(27):
+        for j in range(20):
+            b.Add(tools, ocp_parts.cylinder(2.0, 7.0, (10.0 * (i - 13), 9.0 * (j - 9.5), -3.5)))
+    return ocp_parts.cut(ocp_parts.box(300, 200, 5), tools)
 
 
 def cadquery_parts():
-    """name -> builder: the test suite's PARTS plus the plate with 540 holes."""
-    import test_brep_export  # tests/brep: needs pytest, cadquery, brep_checks (CAD venv)
+    """name -> builder: the test suite's OCP-built PARTS (tests/brep/ocp_parts.py; `cq_` names,
+    as when cadquery built them) plus the plate with 540 holes."""
+    import ocp_parts  # tests/brep: OCP only (7.9 or 8.0)
 
-    parts = {f"cq_{name}": fn for name, fn in test_brep_export.PARTS.items()}
+    parts = {f"cq_{name}": fn for name, fn in ocp_parts.PARTS.items()}
     parts["cq_plate_540_holes"] = plate_540_holes
     return parts
 
@@ -91,16 +103,17 @@ def loose_edges(shape, above=0.01, most=6):
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
     from OCP.TopExp import TopExp
     from OCP.TopoDS import TopoDS
-    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    from tessd.brep.ocp_compat import TopTools_IndexedMapOfShape, static
 
     fmap = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_FACE, fmap)
+    static(TopExp, "MapShapes")(shape, TopAbs_FACE, fmap)
     out = []
     for i in range(1, fmap.Extent() + 1):
         emap = TopTools_IndexedMapOfShape()
-        TopExp.MapShapes_s(fmap.FindKey(i), TopAbs_EDGE, emap)
-        tol = max((BRep_Tool.Tolerance_s(TopoDS.Edge_s(emap.FindKey(k))) for k in range(1, emap.Extent() + 1)),
-                  default=0.0)
+        static(TopExp, "MapShapes")(fmap.FindKey(i), TopAbs_EDGE, emap)
+        tol = max((static(BRep_Tool, "Tolerance")(static(TopoDS, "Edge")(emap.FindKey(k)))
+                   for k in range(1, emap.Extent() + 1)), default=0.0)
         if tol > above:
             out.append([i, tol])
     return sorted(out, key=lambda ft: -ft[1])[:most]
@@ -110,6 +123,7 @@ def export(args):
     from OCP.BRepTools import BRepTools
 
     from tessd.brep import ocp
+    from tessd.brep.ocp_compat import static
 
     work = Path(args.work)
     (work / "json").mkdir(parents=True, exist_ok=True)
@@ -133,7 +147,7 @@ def export(args):
                          units=doc["units"], export_ms=1000 * (t1 - t0), json_bytes=len(text))
             entry["loose_faces"] = loose_edges(shape)
             if kind == "cadquery":
-                BRepTools.Write_s(shape, str(shape_path))
+                static(BRepTools, "Write")(shape, str(shape_path))
         except Exception as e:  # noqa: BLE001 - reported, the run goes on
             entry["error"] = f"{type(e).__name__}: {e}"
             traceback.print_exc()
@@ -187,14 +201,15 @@ def count(shape):
     from OCP.TopExp import TopExp
     from OCP.TopLoc import TopLoc_Location
     from OCP.TopoDS import TopoDS
-    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    from tessd.brep.ocp_compat import TopTools_IndexedMapOfShape, static
 
     fmap = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_FACE, fmap)
+    static(TopExp, "MapShapes")(shape, TopAbs_FACE, fmap)
     nv = nt = missing = 0
     for i in range(1, fmap.Extent() + 1):
         loc = TopLoc_Location()
-        tri = BRep_Tool.Triangulation_s(TopoDS.Face_s(fmap.FindKey(i)), loc)
+        tri = static(BRep_Tool, "Triangulation")(static(TopoDS, "Face")(fmap.FindKey(i)), loc)
         if tri is None or tri.NbTriangles() == 0:
             missing += 1
         else:
@@ -240,14 +255,16 @@ def deviation(shape, tol, limit):
     from OCP.TopExp import TopExp
     from OCP.TopLoc import TopLoc_Location
     from OCP.TopoDS import TopoDS
-    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    from tessd.brep.ocp_compat import TopTools_IndexedMapOfShape, static
 
     fmap = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_FACE, fmap)
+    static(TopExp, "MapShapes")(shape, TopAbs_FACE, fmap)
+    face_of = static(TopoDS, "Face")
     tris = []
     for i in range(1, fmap.Extent() + 1):
         loc = TopLoc_Location()
-        t = BRep_Tool.Triangulation_s(TopoDS.Face_s(fmap.FindKey(i)), loc)
+        t = static(BRep_Tool, "Triangulation")(face_of(fmap.FindKey(i)), loc)
         if t is not None and t.HasUVNodes():
             tris.append((i, t, loc))
     total = sum(t.NbTriangles() for _, t, _ in tris)
@@ -256,7 +273,7 @@ def deviation(shape, tol, limit):
     stride = max(1, total // limit)
     ds, worst, seen = [], (0.0, None), 0
     for i, t, loc in tris:
-        surf = BRepAdaptor_Surface(TopoDS.Face_s(fmap.FindKey(i)))
+        surf = BRepAdaptor_Surface(face_of(fmap.FindKey(i)))
         bounds = (surf.FirstUParameter(), surf.LastUParameter(), surf.FirstVParameter(), surf.LastVParameter())
         trsf = loc.Transformation()
         n = t.NbTriangles()
@@ -283,8 +300,12 @@ def mesh_one(shape, deflection, parallel, args, measure_deviation):
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools
 
+    from tessd.brep.ocp_compat import static
+
+    clean = static(BRepTools, "Clean")
+
     def once():
-        BRepTools.Clean_s(shape)
+        clean(shape)
         c0 = time.process_time()
         t0 = time.perf_counter()
         m = BRepMesh_IncrementalMesh(shape, deflection, False, 0.5, parallel)

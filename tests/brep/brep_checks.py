@@ -451,7 +451,39 @@ def compare_with_ocp(doc: Dict[str, Any], shape: Any, ev: Evaluator, seed: int =
                     stats["trim_vs_tol"] = max(stats["trim_vs_tol"], d / tol)
                     assert d <= tol, f"{tw} (edge {eid}, t={t}): S(C(t)) is {d:.3g} from the edge " \
                         f"(allowed {tol:.3g}: max(1e-6 × size, edge tolerance {etol:.3g}))"
+    stats["vertex_gap"] = check_tolerances(doc, emap, ev, size)
     return stats
+
+
+def check_tolerances(doc: Dict[str, Any], emap: Any, ev: Evaluator, size: float) -> float:
+    """Every edge's `tolerance` is OCP's `BRep_Tool::Tolerance` of it, its `vertex_tolerances`
+    those of the vertices at range[0] and range[1]: OCP's vertex points lie within them of the
+    document's curve at those ends (which end is which is checked on the geometry, not by
+    asking OCP the same question twice). Returns the largest end-to-vertex distance relative to
+    its vertex tolerance."""
+    worst = 0.0
+    for e in doc.get("edges", []):
+        where = f"edge {e['id']}"
+        edge = _edge(emap.FindKey(e["id"]))
+        assert e["tolerance"] == _s(BRep_Tool, "Tolerance")(edge), f"{where}: tolerance {e['tolerance']}"
+        vt = e["vertex_tolerances"]
+        assert len(vt) == 2 and min(vt) >= 0, f"{where}: vertex_tolerances {vt}"
+        v = [_s(TopExp, "FirstVertex")(edge, False), _s(TopExp, "LastVertex")(edge, False)]
+        assert sorted(vt) == sorted(_s(BRep_Tool, "Tolerance")(x) for x in v), f"{where}: {vt}"
+        if e["curve"] is None:
+            continue
+        ends = [ev.curve(e["curve"], t) for t in e["range"]]
+        for k in range(2):
+            # the vertex that the document puts at this end, and the other one
+            mine = _pt(_s(BRep_Tool, "Pnt")(v[k]))
+            d = dist(ends[k], mine)
+            worst = max(worst, d / max(vt[k], 1e-300))
+            assert d <= vt[k] + 1e-9 * size, \
+                f"{where}: the vertex of range[{k}] is {d:.3g} from the curve's end (tolerance {vt[k]:.3g})"
+            if dist(_pt(_s(BRep_Tool, "Pnt")(v[0])), _pt(_s(BRep_Tool, "Pnt")(v[1]))) > vt[0] + vt[1]:
+                other = _pt(_s(BRep_Tool, "Pnt")(v[1 - k]))
+                assert dist(ends[k], other) > vt[1 - k], f"{where}: vertex_tolerances swapped"
+    return worst
 
 
 def _pt(p: Any) -> List[float]:

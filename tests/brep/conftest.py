@@ -1,4 +1,4 @@
-"""tests/brep runs in the CAD venv (.venv-cad: cadquery 2.8, cadquery-ocp 7.9; scripts/test.sh).
+"""tests/brep runs under OCP 7.9 (.venv-cad: cadquery 2.8) and OCP 8.0 (.venv-b123d: build123d 0.13), scripts/test.sh.
 The root conftest puts python/ and tests/ on sys.path and imports nothing the CAD venv lacks;
 this one prints the export timings the tests collected (brep_checks.TIMINGS) at the end."""
 

@@ -1,9 +1,9 @@
 """Every OCP name a module uses, resolved against the installed OCP: the `from OCP.X import Y`
 imports, the static methods reached through `static(Class, "Name")` (tessd.brep.ocp_compat;
 `_static` / `_s` in ocp.py and brep_checks.py), the collections ocp_compat maps, and attributes
-spelled out on an imported OCP class (`BRepGProp.SurfaceProperties_s`). Run under OCP 7.9
-(tests/brep/test_ocp_names.py, .venv-cad) and OCP 8.0 (tests/brep_build123d, .venv-b123d), so a
-name that one of them lacks fails a test instead of an export."""
+spelled out on an imported OCP class (`BRepGProp.SurfaceProperties_s`). tests/brep (with
+test_ocp_names.py) runs under OCP 7.9 (.venv-cad) and OCP 8.0 (.venv-b123d), so a name that one
+of them lacks fails a test instead of an export, or instead of a test far from the name."""
 
 from __future__ import annotations
 
@@ -15,10 +15,10 @@ from typing import Any, Dict, List
 
 REPO = Path(__file__).resolve().parents[2]
 STATIC_HELPERS = {"static", "_static", "_s"}
-# The modules both OCP versions must load: the exporter and the checks shared by both test folders.
-SHARED = [REPO / "python" / "tessd" / "brep" / "ocp.py",
-          REPO / "tests" / "brep" / "brep_checks.py",
-          REPO / "tests" / "brep" / "tessellation_checks.py"]
+# The modules both OCP versions must load: the exporter, every module of tests/brep (which runs
+# under both) and the OCP benchmark's peer.
+SHARED = ([REPO / "python" / "tessd" / "brep" / "ocp.py", REPO / "bench" / "brep" / "peer_ocp.py"]
+          + sorted((REPO / "tests" / "brep").glob("*.py")))
 
 
 def unresolved(path: Path) -> List[str]:

@@ -1,7 +1,9 @@
 """The B-Rep exporter (python/tessd/brep) on real OCP: every STEP / IGES / .brep file of the shared
-data and cadquery-built parts, checked against the format's rules and against OCP's own
-evaluation of the shapes (brep_checks.py). Runs in the CAD venv (.venv-cad: cadquery 2.8,
-cadquery-ocp 7.9)."""
+data and OCP-built parts (tests/brep/ocp_parts.py), checked against the format's rules and
+against OCP's own evaluation of the shapes (brep_checks.py). Runs under OCP 7.9 (.venv-cad:
+cadquery 2.8) and OCP 8.0 (.venv-b123d: build123d 0.13) alike (scripts/test.sh): nothing here
+needs cadquery or build123d, except `test_cad_library_input`, which exports the shapes of
+whichever of the two the venv has."""
 
 from __future__ import annotations
 
@@ -15,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
-import cadquery as cq
 import locate
 from brep_checks import TIMINGS, Evaluator, check_document, compare_with_ocp, ocp_maps
+from ocp_parts import PARTS, box, cylinder
 
 from tessd.brep import export_shape
 from tessd.brep import ocp as brep_ocp
@@ -26,6 +28,13 @@ REPO = Path(__file__).resolve().parents[2]
 BREP_DIR = locate.shared_data() / "brep"
 FILES = sorted(p.name for p in BREP_DIR.glob("*") if p.suffix.lower() in
                (".step", ".stp", ".iges", ".igs", ".brep", ".brp")) if BREP_DIR.is_dir() else []
+
+
+def exported(shape, **kw):
+    """(the document of `shape`, the shape its face and edge ids number: the input, or the sewn
+    faces where the exporter sewed; see tessd.brep.ocp.prepare)."""
+    prepared = brep_ocp.prepare(shape, sew=kw.pop("sew", None), sew_tolerance=kw.pop("sew_tolerance", None))
+    return brep_ocp.export_prepared(prepared, **kw), prepared.shape
 
 
 def _check(doc, shape, label):
@@ -47,7 +56,7 @@ def test_shared_file(name):
     t0 = time.perf_counter()
     shape = brep_ocp.read_file(path)
     t1 = time.perf_counter()
-    doc = brep_ocp.export_topods(shape, source=name)
+    doc, shape = exported(shape, source=name)
     t2 = time.perf_counter()
     stats = _check(doc, shape, name)
     TIMINGS.append((name, len(doc["faces"]), len(doc["edges"]), 1000 * (t1 - t0), 1000 * (t2 - t1), stats))
@@ -55,105 +64,24 @@ def test_shared_file(name):
 
 
 # ------------------------------------------------------------------------------------------
-# cadquery-built parts
-
-
-def _plate_with_holes():
-    return (cq.Workplane("XY").box(80, 60, 10).faces(">Z").workplane()
-            .rarray(20, 20, 3, 2).hole(6).faces(">Z").workplane().rect(60, 40, forConstruction=True)
-            .vertices().cboreHole(4, 7, 3))
-
-
-def _filleted_box():
-    return cq.Workplane("XY").box(30, 20, 10).edges().fillet(3)
-
-
-def _revolved():
-    # a profile with lines and a spline: planes, cones, cylinders, a surface of revolution
-    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(10, 0).lineTo(12, 5).lineTo(12, 10)
-            .spline([(8, 16), (6, 22)], includeCurrent=True).lineTo(0, 22).close())
-    return prof.revolve(360, (0, 0, 0), (0, 1, 0))
-
-
-def _revolved_torus():
-    return cq.Workplane("XZ").center(20, 0).circle(4).revolve(270, (-20, 0, 0), (-20, 1, 0))
-
-
-def _lofted():
-    return (cq.Workplane("XY").rect(20, 20).workplane(offset=15).circle(8)
-            .workplane(offset=10).ellipse(12, 6).loft(ruled=False))
-
-
-def _island():
-    # the top face has a hole (the ring pocket's outer circle); the island (the boss left in the
-    # pocket) is a face of its own in that hole; the pocket's floor is a ring (a face with a hole)
-    return (cq.Workplane("XY").box(50, 50, 10).faces(">Z").workplane()
-            .circle(15).circle(6).cutBlind(-4))
-
-
-def _mirrored():
-    # mirrored cylinders/cones/spheres: OCP frames turn indirect (left-handed)
-    part = (cq.Workplane("XY").box(30, 20, 10).faces(">Z").workplane().hole(8)
-            .edges("|Z").fillet(2).faces("<Z").edges().chamfer(1))
-    part = part.union(cq.Workplane("XY").sphere(6).translate((0, 0, 8)))
-    return part.mirror("YZ")
-
-
-def _extruded_spline():
-    return (cq.Workplane("XY").spline([(0, 0), (10, 5), (20, -3), (30, 4)]).lineTo(30, 20)
-            .lineTo(0, 20).close().extrude(8))
-
-
-def _moved():
-    # shapes placed by a TopLoc_Location (not baked into the geometry)
-    c = cq.Workplane("XY").cylinder(10, 4).val()
-    return c.moved(cq.Location(cq.Vector(5, -3, 7), cq.Vector(1, 1, 0), 33))
-
-
-def _offset_face():
-    # an offset surface (no format type: goes through BRepBuilderAPI_NurbsConvert)
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
-    from OCP.Geom import Geom_OffsetSurface
-
-    lofted = _lofted().val()
-    bs = [f for f in lofted.Faces() if f.geomType() == "BSPLINE"][0]
-    from OCP.BRep import BRep_Tool
-
-    surf = BRep_Tool.Surface_s(bs.wrapped)
-    u0, u1, v0, v1 = bs._uvBounds()
-    off = Geom_OffsetSurface(surf, 1.5)
-    return BRepBuilderAPI_MakeFace(off, u0, u1, v0, v1, 1e-7).Face()
-
-
-PARTS = {
-    "plate_with_holes": _plate_with_holes,
-    "filleted_box": _filleted_box,
-    "revolved": _revolved,
-    "revolved_torus": _revolved_torus,
-    "lofted": _lofted,
-    "island": _island,
-    "mirrored": _mirrored,
-    "extruded_spline": _extruded_spline,
-    "moved": _moved,
-    "offset_face": _offset_face,
-}
+# OCP-built parts (ocp_parts.PARTS)
 
 
 @pytest.mark.parametrize("name", sorted(PARTS))
-def test_cadquery_part(name):
-    part = PARTS[name]()
-    shape = brep_ocp.to_topods(part)
+def test_built_part(name):
+    shape = PARTS[name]()
     t0 = time.perf_counter()
-    doc = export_shape(part, source=name)
+    doc = export_shape(shape, source=name)
     t1 = time.perf_counter()
+    assert "sewing" not in doc or name == "offset_face", doc.get("sewing")  # closed: not sewn
     stats = _check(doc, shape, name)
-    TIMINGS.append((f"cq:{name}", len(doc["faces"]), len(doc["edges"]), 0.0, 1000 * (t1 - t0), stats))
+    TIMINGS.append((f"ocp:{name}", len(doc["faces"]), len(doc["edges"]), 0.0, 1000 * (t1 - t0), stats))
     types = sorted({f["surface"]["type"] for f in doc["faces"]})
     print(f"{name}: {len(doc['faces'])} faces {types}, export {1000 * (t1 - t0):.0f} ms, {stats}")
 
 
 def test_parts_cover_the_cases():
-    """The cadquery parts reach what they are there for."""
+    """The built parts reach what they are there for."""
     def doc(name):
         return export_shape(PARTS[name](), source=name)
 
@@ -183,16 +111,15 @@ def test_parts_cover_the_cases():
     assert {"plane", "cylinder"} <= filleted, filleted
     assert [f["surface"]["type"] for f in doc("offset_face")["faces"]] == ["bspline"]
     # the mirrored part has indirect OCP frames: exported mirrored, still checked exact above
-    mirrored = PARTS["mirrored"]()
-    shape = brep_ocp.to_topods(mirrored)
-    stats = compare_with_ocp(export_shape(mirrored), shape, Evaluator())
+    shape = PARTS["mirrored"]()
+    stats = compare_with_ocp(export_shape(shape), shape, Evaluator())
     assert stats["mirrored_faces"] > 0
 
 
 def test_seam_and_reversed_faces():
     """A cylinder's lateral face: the seam edge appears twice in the loop, each time with its
     own pcurve (u = 0 and u = 2π); a solid's faces include reversed ones."""
-    doc = export_shape(cq.Workplane("XY").cylinder(10, 4), source="cyl")
+    doc = export_shape(cylinder(4, 10, (0, 0, -5)), source="cyl")
     lateral = [f for f in doc["faces"] if f["surface"]["type"] == "cylinder"]
     assert len(lateral) == 1
     trims = lateral[0]["loops"][0]["edges"]
@@ -203,20 +130,19 @@ def test_seam_and_reversed_faces():
     assert math.isclose(us[1] - us[0], 2 * math.pi, abs_tol=1e-9), us
     edge = [e for e in doc["edges"] if e["id"] == seam[0]][0]
     assert edge["faces"] == [lateral[0]["id"]]
-    box = export_shape(cq.Workplane("XY").box(1, 2, 3))
-    assert any(f["reversed"] for f in box["faces"]) and not all(f["reversed"] for f in box["faces"])
-    shape = brep_ocp.to_topods(cq.Workplane("XY").box(1, 2, 3))
+    shape = box(1, 2, 3)
+    doc = export_shape(shape)
+    assert any(f["reversed"] for f in doc["faces"]) and not all(f["reversed"] for f in doc["faces"])
     fmap, _ = ocp_maps(shape)
     from OCP.TopAbs import TopAbs_REVERSED
 
-    for f in box["faces"]:
+    for f in doc["faces"]:
         assert f["reversed"] == (fmap.FindKey(f["id"]).Orientation() == TopAbs_REVERSED)
 
 
-def test_units_and_workplane_input():
+def test_units_and_compound_input():
     screw = BREP_DIR / "screw.step"
-    if not screw.exists():
-        pytest.skip("no shared data")
+    assert screw.exists(), f"shared data missing: {screw}"
     mm = brep_ocp.export_topods(brep_ocp.read_file(str(screw), units="mm"), units="mm")
     m = brep_ocp.export_topods(brep_ocp.read_file(str(screw), units="m"), units="m")
     assert m["units"] == "m"
@@ -224,18 +150,61 @@ def test_units_and_workplane_input():
         if fa["surface"]["type"] in ("plane", "cylinder"):
             assert all(math.isclose(a, 1000 * b, rel_tol=1e-9, abs_tol=1e-9)
                        for a, b in zip(fa["surface"]["origin"], fb["surface"]["origin"]))
-    # A Workplane with several solids: one compound, every face.
-    wp = cq.Workplane("XY").rarray(10, 1, 3, 1).box(2, 2, 2)
-    assert len(export_shape(wp)["faces"]) == 18
+    # A compound of three separate boxes: every face, and (closed solids) not sewn.
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    comp, b = TopoDS_Compound(), BRep_Builder()
+    b.MakeCompound(comp)
+    for x in (-10, 0, 10):
+        b.Add(comp, box(2, 2, 2).Moved(_translation(x, 0, 0)))
+    doc = export_shape(comp)
+    assert len(doc["faces"]) == 18 and "sewing" not in doc
     with pytest.raises(ValueError):
-        export_shape(wp, units="furlong")
+        export_shape(comp, units="furlong")
+    with pytest.raises(ValueError):
+        export_shape(comp, sew=True, sew_tolerance=-1.0)
+
+
+def _translation(x, y, z):
+    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.TopLoc import TopLoc_Location
+
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(x, y, z))
+    return TopLoc_Location(t)
+
+
+def test_cad_library_input():
+    """The shapes of the CAD library this venv has, as users pass them: cadquery's `Workplane`
+    (several solids: one compound) and `Shape` under OCP 7.9 (.venv-cad), build123d's `Part`
+    and `Compound` under OCP 8.0 (.venv-b123d). One of the two must be there."""
+    try:
+        import cadquery as cq
+    except ImportError:
+        cq = None
+    if cq is not None:
+        wp = cq.Workplane("XY").rarray(10, 1, 3, 1).box(2, 2, 2)
+        assert len(export_shape(wp)["faces"]) == 18
+        solid = cq.Workplane("XY").box(40, 30, 10).faces(">Z").workplane().hole(10).val()
+        doc = export_shape(solid, source="cq")
+        _check(doc, solid.wrapped, "cq")
+        assert len(doc["faces"]) == 7
+        return
+    import build123d as bd  # the build123d venv (no cadquery there)
+
+    part = bd.Box(40, 30, 10) - bd.Cylinder(radius=5, height=10)
+    doc = export_shape(part, source="b123d")
+    _check(doc, part.wrapped, "b123d")
+    assert len(doc["faces"]) == 7
+    boxes = bd.Compound([bd.Pos(x, 0, 0) * bd.Box(2, 2, 2) for x in (-10, 0, 10)])
+    assert len(export_shape(boxes)["faces"]) == 18
 
 
 @pytest.mark.parametrize("name", ["screw.step", "hammer.iges", "bottle.brep"])
 def test_cli_writes_valid_json(tmp_path, name):
     path = BREP_DIR / name
-    if not path.exists():
-        pytest.skip("no shared data")
+    assert path.exists(), f"shared data missing: {path}"
     out = tmp_path / "out.json"
     env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
     r = subprocess.run([sys.executable, "-m", "tessd.brep", "export", str(path), str(out)],
@@ -245,6 +214,8 @@ def test_cli_writes_valid_json(tmp_path, name):
     assert doc["format"] == "tessd-brep" and doc["version"] == 1 and doc["source"] == name
     shape = brep_ocp.read_file(str(path))
     assert len(doc["faces"]) == ocp_maps(shape)[0].Extent()
+    # the summary line says what sewing did (hammer.iges: unsewn IGES surfaces, sewn)
+    assert ("sewn at" in r.stderr) == (name == "hammer.iges"), r.stderr
     # `-`: the JSON alone on standard output (OCCT's reader chatter goes to standard error)
     r = subprocess.run([sys.executable, "-m", "tessd.brep", "export", str(path), "-"],
                        env=env, capture_output=True, text=True, timeout=300)

@@ -1,4 +1,4 @@
-"""Exporter and daemon together: every shared STEP / IGES / .brep part and the cadquery parts,
+"""Exporter and daemon together: every shared STEP / IGES / .brep part and the OCP-built parts,
 exported by python/tessd/brep on real OCP, are accepted by the daemon's `brep.load` (the Rust
 validator of core/brep, an independent reader of the same format), with its table-1 counts
 equal to what was sent; a broken document is refused naming the element."""
@@ -15,7 +15,8 @@ from tessd import TessdError
 from tessd.brep import export_shape
 from tessd.brep import ocp as brep_ocp
 
-from test_brep_export import BREP_DIR, FILES, PARTS
+from ocp_parts import PARTS
+from test_brep_export import BREP_DIR, FILES
 
 
 def load(daemon, doc):
@@ -42,7 +43,7 @@ def test_shared_parts_load(daemon, name):
 
 
 @pytest.mark.parametrize("name", sorted(PARTS))
-def test_cadquery_parts_load(daemon, name):
+def test_built_parts_load(daemon, name):
     doc = export_shape(PARTS[name](), source=name)
     check_counts(load(daemon, doc), doc)
 

@@ -1,13 +1,13 @@
 """The CPU trim classifier (core/trim through the daemon's `trim.classify`) against OpenCASCADE's:
-for every face of every shared part and of the cadquery parts, 100 000 random (u, v) points in the
+for every face of every shared part and of the OCP-built parts (ocp_parts.PARTS), 100 000 random (u, v) points in the
 face's bounds are classified on / off by both. OCP's answer comes from `IntTools_FClass2d` (its
 polygon of the pcurves); where the two disagree, OCP's exact `BRepClass_FaceClassifier` (on the
 pcurves themselves) gives its final answer, and every remaining disagreement must lie within the
 ε band: its (u, v) distance to the face's exact trim curves (the pcurves, sampled densely) at
 most ε_uv, the parameter tolerance that ε = 0.01 mm gives on that face (paper 000, section 3.1).
 
-Runs in the CAD venv; OCP's classification is spread over a process pool (it costs ~20 µs a
-point from Python)."""
+Runs under OCP 7.9 (.venv-cad) and 8.0 (.venv-b123d); OCP's classification is spread over a
+process pool (it costs ~20 µs a point from Python)."""
 
 from __future__ import annotations
 
@@ -31,10 +31,13 @@ from OCP.gp import gp_Pnt2d
 from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_IN, TopAbs_ON, TopAbs_OUT
 from OCP.TopExp import TopExp_Explorer
-from OCP.TopTools import TopTools_IndexedMapOfShape
-from OCP.TopoDS import TopoDS_Shape
 
-from test_brep_export import BREP_DIR, FILES, PARTS
+from ocp_parts import PARTS
+from tessd.brep.ocp_compat import TopTools_IndexedMapOfShape
+from tessd.brep.ocp_compat import static
+from test_brep_export import BREP_DIR, FILES
+
+_write_brep = static(BRepTools, "Write")
 
 EPS = 0.01  # ε, mm (the documents' units)
 POINTS = 100_000
@@ -88,8 +91,9 @@ _SHAPES = {}
 
 
 def _shape(path):
+    """The shape the document of `path` numbers (sewn where the exporter sews)."""
     if path not in _SHAPES:
-        _SHAPES[path] = brep_ocp.read_file(path)
+        _SHAPES[path] = brep_ocp.prepare(brep_ocp.read_file(path)).shape
     return _SHAPES[path]
 
 
@@ -187,11 +191,9 @@ def test_shared_part_classification(daemon, pool, name):
 
 
 @pytest.mark.parametrize("name", sorted(PARTS))
-def test_cadquery_part_classification(daemon, pool, name, tmp_path):
-    part = PARTS[name]()
-    shape = part if isinstance(part, TopoDS_Shape) else getattr(part, "wrapped", None) or part.val().wrapped
+def test_built_part_classification(daemon, pool, name, tmp_path):
     path = str(tmp_path / f"{name}.brep")
-    assert BRepTools.Write_s(shape, path)
+    assert _write_brep(PARTS[name](), path)
     doc = export_shape(brep_ocp.read_file(path), source=name)
     check_part(daemon, pool, doc, path, name)
 
@@ -201,7 +203,7 @@ def test_a_coarse_structure_breaks_the_band(daemon, pool, name, tmp_path):
     """The comparison can fail: trims approximated at ε = 2 mm disagree with OCP outside the
     0.01 mm band."""
     path = str(tmp_path / f"{name}.brep")
-    assert BRepTools.Write_s(PARTS[name]().val().wrapped, path)
+    assert _write_brep(PARTS[name](), path)
     doc = export_shape(brep_ocp.read_file(path), source=name)
     check_part(daemon, pool, doc, path, f"{name} at ε = 2 mm", eps=2.0, expect_failures=True)
 

@@ -1,5 +1,6 @@
-"""Every OCP name the exporter and the shared checks use exists in this venv's OCP (7.9, cadquery;
-tests/brep_build123d asks OCP 8.0 the same), as spelled or through tessd.brep.ocp_compat."""
+"""Every OCP name the exporter, the tests of tests/brep and the OCP benchmark peer use exists in
+this venv's OCP (7.9 in .venv-cad, 8.0 in .venv-b123d: scripts/test.sh runs tests/brep in both),
+as spelled or through tessd.brep.ocp_compat."""
 
 from __future__ import annotations
 

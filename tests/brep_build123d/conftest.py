@@ -1,7 +1,8 @@
 """tests/brep_build123d runs in the build123d venv (.venv-b123d: build123d 0.13 on OCP 8.0,
 python/requirements-build123d.txt; scripts/test.sh). The root conftest puts python/ and tests/
 on sys.path and provides the `daemon` fixture; this one adds tests/brep, whose OCP checks
-(brep_checks.py, tessellation_checks.py, ocp_names.py) load under OCP 7.9 and 8.0 alike."""
+(brep_checks.py, tessellation_checks.py) load under OCP 7.9 and 8.0 alike (tests/brep itself
+runs in this venv too: scripts/test.sh)."""
 
 from __future__ import annotations
 

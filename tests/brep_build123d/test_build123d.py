@@ -2,8 +2,9 @@
 here are exported with `tessd.brep.export_shape`, checked against the format and against OCP's
 own evaluation (tests/brep/brep_checks.py), and tessellated by the real daemon: the mesh must be
 watertight and every face's mesh area within 0.5 % of OCP's `BRepGProp` area of that face. The
-CLI (`python -m tessd.brep export`) reads build123d's STEP; every shared STEP / IGES / .brep part
-exports and checks as it does under OCP 7.9 (tests/brep). Runs in .venv-b123d."""
+CLI (`python -m tessd.brep export`) reads build123d's STEP. Runs in .venv-b123d; the whole of
+tests/brep (the shared parts, the OCP-built parts and file fixtures, the names check) runs
+there too (scripts/test.sh), so it is not repeated here."""
 
 from __future__ import annotations
 
@@ -32,18 +33,12 @@ from build123d import (
     revolve,
 )
 
-import locate
 import tessd
 from brep_checks import Evaluator, check_document, compare_with_ocp, ocp_maps, shape_size
-from ocp_names import SHARED, unresolved
 from tessellation_checks import edge_uses, face_area, mesh_group_areas
 from tessd.brep import export_shape
-from tessd.brep import ocp as brep_ocp
 
 REPO = Path(__file__).resolve().parents[2]
-BREP_DIR = locate.shared_data() / "brep"
-SHARED_FILES = sorted(p.name for p in BREP_DIR.glob("*") if p.suffix.lower() in
-                      (".step", ".stp", ".iges", ".igs", ".brep", ".brp")) if BREP_DIR.is_dir() else []
 
 # The chordal tolerance, relative to the part's size (its bounding box diagonal).
 TOLERANCE = 1e-3
@@ -147,20 +142,3 @@ def test_cli_exports_build123d_step(daemon, tmp_path):
     _tessellate(daemon.socket, doc, shape)
 
 
-@pytest.mark.parametrize("name", SHARED_FILES)
-def test_shared_file_on_ocp8(name):
-    """Every shared part exports under OCP 8.0 and checks as under 7.9 (tests/brep)."""
-    shape = brep_ocp.read_file(str(BREP_DIR / name))
-    doc = brep_ocp.export_topods(shape, source=name)
-    _check_export(doc, shape)
-
-
-@pytest.mark.parametrize("path", SHARED, ids=lambda p: p.name)
-def test_ocp8_names_resolve(path):
-    """Every OCP name of the exporter and the shared checks exists in OCP 8.0, as spelled or
-    through tessd.brep.ocp_compat (tests/brep/test_ocp_names.py asks OCP 7.9)."""
-    assert unresolved(path) == []
-
-
-def test_the_shared_parts_are_there():
-    assert len(SHARED_FILES) >= 10, f"shared B-Rep data missing in {BREP_DIR}: {SHARED_FILES}"

@@ -251,7 +251,26 @@ def check_against_freecad(doc: Dict[str, Any], shape: Any, ev: Optional[Evaluato
             assert e["curve"] is None, f"edge {e['id']}: a curve for a degenerate edge"
         else:
             assert e["curve"] is not None, f"edge {e['id']}: no curve"
+        _check_tolerances(doc, e, edge, ev, size)
     return stats
+
+
+def _check_tolerances(doc: Dict[str, Any], e: Dict[str, Any], edge: Any, ev: Evaluator, size: float) -> None:
+    """The edge's `tolerance` and `vertex_tolerances` are FreeCAD's (in millimetres: a document
+    in other units has them scaled, and `shape` may be a scaled copy, whose OCCT tolerances are
+    clamped at 1e-7, so only the geometry is checked there): the vertex at each end of the range
+    lies within its tolerance of the document's curve there."""
+    where = f"edge {e['id']}"
+    v = [edge.firstVertex(False), edge.lastVertex(False)]
+    tol, vt = e["tolerance"], e["vertex_tolerances"]
+    assert tol >= 0 and len(vt) == 2 and min(vt) >= 0, f"{where}: {tol}, {vt}"
+    if doc["units"] == "mm":
+        assert tol == edge.Tolerance and vt == [x.Tolerance for x in v], f"{where}: {tol}, {vt}"
+    if e["curve"] is not None:
+        for k in range(2):
+            d = dist(ev.curve(e["curve"], e["range"][k]), vec(v[k].Point))
+            assert d <= vt[k] + 1e-9 * size, \
+                f"{where}: the vertex of range[{k}] is {d:.3g} from the curve's end (tolerance {vt[k]:.3g})"
 
 
 def _try_surface(face: Any) -> Any:

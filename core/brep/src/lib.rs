@@ -25,6 +25,7 @@ pub mod curve;
 pub mod model;
 pub mod stats;
 pub mod surface;
+pub mod transform;
 pub mod validate;
 pub mod vector;
 

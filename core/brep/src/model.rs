@@ -129,6 +129,17 @@ pub struct Edge {
     /// The ids of the faces the edge bounds.
     #[serde(default)]
     pub faces: Vec<u64>,
+    /// The edge's tolerance (OCP `BRep_Tool::Tolerance(edge)`: how far its pcurves on their
+    /// surfaces may stray from the 3D curve), world units, ≥ 0; `None` when not written.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+    /// The tolerances of the edge's vertices at `range[0]` and at `range[1]` (OCP
+    /// `BRep_Tool::Tolerance(vertex)`: the radius of the ball every edge end meeting there lies
+    /// in), world units, ≥ 0; `None` when not written. Tessellation merges edge ends within
+    /// them (capped, see `tessd-tessellate`'s `edges` module), closing the small holes real
+    /// files leave where edges meet.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex_tolerances: Option<[f64; 2]>,
 }
 
 /// A right-handed orthonormal frame (OCP's `gp_Ax3` with a direct orientation is written with

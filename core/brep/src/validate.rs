@@ -171,6 +171,16 @@ pub enum ValidationError {
         /// The value.
         value: f64,
     },
+    /// An edge's `tolerance` or one of its `vertex_tolerances` below 0.
+    #[error("{at}: {field} is {value}; a tolerance must be ≥ 0")]
+    NegativeTolerance {
+        /// The edge.
+        at: Place,
+        /// `tolerance`, `vertex_tolerances[0]` or `vertex_tolerances[1]`.
+        field: &'static str,
+        /// The value.
+        value: f64,
+    },
     /// A cone's reference radius below 0.
     #[error("{at}: radius is {value}; a cone's radius must be ≥ 0")]
     ConeRadius {
@@ -383,6 +393,7 @@ pub fn validate(doc: &Document) -> Vec<ValidationError> {
         {
             c.range(curve, edge.range, &at);
         }
+        c.tolerances(edge, &at);
         for &face in &edge.faces {
             if !face_index.contains_key(&face) {
                 c.push(ValidationError::UnknownFace {
@@ -450,6 +461,27 @@ impl Checker {
 
     fn frame(&mut self, f: &Frame, at: &Place) -> bool {
         self.finite(&f.origin, at, "origin") & self.axes(&f.x_dir, &f.y_dir, at)
+    }
+
+    /// An edge's optional `tolerance` and `vertex_tolerances`: finite and ≥ 0 (their
+    /// length, 2, is the type's).
+    fn tolerances(&mut self, edge: &crate::model::Edge, at: &Place) {
+        let vt = edge.vertex_tolerances;
+        let fields = [
+            ("tolerance", edge.tolerance),
+            ("vertex_tolerances[0]", vt.map(|v| v[0])),
+            ("vertex_tolerances[1]", vt.map(|v| v[1])),
+        ];
+        for (field, value) in fields {
+            let Some(value) = value else { continue };
+            if self.finite(&[value, 0.0], at, field) {
+                self.check(value < 0.0, || ValidationError::NegativeTolerance {
+                    at: at.clone(),
+                    field,
+                    value,
+                });
+            }
+        }
     }
 
     fn positive(&mut self, value: f64, at: &Place, field: &'static str) -> bool {

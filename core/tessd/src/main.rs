@@ -205,6 +205,12 @@ enum Command {
         /// The largest angle, radians, between neighbouring facets' normals (default 0.5).
         #[arg(long)]
         angle: Option<f64>,
+        /// What the f32 positions are relative to: `auto` (default: a rounded centre of the
+        /// part, only when f32 would not hold the tolerance at the part's coordinates), `none`,
+        /// or `X,Y,Z`. A .usda gets it as the prim's xformOp:translate; OBJ, PLY and OFF are
+        /// written absolute in f64.
+        #[arg(long)]
+        origin: Option<String>,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -433,6 +439,7 @@ fn run(cli: Cli) -> Result<()> {
             output,
             tolerance,
             angle,
+            origin,
             json,
         } => {
             let params = serde_json::json!({
@@ -440,6 +447,7 @@ fn run(cli: Cli) -> Result<()> {
                 "output": output,
                 "tolerance": tolerance,
                 "angle": angle,
+                "origin": origin.as_deref().map(origin_param),
             });
             report_or_json(run_local("tessellate", params)?, json, |r| {
                 let r = &r.result;
@@ -460,9 +468,22 @@ fn run(cli: Cli) -> Result<()> {
                     output.display(),
                     r["time_ms"].as_f64().unwrap_or(0.0)
                 );
+                for w in r["warnings"].as_array().into_iter().flatten() {
+                    eprintln!("warning: {}", w.as_str().unwrap_or_default());
+                }
             })
         }
         Command::Demo { out } => tessd::demo::run(&out),
+    }
+}
+
+/// `--origin` as the op's parameter: `auto` and `none` as they are, `X,Y,Z` as a list of
+/// three numbers (anything else is passed on as text for the op to refuse, naming it).
+fn origin_param(s: &str) -> serde_json::Value {
+    let parts: Vec<Option<f64>> = s.split(',').map(|p| p.trim().parse().ok()).collect();
+    match parts.as_slice() {
+        [Some(x), Some(y), Some(z)] => serde_json::json!([x, y, z]),
+        _ => serde_json::Value::from(s),
     }
 }
 

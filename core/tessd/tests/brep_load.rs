@@ -1,6 +1,8 @@
 //! `brep.load` through the registry the daemon and job files share: a fixture document from a
 //! file and inline (with arrays by reference), bad documents and bad requests.
 
+mod support;
+
 use serde_json::{Map, Value, json};
 use std::path::{Path, PathBuf};
 use tessd_ipc::arrays::{Arrays, OwnedArray};
@@ -19,19 +21,7 @@ fn fixture(name: &str) -> Value {
 }
 
 fn call(params: Value, arrays: &[OwnedArray]) -> Result<Value, OpError> {
-    let Value::Object(params) = params else {
-        panic!("params must be an object")
-    };
-    let request = Request {
-        params,
-        arrays: Arrays::from_owned(arrays),
-        base_dir: None,
-    };
-    let sink = |_| {};
-    let ctx = JobContext::new(&sink, CancelToken::default());
-    tessd::ops::registry()
-        .run("brep.load", request, &ctx)
-        .map(|r| r.result)
+    support::run_op("brep.load", params, arrays)
 }
 
 #[test]

@@ -132,66 +132,136 @@ fn refine(
     }
 }
 
-/// Groups nearby points (within `radius`) into topological vertices.
+/// Groups nearby points into topological vertices. Each point may carry a file tolerance
+/// `f` (its vertex's, capped: [`file_radius`]); two points are one vertex when their distance
+/// is within max(`base`, f₁ + f₂): OCP's vertex tolerance is a ball about the vertex point
+/// that every edge end meeting there lies in, so two ends of one vertex may be up to twice it
+/// apart (the vertex point itself is not in the format). Points without file tolerances merge
+/// within `base`, as they always did. A vertex keeps the first point that made it and the
+/// largest file tolerance of the points merged into it.
 #[derive(Default)]
 pub struct VertexSnap {
-    reps: Vec<[f64; 3]>,
-    radius: f64,
+    reps: Vec<([f64; 3], f64)>,
+    base: f64,
+    cell: f64,
     cells: HashMap<[i64; 3], Vec<usize>>,
 }
 
+/// How [`VertexSnap::snap_within`] placed a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Snapped {
+    /// Not finite, or the first point of a new vertex.
+    New,
+    /// Onto an existing vertex, this far away.
+    Merged(f64),
+}
+
 impl VertexSnap {
-    /// An empty set of vertices merging points within `radius`.
+    /// An empty set of vertices merging points within `radius` (no file tolerances).
     pub fn new(radius: f64) -> VertexSnap {
+        VertexSnap::with_file_tolerances(radius, 0.0)
+    }
+
+    /// An empty set of vertices merging points within `base`, or within the sum of their file
+    /// tolerances, none above `largest` (the grid's cells are as large as the largest merge
+    /// distance, 2 × `largest`; file tolerances passed to [`VertexSnap::snap_within`] are
+    /// capped at `largest`).
+    pub fn with_file_tolerances(base: f64, largest: f64) -> VertexSnap {
+        let base = base.max(f64::MIN_POSITIVE);
+        let largest = largest.max(0.0);
         VertexSnap {
             reps: Vec::new(),
-            radius: radius.max(f64::MIN_POSITIVE),
+            base,
+            cell: base.max(2.0 * largest),
             cells: HashMap::new(),
         }
     }
 
-    fn cell(&self, p: [f64; 3]) -> [i64; 3] {
-        p.map(|c| (c / self.radius).floor() as i64)
+    /// The largest merge distance (the cell size).
+    pub fn radius(&self) -> f64 {
+        self.cell
     }
 
-    /// The representative of the vertex within `radius` of `p`, if there is one.
-    pub fn find(&self, p: [f64; 3]) -> Option<[f64; 3]> {
-        let c = self.cell(p);
-        let mut best: Option<(f64, [f64; 3])> = None;
+    fn cell_of(&self, p: [f64; 3]) -> [i64; 3] {
+        p.map(|c| (c / self.cell).floor() as i64)
+    }
+
+    /// The index of the nearest vertex within max(`base`, its file tolerance + `f`) of `p`,
+    /// and the distance.
+    fn nearest(&self, p: [f64; 3], f: f64) -> Option<(usize, f64)> {
+        let c = self.cell_of(p);
+        let mut best: Option<(usize, f64)> = None;
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
                     let key = [c[0] + dx, c[1] + dy, c[2] + dz];
                     for &i in self.cells.get(&key).into_iter().flatten() {
-                        let d = self.reps[i].sub(p).norm();
-                        if d <= self.radius && best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((d, self.reps[i]));
+                        let (q, g) = self.reps[i];
+                        let d = q.sub(p).norm();
+                        if d <= self.base.max(g + f) && best.is_none_or(|(_, bd)| d < bd) {
+                            best = Some((i, d));
                         }
                     }
                 }
             }
         }
-        best.map(|(_, q)| q)
+        best
     }
 
-    /// `p` snapped onto an existing vertex, or made a new one.
+    /// The representative of the vertex `p` (without a file tolerance of its own) merges
+    /// onto, if there is one.
+    pub fn find(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+        self.find_within(p, 0.0)
+    }
+
+    /// [`VertexSnap::find`] for a point with the file tolerance `f`.
+    pub fn find_within(&self, p: [f64; 3], f: f64) -> Option<[f64; 3]> {
+        let f = f.clamp(0.0, 0.5 * self.cell);
+        self.nearest(p, f).map(|(i, _)| self.reps[i].0)
+    }
+
+    /// `p` (without a file tolerance) snapped onto an existing vertex, or made a new one.
     pub fn snap(&mut self, p: [f64; 3]) -> [f64; 3] {
+        self.snap_within(p, 0.0).0
+    }
+
+    /// `p`, with the file tolerance `f`, snapped onto the nearest vertex it merges with, or
+    /// made a new vertex; and how.
+    pub fn snap_within(&mut self, p: [f64; 3], f: f64) -> ([f64; 3], Snapped) {
         if !p.is_finite() {
-            return p;
+            return (p, Snapped::New);
         }
-        if let Some(q) = self.find(p) {
-            return q;
+        let f = f.clamp(0.0, 0.5 * self.cell);
+        if let Some((i, d)) = self.nearest(p, f) {
+            let (q, g) = self.reps[i];
+            self.reps[i].1 = g.max(f);
+            return (q, Snapped::Merged(d));
         }
-        let key = self.cell(p);
+        let key = self.cell_of(p);
         self.cells.entry(key).or_default().push(self.reps.len());
-        self.reps.push(p);
-        p
+        self.reps.push((p, f));
+        (p, Snapped::New)
     }
 }
 
 /// The radius within which edge end points are one vertex: a small fraction of the tolerance.
 pub fn snap_radius(options: &Options) -> f64 {
     0.05 * options.tolerance
+}
+
+/// How many chordal tolerances a file's vertex tolerance may count for at most when merging
+/// edge ends. Real files' vertex tolerances (1e-3 to 1e-2 mm) are below it at any tolerance
+/// a part is tessellated to; a hostile or broken one (1e9) can then merge only features
+/// smaller than 2 × 10 tolerances, which the mesh cannot show anyway, never a whole part.
+pub const VERTEX_TOLERANCE_CAP: f64 = 10.0;
+
+/// The file tolerance an edge end counts with: its vertex's `vertex` tolerance, capped at
+/// [`VERTEX_TOLERANCE_CAP`] × the tolerance; 0 without one (or a non-finite one).
+pub fn file_radius(vertex: Option<f64>, options: &Options) -> f64 {
+    match vertex {
+        Some(t) if t.is_finite() && t > 0.0 => t.min(VERTEX_TOLERANCE_CAP * options.tolerance),
+        _ => 0.0,
+    }
 }
 
 /// The surface point of a trim's curve at `t`.
@@ -222,32 +292,100 @@ pub fn split_edge(table: &mut EdgeTable, id: u64, curve: &Curve3, ta: f64, tb: f
     true
 }
 
+/// What merging the edges' end points did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MergeStats {
+    /// Edge ends merged onto a vertex farther than [`snap_radius`]: only the file's vertex
+    /// tolerances merged them.
+    pub by_file_tolerance: usize,
+    /// The largest distance such an end moved.
+    pub largest_distance: f64,
+}
+
 /// Discretises every edge of `doc` once.
 pub fn discretise(doc: &Document, options: &Options) -> EdgeTable {
+    discretise_with_stats(doc, options).0
+}
+
+/// [`discretise`], with what merging the end points through file tolerances did.
+pub fn discretise_with_stats(doc: &Document, options: &Options) -> (EdgeTable, MergeStats) {
     let mut table = EdgeTable::new();
+    let mut stats = MergeStats::default();
     let Some(edges) = &doc.edges else {
-        return table;
+        return (table, stats);
     };
-    let mut snap = VertexSnap::new(snap_radius(options));
+    let base = snap_radius(options);
+    // First every edge's samples and its ends' file tolerances, so that the grid's cells can
+    // be as large as the largest merge distance.
+    struct Sampled {
+        id: u64,
+        params: Vec<f64>,
+        points: Vec<[f64; 3]>,
+        length: f64,
+        radii: [f64; 2],
+    }
+    let mut sampled = Vec::new();
     for edge in edges {
         let Some(curve) = &edge.curve else { continue };
         let [t0, t1] = edge.range;
         let f = |t: f64| curve.point(t);
         let min = min_segments(curve, t0, t1).max(2);
         let params = sample_chordal(&f, t0, t1, min, options.tolerance, options.angle);
-        let mut points: Vec<[f64; 3]> = params.iter().map(|&t| curve.point(t)).collect();
-        let last = points.len() - 1;
+        let points: Vec<[f64; 3]> = params.iter().map(|&t| curve.point(t)).collect();
         let length: f64 = points.windows(2).map(|w| w[1].sub(w[0]).norm()).sum();
-        if length < 2.0 * snap.radius {
+        let vt = edge.vertex_tolerances;
+        let radii = [0, 1].map(|k| file_radius(vt.map(|v| v[k]), options));
+        sampled.push(Sampled {
+            id: edge.id,
+            params,
+            points,
+            length,
+            radii,
+        });
+    }
+    let largest = sampled.iter().flat_map(|s| s.radii).fold(0.0, f64::max);
+    let mut snap = VertexSnap::with_file_tolerances(base, largest);
+    let mut count = |how: Snapped| {
+        // Beyond the chordal radius only a file tolerance can have merged it.
+        if let Snapped::Merged(d) = how
+            && d > base
+        {
+            stats.by_file_tolerance += 1;
+            stats.largest_distance = stats.largest_distance.max(d);
+        }
+    };
+    for Sampled {
+        id,
+        params,
+        mut points,
+        length,
+        radii,
+    } in sampled
+    {
+        let last = points.len() - 1;
+        if length < 2.0 * base {
             // Shorter than the snapping: both ends would become one vertex and the middle
             // samples a needle out and back (a fold three triangles share; Pump_Nut's
             // 0.002 mm edge 18 at 0.1 mm). The edge is that vertex, as a degenerate one is.
-            table.insert(edge.id, EdgeSamples::Point(snap.snap(points[0])));
+            let (q, how) = snap.snap_within(points[0], radii[0]);
+            count(how);
+            table.insert(id, EdgeSamples::Point(q));
             continue;
         }
-        points[0] = snap.snap(points[0]);
-        points[last] = snap.snap(points[last]);
-        table.insert(edge.id, EdgeSamples::Curve { params, points });
+        let open = points[0].sub(points[last]).norm() > base;
+        let (a, how_a) = snap.snap_within(points[0], radii[0]);
+        let (b, how_b) = snap.snap_within(points[last], radii[1]);
+        count(how_a);
+        count(how_b);
+        if open && a == b && length < radii[0] + radii[1] {
+            // An open edge no longer than the distance its vertex tolerances merge, both ends
+            // on one vertex: the same needle, for the same reason, so the edge is that vertex.
+            table.insert(id, EdgeSamples::Point(a));
+            continue;
+        }
+        points[0] = a;
+        points[last] = b;
+        table.insert(id, EdgeSamples::Curve { params, points });
     }
     // Degenerate edges: the vertex their trims' surface points collapse onto.
     for edge in edges.iter().filter(|e| e.curve.is_none()) {
@@ -259,9 +397,10 @@ pub fn discretise(doc: &Document, options: &Options) -> EdgeTable {
                 .map(|t| trim_point(face, &t.curve, t.range[0]))
         });
         if let Some(p) = start {
-            let q = snap.find(p).unwrap_or(p);
+            let f = file_radius(edge.vertex_tolerances.map(|v| v[0]), options);
+            let q = snap.find_within(p, f).unwrap_or(p);
             table.insert(edge.id, EdgeSamples::Point(q));
         }
     }
-    table
+    (table, stats)
 }

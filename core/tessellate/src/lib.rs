@@ -6,8 +6,9 @@
 //! [`boundary`] (each face's loops as (u, v) polylines reusing those samples), [`crossings`]
 //! (polylines that cross in (u, v) split, on the shared edge), [`interior`]
 //! (a curvature-driven grid of interior points), [`cdt`] (constrained Delaunay triangulation,
-//! trimming and refinement). [`tessellate`] runs them, in parallel over faces, into one
-//! [`Mesh`] with a face group per B-Rep face, named `face<id>`.
+//! trimming and refinement), [`origin`] (what the f32 positions are relative to).
+//! [`tessellate`] runs them, in parallel over faces, into one [`Mesh`] with a face group per
+//! B-Rep face, named `face<id>`.
 //!
 //! ```
 //! let doc = tessd_brep::Document::from_json(r#"{
@@ -27,6 +28,9 @@ pub mod cdt;
 pub mod crossings;
 pub mod edges;
 pub mod interior;
+pub mod origin;
+
+pub use origin::{Origin, Placement};
 
 use std::time::Instant;
 use tessd_brep::{Document, ValidationError};
@@ -41,6 +45,8 @@ pub struct Options {
     /// an edge chord and the curve at its ends (so neighbouring chords turn by up to twice
     /// this), and between a triangle's normal and the surface's at its centroid.
     pub angle: f64,
+    /// What the mesh's f32 positions are relative to (default [`Origin::Auto`]).
+    pub origin: Origin,
 }
 
 impl Options {
@@ -52,6 +58,7 @@ impl Options {
         Options {
             tolerance,
             angle: Options::DEFAULT_ANGLE,
+            origin: Origin::Auto,
         }
     }
 }
@@ -93,6 +100,11 @@ pub struct Stats {
     pub refined_points: usize,
     /// What splitting crossing boundary polylines did.
     pub crossings: crossings::CrossingStats,
+    /// Edge ends merged onto a vertex only because of the file's vertex tolerances (farther
+    /// than the chordal merge radius, [`edges::snap_radius`]).
+    pub merged_by_file_tolerance: usize,
+    /// The largest distance such a merge moved an edge end (0 without one).
+    pub largest_file_tolerance_merge: f64,
     /// Wall time, milliseconds.
     pub time_ms: f64,
 }
@@ -100,8 +112,16 @@ pub struct Stats {
 /// A tessellation: the mesh and its stats.
 #[derive(Clone, Debug)]
 pub struct Tessellation {
-    /// Triangles, a face group per B-Rep face (in document order), named `face<id>`.
+    /// Triangles, a face group per B-Rep face (in document order), named `face<id>`; the
+    /// positions relative to `placement.origin` (f32).
     pub mesh: Mesh,
+    /// The absolute f64 position of each mesh vertex (parallel to `mesh.positions`): what
+    /// the f32 positions round, before the origin is taken off.
+    pub points: Vec<[f64; 3]>,
+    /// The origin of the f32 positions and their precision.
+    pub placement: Placement,
+    /// What a host should know about the f32 positions ([`Placement::warnings`]).
+    pub warnings: Vec<String>,
     /// The (u, v) of each mesh vertex on its face's surface (parallel to `mesh.positions`).
     pub uvs: Vec<[f64; 2]>,
     /// Counts and timings.
@@ -153,7 +173,7 @@ pub fn tessellate_with_progress(
     }
     doc.validate().map_err(TessellateError::Invalid)?;
     let start = Instant::now();
-    let mut edges = edges::discretise(doc, options);
+    let (mut edges, merges) = edges::discretise_with_stats(doc, options);
     let (loops, crossing_stats) = crossings::face_loops_uncrossed(doc, &mut edges, options);
     let done = std::sync::atomic::AtomicUsize::new(0);
     let total = doc.faces.len();
@@ -168,20 +188,33 @@ pub fn tessellate_with_progress(
         t
     });
 
+    let points: Vec<[f64; 3]> = faces
+        .iter()
+        .flat_map(|t| t.points.iter().copied())
+        .collect();
+    let placement = origin::place(&points, options.tolerance, options.origin);
+    let o = placement.origin;
     let mut mesh = Mesh::default();
     let mut uvs = Vec::new();
     let mut stats = Stats {
         faces: total,
         edges: edges.len(),
         crossings: crossing_stats,
+        merged_by_file_tolerance: merges.by_file_tolerance,
+        largest_file_tolerance_merge: merges.largest_distance,
         ..Stats::default()
     };
     for (g, (face, t)) in doc.faces.iter().zip(&faces).enumerate() {
         mesh.group_names.push(format!("face{}", face.id));
         stats.refined_points += t.refined;
         let base = mesh.positions.len() as u32;
-        mesh.positions
-            .extend(t.points.iter().map(|p| p.map(|c| c as f32)));
+        // Relative to the origin in f64, then rounded: with the origin [0, 0, 0] exactly the
+        // absolute positions rounded, as they always were.
+        mesh.positions.extend(
+            t.points
+                .iter()
+                .map(|p| [0, 1, 2].map(|k| (p[k] - o[k]) as f32)),
+        );
         uvs.extend_from_slice(&t.uvs);
         let mut count = 0;
         for tri in &t.triangles {
@@ -206,5 +239,13 @@ pub fn tessellate_with_progress(
     stats.triangles = mesh.face_count();
     stats.vertices = mesh.vertex_count();
     stats.time_ms = start.elapsed().as_secs_f64() * 1e3;
-    Ok(Tessellation { mesh, uvs, stats })
+    let warnings = placement.warnings(options.tolerance, doc.units.name());
+    Ok(Tessellation {
+        mesh,
+        points,
+        placement,
+        warnings,
+        uvs,
+        stats,
+    })
 }

@@ -1,7 +1,8 @@
 //! The trim structure of paper 000 (Claux et al., "Une structure de découpe efficace pour
 //! l'affichage de grands modèles B-Rep"), one step per module:
 //!
-//! - [`tolerance`]: the world ε turned into a (u, v) tolerance (section 3.1);
+//! - [`tolerance`]: the world ε turned into a (u, v) tolerance (section 3.1), the surface's
+//!   stretch sampled on a grid and in every knot span;
 //! - [`quadratic_fit`], [`knot_removal`], [`approximate`]: trim curves sampled, fitted by a
 //!   uniform quadratic B-spline, thinned by knot removal to the tolerance and split into
 //!   connected quadratic Béziers, flat ones made lines (section 3.1), using [`bezier`];
@@ -94,7 +95,8 @@ pub struct TrimStats {
     pub bytes: usize,
     /// The level k_i of section 6.
     pub k_i: Option<u32>,
-    /// The largest measured (u, v) distance between a trim and its approximation.
+    /// The largest measured (u, v) distance between a trim and its approximation; above
+    /// ε_uv it is a warning ([`TrimStructure::warnings`]).
     pub max_fit_error_uv: f64,
     /// Wall time of the build.
     pub build_time: Duration,
@@ -192,6 +194,27 @@ impl TrimStructure {
             packed,
             stats,
         })
+    }
+
+    /// What the caller should know about this structure, as sentences naming the face; empty
+    /// when all is well. Today one kind: the measured fit error
+    /// ([`TrimStats::max_fit_error_uv`]) above ε_uv, which section 3.1 of paper 000 asks the
+    /// approximation to meet. That happens where the fitter cannot follow a trim within its
+    /// sample budget ([`approximate::MAX_SAMPLES`]: a curve that turns faster than the
+    /// samples are spaced, an extreme rational weight); the structure is still built and used,
+    /// never refused, and a point nearer to the trims than the error may be classified wrong.
+    pub fn warnings(&self) -> Vec<String> {
+        let (fit, eps) = (self.stats.max_fit_error_uv, self.tolerance.eps_uv);
+        let mut out = Vec::new();
+        if fit > eps {
+            out.push(format!(
+                "face {}: the trim fit error {fit:.1e} exceeds ε_uv {eps:.1e} ({:.1}×); \
+                 classification near its boundary may be off by that much",
+                self.face,
+                fit / eps
+            ));
+        }
+        out
     }
 
     /// Whether (u, v) is on the face (exact classification, no footprint).

@@ -376,7 +376,7 @@ pub fn follow_end_tangents(spline: &mut QuadSpline, start: P2, end: P2) {
 pub const CORRECTION_ROUNDS: usize = 3;
 
 /// Parameter correction (Hoschek's "intrinsic parametrisation", as in Lyche–Mørken's data
-/// reduction [LM87] that section 3.1 follows): one Newton step per sample towards the foot of
+/// reduction \[LM87\] that section 3.1 follows): one Newton step per sample towards the foot of
 /// its perpendicular on `spline`, kept only where it brings the spline point closer, with
 /// the ends fixed and the order of the samples kept. The fit's error at the corrected
 /// parameters is then (nearly) the samples' distance to the curve instead of to the point of

@@ -226,6 +226,11 @@ pub struct MeshPrim<'a> {
     /// is the **transpose** of Blender's `Object.matrix_world` (pass
     /// `matrix_world.transposed()`). Every entry must be finite.
     pub transform: Option<[[f64; 4]; 4]>,
+    /// Optional translation, authored as `double3 xformOp:translate` on the Mesh prim, after
+    /// `xformOp:transform` in `xformOpOrder` (so the points are translated first): the origin
+    /// the mesh's f32 points are relative to, in f64, so readers compute exact absolute
+    /// positions for parts far from their model's origin. Every coordinate must be finite.
+    pub translate: Option<[f64; 3]>,
     /// Animated points: frame `k` (0-based) is authored at time code `k + 1` as
     /// `points.timeSamples` (and `extent.timeSamples`); each frame has one point per vertex of
     /// `mesh`. The stage then gets `startTimeCode = 1` and `endTimeCode` = the frame count.
@@ -239,6 +244,7 @@ impl<'a> MeshPrim<'a> {
             mesh,
             options: MeshPrimOptions::default(),
             transform: None,
+            translate: None,
             point_samples: None,
         }
     }
@@ -252,6 +258,12 @@ impl<'a> MeshPrim<'a> {
     /// Sets [`MeshPrim::transform`].
     pub fn with_transform(mut self, transform: [[f64; 4]; 4]) -> Self {
         self.transform = Some(transform);
+        self
+    }
+
+    /// Sets [`MeshPrim::translate`].
+    pub fn with_translate(mut self, translate: [f64; 3]) -> Self {
+        self.translate = Some(translate);
         self
     }
 

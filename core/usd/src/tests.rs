@@ -580,3 +580,35 @@ fn animated_points_are_time_samples() {
         assert!(v.is_empty());
     }
 }
+
+#[test]
+fn translate_is_a_double3_op_after_the_transform() {
+    let a = quad();
+    let origin = [20030.000000001, -0.5, 1e-7];
+    let prims = [MeshPrim::new(&a).with_translate(origin)];
+    let mut v = Vec::new();
+    write_stage(&mut v, &StageOptions::default(), &prims).unwrap();
+    let s = String::from_utf8(v).unwrap();
+    assert!(
+        s.contains(
+            "        double3 xformOp:translate = (20030.000000001, -0.5, 1e-7)\n        uniform \
+             token[] xformOpOrder = [\"xformOp:translate\"]\n"
+        ),
+        "{s}"
+    );
+    let mut t = [[0.0; 4]; 4];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = 2.0;
+    }
+    let prims = [MeshPrim::new(&a).with_transform(t).with_translate(origin)];
+    let mut v = Vec::new();
+    write_stage(&mut v, &StageOptions::default(), &prims).unwrap();
+    let s = String::from_utf8(v).unwrap();
+    assert!(
+        s.contains("xformOpOrder = [\"xformOp:transform\", \"xformOp:translate\"]\n"),
+        "{s}"
+    );
+    let bad = [MeshPrim::new(&a).with_translate([0.0, f64::NAN, 0.0])];
+    let e = write_stage(&mut Vec::new(), &StageOptions::default(), &bad).unwrap_err();
+    assert!(e.to_string().contains("translate"), "{e}");
+}

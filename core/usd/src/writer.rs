@@ -173,6 +173,12 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                         p.options.name
                     )));
                 }
+                if p.translate.iter().flatten().any(|v| !v.is_finite()) {
+                    return Err(UsdError::InvalidOption(format!(
+                        "mesh prim \"{}\": the translate has a non-finite entry",
+                        p.options.name
+                    )));
+                }
                 for (k, f) in p.point_samples.iter().flat_map(|s| s.iter()).enumerate() {
                     if f.len() != p.mesh.positions.len() {
                         return Err(UsdError::InvalidOption(format!(
@@ -256,6 +262,7 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                 let name = names.claim(&p.options.name, "mesh");
                 let extras = PrimExtras {
                     transform: p.transform.as_ref(),
+                    translate: p.translate.as_ref(),
                     visibility: None,
                     point_samples: p.point_samples,
                 };
@@ -290,6 +297,7 @@ fn write_root(w: &mut dyn Write, stage: &StageOptions, body: Body<'_>) -> Result
                 out.push("\n");
                 let extras = PrimExtras {
                     transform: None,
+                    translate: None,
                     point_samples: None,
                     visibility: Some(if i == lod.default_index {
                         "inherited"
@@ -400,6 +408,8 @@ fn check_prim(mesh: &Mesh, options: &MeshPrimOptions, label: &str) -> Result<(),
 struct PrimExtras<'a> {
     /// `xformOp:transform`.
     transform: Option<&'a [[f64; 4]; 4]>,
+    /// `xformOp:translate`, after the transform.
+    translate: Option<&'a [f64; 3]>,
     /// The `visibility` token (`"inherited"` / `"invisible"`), when authored.
     visibility: Option<&'static str>,
     /// Animated points (see [`MeshPrim::point_samples`]).
@@ -585,8 +595,28 @@ fn write_mesh(
             out.push(")");
         }
         out.push(" )\n");
+    }
+    if let Some(t) = extras.translate {
+        out.push_fmt(format_args!("{pad1}double3 xformOp:translate = ("));
+        for (k, v) in t.iter().enumerate() {
+            if k > 0 {
+                out.push(", ");
+            }
+            out.push_f64(*v);
+        }
+        out.push(")\n");
+    }
+    let ops: Vec<&str> = [
+        extras.transform.map(|_| "\"xformOp:transform\""),
+        extras.translate.map(|_| "\"xformOp:translate\""),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if !ops.is_empty() {
         out.push_fmt(format_args!(
-            "{pad1}uniform token[] xformOpOrder = [\"xformOp:transform\"]\n"
+            "{pad1}uniform token[] xformOpOrder = [{}]\n",
+            ops.join(", ")
         ));
     }
     if !mesh.face_groups.is_empty() {

@@ -5,8 +5,9 @@
     doc = export_shape(freecad_part_shape)  # inside FreeCAD (or its Python modules)
     json.dump(doc, f)
 
-or from the command line: `python -m tessd.brep export PART.step OUT.json [--units mm]`
-(STEP, IGES, OpenCASCADE .brep). OCP shapes need OCP: 7.9 (cadquery 2.8, the CAD venv
+or from the command line: `python -m tessd.brep export PART.step OUT.json [--units mm]
+[--sew | --no-sew] [--sew-tolerance X]` (STEP, IGES, OpenCASCADE .brep; unsewn IGES surfaces
+and open STEP shells are sewn by default). OCP shapes need OCP: 7.9 (cadquery 2.8, the CAD venv
 `.venv-cad`) or 8.0 (build123d 0.13, `.venv-b123d`; ocp_compat.py resolves what 8.0 renamed).
 FreeCAD shapes go through FreeCAD's own Part API (freecad.py); either is imported only when
 something is exported, so `import tessd.brep` works without them.
@@ -30,14 +31,23 @@ def _is_freecad(shape: Any) -> bool:
     return from_part(shape) or ("Part" in sys.modules and from_part(getattr(shape, "Shape", None)))
 
 
-def export_shape(shape: Any, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
+def export_shape(shape: Any, units: str = "mm", source: Optional[str] = None,
+                 sew: Optional[bool] = None, sew_tolerance: Optional[float] = None) -> Dict[str, Any]:
     """The format's document (a JSON-ready dict) for `shape`: an OCP `TopoDS_Shape`, a cadquery
     or build123d shape (anything with a `.wrapped` `TopoDS_Shape`), a cadquery `Workplane`, or
     a FreeCAD `Part.Shape` (or document object; FreeCAD's millimetres are scaled to `units`).
-    Every face of the shape is exported (solids, open shells, loose faces alike)."""
+    Every face of the shape is exported (solids, open shells, loose faces alike).
+
+    `sew` / `sew_tolerance` (OCP shapes): unsewn faces are sewn (`BRepBuilderAPI_Sewing`) by
+    default when the shape has free edges, never when it is closed; True / False force it (see
+    tessd.brep.ocp.prepare). FreeCAD shapes are exported as they are (sew them with Part's
+    `sewShape` first): `sew=True` is refused for them."""
     if _is_freecad(shape):
         from . import freecad
 
+        if sew:
+            raise ValueError("sewing is done through OCP; sew a FreeCAD shape with "
+                             "Part.Shape.sewShape(tolerance) before exporting it")
         return freecad.export_shape(shape, units=units, source=source)
     try:
         from . import ocp
@@ -45,17 +55,21 @@ def export_shape(shape: Any, units: str = "mm", source: Optional[str] = None) ->
         raise TypeError(f"not a FreeCAD Part.Shape ({type(shape).__name__}), and OCP, needed for "
                         f"OCP / cadquery / build123d shapes, is not importable: {e}") from e
 
-    return ocp.export_topods(ocp.to_topods(shape), units=units, source=source)
+    return ocp.export_topods(ocp.to_topods(shape), units=units, source=source, sew=sew,
+                             sew_tolerance=sew_tolerance)
 
 
-def export_file(path: str, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
-    """The document for a STEP / IGES / .brep file (read through OCP, in `units`)."""
+def export_file(path: str, units: str = "mm", source: Optional[str] = None,
+                sew: Optional[bool] = None, sew_tolerance: Optional[float] = None) -> Dict[str, Any]:
+    """The document for a STEP / IGES / .brep file (read through OCP, in `units`; an unsewn
+    IGES surface model or open STEP shell is sewn unless `sew=False`, as in `export_shape`)."""
     import os
 
     from . import ocp
 
     shape = ocp.read_file(path, units=units)
-    return ocp.export_topods(shape, units=units, source=os.path.basename(path) if source is None else source)
+    return ocp.export_topods(shape, units=units, source=os.path.basename(path) if source is None else source,
+                             sew=sew, sew_tolerance=sew_tolerance)
 
 
 __all__ = ["FORMAT", "VERSION", "export_shape", "export_file"]

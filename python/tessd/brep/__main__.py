@@ -1,7 +1,15 @@
-"""`python -m tessd.brep export PART OUT.json [--units mm] [--source TEXT]`
+"""`python -m tessd.brep export PART OUT.json [--units mm] [--source TEXT] [--sew | --no-sew]
+[--sew-tolerance X]`
 
 Reads PART (.step/.stp, .iges/.igs, .brep/.brp) through OCP and writes the `tessd-brep` v1 JSON
-(docs/brep-format.md) to OUT.json (`-`: standard output). A summary goes to standard error."""
+(docs/brep-format.md) to OUT.json (`-`: standard output). A summary goes to standard error, with
+what sewing did.
+
+Sewing: IGES surface models (and STEP faces or open shells) come unsewn, each face with its own
+boundary edges, which a tessellation would then discretise per face (cracks). By default a part
+with free edges is sewn (`BRepBuilderAPI_Sewing`) and a closed one is not; `--sew` / `--no-sew`
+force it; `--sew-tolerance` sets the tolerance (in `--units`; default: the part's largest edge
+or vertex tolerance, within 1e-6 and 1e-3 of its bounding-box diagonal)."""
 
 from __future__ import annotations
 
@@ -22,6 +30,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     ex.add_argument("--units", default="mm", choices=["mm", "cm", "m", "in"],
                     help="length unit of the output (STEP/IGES are converted to it; default mm)")
     ex.add_argument("--source", default=None, help="the document's `source` (default: PART's name)")
+    sewing = ex.add_mutually_exclusive_group()
+    sewing.add_argument("--sew", dest="sew", action="store_const", const=True, default=None,
+                        help="sew the faces (default: when the part has free edges, e.g. IGES surfaces)")
+    sewing.add_argument("--no-sew", dest="sew", action="store_const", const=False,
+                        help="export the faces as they are, unsewn")
+    ex.add_argument("--sew-tolerance", type=_positive, default=None, metavar="X",
+                    help="sewing tolerance in --units (default: the part's largest edge / vertex "
+                         "tolerance, within 1e-6 and 1e-3 of its bounding-box diagonal)")
     args = ap.parse_args(argv)
 
     from . import ocp
@@ -41,7 +57,8 @@ def main(argv: Optional[List[str]] = None) -> int:
             os.close(saved)
         t1 = time.perf_counter()
         doc = ocp.export_topods(shape, units=args.units,
-                                source=args.source if args.source is not None else os.path.basename(args.part))
+                                source=args.source if args.source is not None else os.path.basename(args.part),
+                                sew=args.sew, sew_tolerance=args.sew_tolerance)
     except (OSError, ocp.ExportError) as e:
         print(f"tessd.brep: {e}", file=sys.stderr)
         return 1
@@ -54,10 +71,32 @@ def main(argv: Optional[List[str]] = None) -> int:
         with open(tmp, "w", encoding="utf-8") as f:
             f.write(text)
         os.replace(tmp, args.out)
-    print(f"tessd.brep: {args.part}: {len(doc['faces'])} faces, {len(doc['edges'])} edges "
-          f"(read {1000 * (t1 - t0):.0f} ms, export {1000 * (t2 - t1):.0f} ms) -> {args.out}",
-          file=sys.stderr)
+    print(f"tessd.brep: {args.part}: {len(doc['faces'])} faces, {len(doc['edges'])} edges, "
+          f"{sewing_summary(doc, args.sew)} (read {1000 * (t1 - t0):.0f} ms, export "
+          f"{1000 * (t2 - t1):.0f} ms) -> {args.out}", file=sys.stderr)
     return 0
+
+
+def sewing_summary(doc: dict, asked: Optional[bool]) -> str:
+    """What sewing did, for the summary line."""
+    s = doc.get("sewing")
+    if s is None:
+        return "not sewn (--no-sew)" if asked is False else "not sewn (no free edges)"
+    if s["sewn_edges"] == 0:
+        return (f"sewing at {s['tolerance']:.3g} joined nothing ({s['free_edges_before']} free edges "
+                f"kept)")
+    return (f"sewn at {s['tolerance']:.3g}: {s['sewn_edges']} edges joined, free edges "
+            f"{s['free_edges_before']} -> {s['free_edges_after']}")
+
+
+def _positive(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (x > 0 and x != float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive length, not {text!r}")
+    return x
 
 
 if __name__ == "__main__":

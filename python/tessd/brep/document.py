@@ -32,19 +32,30 @@ def check_units(units: str) -> None:
 
 
 def new_document(units: str, source: Optional[str], faces: List[Dict[str, Any]],
-                 edges: List[Dict[str, Any]]) -> Dict[str, Any]:
-    """The document around its faces and edges (the fields in the format's order)."""
+                 edges: List[Dict[str, Any]], sewing: Optional[Dict[str, Any]] = None) -> Dict[str, Any]:
+    """The document around its faces and edges (the fields in the format's order); `sewing`:
+    the exporter's report of what sewing did, when it sewed (an optional top-level field)."""
     doc: Dict[str, Any] = {"format": FORMAT, "version": VERSION, "units": units}
     if source is not None:
         doc["source"] = source
+    if sewing is not None:
+        doc["sewing"] = sewing
     doc["faces"] = faces
     doc["edges"] = edges
     return doc
 
 
 def edge_json(eid: int, curve: Optional[Dict[str, Any]], first: float, last: float,
-              faces: List[int]) -> Dict[str, Any]:
-    return {"id": eid, "curve": curve, "range": [first, last], "faces": faces}
+              faces: List[int], tolerance: Optional[float] = None,
+              vertex_tolerances: Optional[Sequence[float]] = None) -> Dict[str, Any]:
+    """An EDGE; `tolerance` (the kernel's edge tolerance) and `vertex_tolerances` (its vertices'
+    at range[0] and range[1]) are written when known, in the document's units."""
+    e: Dict[str, Any] = {"id": eid, "curve": curve, "range": [first, last], "faces": faces}
+    if tolerance is not None:
+        e["tolerance"] = float(tolerance)
+    if vertex_tolerances is not None:
+        e["vertex_tolerances"] = [float(t) for t in vertex_tolerances]
+    return e
 
 
 def note_edge_face(edge_faces: Dict[int, List[int]], eid: Optional[int], fid: int) -> None:

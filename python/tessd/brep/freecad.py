@@ -19,7 +19,13 @@ How FreeCAD's Part API maps onto ocp.py's walk:
   iso circle's axis (its gp_Ax2's) is against the surface's axis has an indirect (left-handed)
   gp_Ax3 and is mirrored as in ocp.py ((X, -Y), u → 2π - u);
 - a surface without a format type (offset, ...) goes through `face.toNurbs()`
-  (BRepBuilderAPI_NurbsConvert); its edges are matched with the original ones in explorer order.
+  (BRepBuilderAPI_NurbsConvert); its edges are matched with the original ones in explorer order
+  (the edges keep their original 3D curves, as in ocp.py);
+- edges carry `tolerance` (`edge.Tolerance`) and `vertex_tolerances` (`firstVertex(False)` /
+  `lastVertex(False)`: the vertices at range[0] and range[1]), scaled to `units`.
+
+Sewing is ocp.py's (`tessd.brep.export_shape` refuses `sew=True` for FreeCAD shapes): a FreeCAD
+shape is exported as it is (`Part.Shape.sewShape` sews one in FreeCAD).
 """
 
 from __future__ import annotations
@@ -391,7 +397,7 @@ def _export_face(face: Any, fid: int, ids: _EdgeIds, edge_faces: Dict[int, List[
     return face_json(fid, reversed_, mirror, surf, wire_trims, (u0, u1, v0, v1), where)
 
 
-def _export_edge(edge: Any, eid: int, faces: List[int]) -> Dict[str, Any]:
+def _export_edge(edge: Any, eid: int, faces: List[int], tolerances: Tuple[float, Optional[List[float]]]) -> Dict[str, Any]:
     first, last = edge.ParameterRange
     curve = None
     if not edge.Degenerated:
@@ -402,7 +408,20 @@ def _export_edge(edge: Any, eid: int, faces: List[int]) -> Dict[str, Any]:
         if c is not None:
             c, first, last = _curve_on_range(c, first, last)
             curve = _curve_json(c)
-    return edge_json(eid, curve, first, last, faces)
+    return edge_json(eid, curve, first, last, faces, tolerance=tolerances[0],
+                     vertex_tolerances=tolerances[1])
+
+
+def _tolerances(edge: Any, scale: float) -> Tuple[float, Optional[List[float]]]:
+    """(the edge's tolerance, [its vertices' at range[0], range[1]]) × `scale`, as ocp.py
+    writes them: `firstVertex(False)` is TopExp::FirstVertex without the edge's orientation,
+    the vertex at the curve's first parameter."""
+    try:
+        v0, v1 = edge.firstVertex(False), edge.lastVertex(False)
+        vertices: Optional[List[float]] = [v0.Tolerance * scale, v1.Tolerance * scale]
+    except Exception:  # an edge without vertices (infinite)
+        vertices = None
+    return edge.Tolerance * scale, vertices
 
 
 # --------------------------------------------------------------------------------------------
@@ -429,17 +448,32 @@ def export_shape(shape: Any, units: str = "mm", source: Optional[str] = None) ->
     shape = to_shape(shape)
     if shape.isNull():
         raise ExportError("empty shape (a null Part.Shape)")
+    scale = _SCALE[units]
+    # Tolerances are taken on the unscaled shape and scaled here: OCCT keeps every tolerance of
+    # a scaled copy at 1e-7 or more, so the copy's are not the scaled ones. The same walk over
+    # both shapes meets the same edges in the same order.
+    tolerance_edges = _edge_ids(shape).edges
     if units != "mm":
-        shape = shape.scaled(_SCALE[units])
+        shape = shape.scaled(scale)
     shape_faces = shape.Faces
-    ids = _EdgeIds()
-    for f in shape_faces:
-        for e in f.Edges:
-            ids.add(e)
+    ids = _edge_ids(shape)
+    if len(ids.edges) != len(tolerance_edges):
+        raise ExportError(f"scaling to {units} changed the shape's edges "
+                          f"({len(tolerance_edges)} → {len(ids.edges)})")
     edge_faces: Dict[int, List[int]] = {}
     faces = [_export_face(f, fid, ids, edge_faces) for fid, f in enumerate(shape_faces, start=1)]
-    edges = [_export_edge(e, eid, edge_faces.get(eid, [])) for eid, e in enumerate(ids.edges, start=1)]
+    edges = [_export_edge(e, eid, edge_faces.get(eid, []), _tolerances(t, scale))
+             for eid, (e, t) in enumerate(zip(ids.edges, tolerance_edges), start=1)]
     return new_document(units, source, faces, edges)
+
+
+def _edge_ids(shape: Any) -> _EdgeIds:
+    """The shape's edges numbered as ocp.py numbers them (each face's edges in face order)."""
+    ids = _EdgeIds()
+    for f in shape.Faces:
+        for e in f.Edges:
+            ids.add(e)
+    return ids
 
 
 def read_file(path: str) -> Any:

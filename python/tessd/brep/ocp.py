@@ -22,6 +22,34 @@ How the OCP model maps onto the format:
   with the same parameter), its loops are re-reversed and `reversed` flips (the mirrored
   parametrisation has the opposite ∂S/∂u × ∂S/∂v). S(2π - u, v) is then OCP's S(u, v) exactly.
 
+Faces converted to NURBS keep the edge ids and 3D curves of the original shape: the trims of a
+converted face are the converted face's own (NurbsConvert re-computes every pcurve for the new
+surface, on the converted edge's parameter), and each trim names the original edge it came from
+(`ModifiedShape`). The converted face's edges' 3D curves are not exported: an edge shared with an
+unconverted neighbour must keep one 3D curve in `edges`, and the original one is exact (a line or
+a circle stays one), whereas NurbsConvert's B-spline copy of it is in another parameter (a
+circle's rational B-spline does not run at constant speed). So a converted face's trim and its
+edge may not be "same parameter" (the trim's t is the converted edge's, the edge's range the
+original's): the reader must not assume they are, and decides it by sampling (docs/brep-format.md,
+Edge). The neighbours' trims and the edge stay same parameter as OCP made them.
+
+Edges carry OCP's tolerances (`BRep_Tool::Tolerance`, in the shape's units, which are the
+document's): `tolerance` the edge's, `vertex_tolerances` its vertices' at `range[0]` and
+`range[1]` (`TopExp::FirstVertex / LastVertex` of the edge without its orientation: the FORWARD
+vertex sits at the curve's first parameter, which is `range[0]`). A reader merges what lies
+within them (edges' ends at a vertex: real files' curves miss their vertices by up to these).
+
+Sewing (`prepare`): IGES surface models, and STEP files written as loose faces or open shells,
+arrive unsewn: every face has its own copy of each boundary edge, so every face boundary would be
+discretised per face and crack. `export_topods(shape, sew=None)` sews
+(`BRepBuilderAPI_Sewing`) when the shape has free edges (an edge bounding one face only, seams and
+degenerate edges aside), not when it is closed; `sew=True / False` forces it. Face ids stay the
+input's (each sewn face is matched to its original with `ModifiedSubShape`), so `face 17` is still the
+file's 17th face; edge ids are the sewn shape's. When sewing joins nothing (an open shell that is
+simply open, a single face) the input is exported as it is. The document's `sewing` object says
+what was done (`tolerance`, `free_edges_before`, `free_edges_after`, `sewn_edges`, `faces`); see
+`default_sew_tolerance` for the tolerance.
+
 What needs no OCP (the loops' assembly from the trims, bounds, gap bridges, the document) is in
 document.py, shared with freecad.py (FreeCAD's Part API: the same walk, the same document).
 """
@@ -30,11 +58,13 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, NamedTuple, Optional, Sequence, Tuple
 
+from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
-from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+from OCP.BRepBndLib import BRepBndLib
+from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert, BRepBuilderAPI_Sewing
 from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
 from OCP.Geom import (
     Geom_BezierCurve,
@@ -75,6 +105,7 @@ from OCP.TopAbs import (
     TopAbs_FORWARD,
     TopAbs_INTERNAL,
     TopAbs_REVERSED,
+    TopAbs_VERTEX,
     TopAbs_WIRE,
 )
 from OCP.TopExp import TopExp, TopExp_Explorer
@@ -115,6 +146,11 @@ _curve_of = _static(BRep_Tool, "Curve")
 _pcurve_of = _static(BRep_Tool, "CurveOnSurface")
 _range_of = _static(BRep_Tool, "Range")
 _degenerated = _static(BRep_Tool, "Degenerated")
+_tolerance = _static(BRep_Tool, "Tolerance")
+_first_vertex = _static(TopExp, "FirstVertex")
+_last_vertex = _static(TopExp, "LastVertex")
+_vertex = _static(TopoDS, "Vertex")
+_add_to_box = _static(BRepBndLib, "Add")
 _uv_bounds = _static(BRepTools, "UVBounds")
 _outer_wire = _static(BRepTools, "OuterWire")
 _curve2d_to_bspline = _static(Geom2dConvert, "CurveToBSplineCurve")
@@ -374,11 +410,31 @@ def _trim(edge: Any, face: Any, mirror: bool, edge_id: Optional[int], where: str
 # the walk
 
 
-def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
-    """A `tessd-brep` v1 document (a dict ready for `json.dump`) from a `TopoDS_Shape`."""
+def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None,
+                  sew: Optional[bool] = None, sew_tolerance: Optional[float] = None) -> Dict[str, Any]:
+    """A `tessd-brep` v1 document (a dict ready for `json.dump`) from a `TopoDS_Shape`.
+
+    `sew`: None (the default) sews a shape with free edges (unsewn IGES / STEP faces, open
+    shells) and leaves a closed one alone; True / False force it. `sew_tolerance`: the sewing
+    tolerance in the shape's units (default `default_sew_tolerance`). See `prepare`."""
     check_units(units)
     if shape is None or shape.IsNull():
         raise ExportError("empty shape")
+    return export_prepared(prepare(shape, sew=sew, sew_tolerance=sew_tolerance), units, source)
+
+
+class Prepared(NamedTuple):
+    """The shape whose faces and edges the document numbers (the input, or the sewn faces in
+    the input's face order, as a compound) and the `sewing` report (None when not sewn)."""
+
+    shape: Any
+    sewing: Optional[Dict[str, Any]]
+
+
+def export_prepared(prepared: Prepared, units: str = "mm", source: Optional[str] = None) -> Dict[str, Any]:
+    """The document of a `prepare`d shape (its `sewing` report included)."""
+    check_units(units)
+    shape = prepared.shape
     face_map = TopTools_IndexedMapOfShape()
     _map_shapes(shape, TopAbs_FACE, face_map)
     edge_map = TopTools_IndexedMapOfShape()
@@ -394,7 +450,7 @@ def export_topods(shape: Any, units: str = "mm", source: Optional[str] = None) -
     for eid in range(1, edge_map.Extent() + 1):
         edges.append(_export_edge(_edge(edge_map.FindKey(eid)), eid, edge_faces.get(eid, [])))
 
-    return new_document(units, source, faces, edges)
+    return new_document(units, source, faces, edges, sewing=prepared.sewing)
 
 
 def document_face(face: Any) -> Tuple[Any, Optional[Dict[str, Any]], bool, Any]:
@@ -463,7 +519,139 @@ def _export_edge(edge: Any, eid: int, faces: List[int]) -> Dict[str, Any]:
         if c is not None:
             c, first, last = _curve_on_range(c, first, last, 3)
             curve = _curve_json(c, 3)
-    return edge_json(eid, curve, first, last, faces)
+    return edge_json(eid, curve, first, last, faces, tolerance=_tolerance(edge),
+                     vertex_tolerances=_vertex_tolerances(edge))
+
+
+def _vertex_tolerances(edge: Any) -> Optional[List[float]]:
+    """[t0, t1]: the tolerances of the edge's vertices at the start and the end of its range.
+    `TopExp::FirstVertex(edge, CumOri = false)` is the vertex oriented FORWARD in the edge,
+    which OCCT puts at the curve's first parameter whatever the edge's own orientation; the
+    range is always written first < last (ranges are never reversed by `_curve_on_range`).
+    None for an edge without both vertices (an infinite one)."""
+    v0, v1 = _first_vertex(edge, False), _last_vertex(edge, False)
+    if v0.IsNull() or v1.IsNull():
+        return None
+    return [_tolerance(v0), _tolerance(v1)]
+
+
+# --------------------------------------------------------------------------------------------
+# sewing
+
+# The default sewing tolerance's floor and cap, as fractions of the bounding-box diagonal.
+SEW_FLOOR = 1e-6
+SEW_CAP = 1e-3
+
+
+def _faces(shape: Any) -> List[Any]:
+    m = TopTools_IndexedMapOfShape()
+    _map_shapes(shape, TopAbs_FACE, m)
+    return [_face(m.FindKey(i)) for i in range(1, m.Extent() + 1)]
+
+
+def free_edges(faces: Sequence[Any]) -> List[Any]:
+    """The free edges of a set of faces: boundary edges (FORWARD / REVERSED in their wire) that
+    bound one face only, once (a seam of a periodic face bounds it twice: not free), that are
+    not degenerate (a sphere's pole bounds one face and is no gap)."""
+    index = TopTools_IndexedMapOfShape()
+    uses: Dict[int, List[int]] = {}
+    for fi, f in enumerate(faces):
+        exp = TopExp_Explorer(f, TopAbs_EDGE)
+        while exp.More():
+            e = exp.Current()
+            if e.Orientation() in (TopAbs_FORWARD, TopAbs_REVERSED):
+                uses.setdefault(index.Add(e), []).append(fi)
+            exp.Next()
+    return [_edge(index.FindKey(i)) for i, fs in uses.items()
+            if len(fs) == 1 and not _degenerated(_edge(index.FindKey(i)))]
+
+
+def _diagonal(shape: Any) -> float:
+    box = Bnd_Box()
+    _add_to_box(shape, box)
+    if box.IsVoid():
+        return 0.0
+    return box.CornerMin().Distance(box.CornerMax())
+
+
+def _largest_tolerance(shape: Any) -> float:
+    tol = 0.0
+    for kind, cast in ((TopAbs_EDGE, _edge), (TopAbs_VERTEX, _vertex)):
+        exp = TopExp_Explorer(shape, kind)
+        while exp.More():
+            tol = max(tol, _tolerance(cast(exp.Current())))
+            exp.Next()
+    return tol
+
+
+def default_sew_tolerance(shape: Any) -> float:
+    """The sewing tolerance used when none is given: the largest edge or vertex tolerance of the
+    shape, at least SEW_FLOOR (1e-6) × its bounding-box diagonal, at most SEW_CAP (1e-3) × it.
+
+    Why: sewing joins two free edges that lie within the tolerance of each other. The gaps
+    between neighbouring faces of unsewn data are the sending system's precision, which the
+    reader records in the tolerances (IGES's resolution, what ShapeFix had to allow for): the
+    largest of them is the widest gap the data itself admits (hammer.iges: 0.37, where 1e-6 ×
+    its 41 m diagonal leaves edges unsewn). The floor covers data whose recorded tolerances are
+    OCCT's 1e-7 while its coordinates, large, only meet to their last digits; the cap keeps one
+    bad tolerance from sewing across features (any two free edges closer than the tolerance are
+    joined: a slot 0.5 mm wide would close at 0.5)."""
+    diagonal = _diagonal(shape)
+    tol = max(_largest_tolerance(shape), SEW_FLOOR * diagonal)
+    if diagonal > 0:
+        tol = min(tol, SEW_CAP * diagonal)
+    if not tol > 0:
+        raise ExportError("cannot choose a sewing tolerance for a shape without extent: give one")
+    return tol
+
+
+def prepare(shape: Any, sew: Optional[bool] = None, sew_tolerance: Optional[float] = None) -> Prepared:
+    """The shape to export and its sewing report. `sew` None: sewn when it has free edges
+    (IGES surface models, loose STEP faces, open shells), not when closed; True / False: as
+    asked. A sewn shape is exported as the compound of its faces in the input's face order (face
+    ids stay the input's); when sewing joins nothing, the input itself."""
+    if sew_tolerance is not None and not (isinstance(sew_tolerance, (int, float))
+                                          and math.isfinite(sew_tolerance) and sew_tolerance > 0):
+        raise ValueError(f"sew_tolerance must be a positive length, not {sew_tolerance!r}")
+    faces = _faces(shape)
+    before = len(free_edges(faces))
+    if sew is None:
+        sew = before > 0
+    if not sew or not faces:
+        return Prepared(shape, None)
+    tol = sew_tolerance if sew_tolerance is not None else default_sew_tolerance(shape)
+    sewing = BRepBuilderAPI_Sewing(tol)
+    sewing.Add(shape)
+    sewing.Perform()
+    sewn = sewing.SewedShape()
+    report = {"tolerance": tol, "free_edges_before": before, "free_edges_after": before,
+              "sewn_edges": 0, "faces": len(faces)}
+    if sewn is None or sewn.IsNull():
+        return Prepared(shape, report)
+    sewn_map = TopTools_IndexedMapOfShape()
+    _map_shapes(sewn, TopAbs_FACE, sewn_map)
+    comp = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(comp)
+    out = []
+    for f in faces:
+        i = 0
+        # (`ModifiedSubShape`: the sewn version of a sub-shape of what was added; `Modified`
+        # only answers for the added shapes themselves.)
+        for candidate in (sewing.ModifiedSubShape(f), sewing.Modified(f), f):
+            if candidate is not None and not candidate.IsNull():
+                i = sewn_map.FindIndex(candidate)
+                if i:
+                    break
+        # A face sewing dropped (degenerate) stays as it was, unsewn.
+        g = _face(sewn_map.FindKey(i)) if i else f
+        out.append(g)
+        builder.Add(comp, g)
+    after = len(free_edges(out))
+    if after >= before:
+        return Prepared(shape, report)  # nothing joined: the input as it is
+    report.update(free_edges_after=after, sewn_edges=sewing.NbContigousEdges(), faces=len(out))
+    return Prepared(comp, report)
 
 
 # --------------------------------------------------------------------------------------------
@@ -498,7 +686,7 @@ _XSTEP_UNITS = {"mm": "MM", "cm": "CM", "m": "M", "in": "INCH"}
 def read_file(path: str, units: str = "mm") -> Any:
     """A `TopoDS_Shape` from a STEP (.step/.stp), IGES (.iges/.igs) or OpenCASCADE (.brep/.brp)
     file. STEP and IGES are converted to `units`; a .brep file has no unit (taken as `units`).
-    IGES surface models stay unsewn (a compound of faces)."""
+    IGES surface models stay unsewn here (a compound of faces): `export_topods` sews them."""
     ext = os.path.splitext(path)[1].lower()
     if not os.path.isfile(path):
         raise FileNotFoundError(path)

@@ -206,7 +206,7 @@ pub fn write_path(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
     let format = Format::from_path(path)?;
     let name = path.display().to_string();
     mesh.validate()?;
-    write_atomic(path, |w| write_named(mesh, w, format, &name))
+    write_atomic(path, |w| write_named(mesh, w, format, &name, None))
 }
 
 /// Writes a mesh in `format` to any writer (buffered internally and flushed at the end).
@@ -215,20 +215,70 @@ pub fn write_path(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
 /// As [`write_path`], with I/O errors reported against the name `<output>`.
 pub fn write(mesh: &Mesh, w: impl Write, format: Format) -> Result<(), MeshError> {
     mesh.validate()?;
-    write_named(mesh, w, format, "<output>")
+    write_named(mesh, w, format, "<output>", None)
 }
 
-fn write_named(mesh: &Mesh, w: impl Write, format: Format, name: &str) -> Result<(), MeshError> {
+/// Writes a mesh file atomically with `positions` (f64, one per vertex of `mesh`) in place of
+/// the mesh's f32 ones, for coordinates f32 cannot hold (a part 2·10⁴ mm from its origin has
+/// an f32 spacing of 0.002 mm): OBJ and OFF print them in full (the shortest decimal that
+/// reads back as the same f64), PLY stores `double` properties; binary STL has f32 only, so
+/// they are rounded there.
+///
+/// # Errors
+/// As [`write_path`]; [`MeshError::Invalid`] when `positions` has another count than the
+/// mesh's vertices or a non-finite coordinate.
+pub fn write_path_f64(mesh: &Mesh, positions: &[[f64; 3]], path: &Path) -> Result<(), MeshError> {
+    let format = Format::from_path(path)?;
+    let name = path.display().to_string();
+    mesh.validate()?;
+    check_f64_positions(mesh, positions)?;
+    if format == Format::Stl {
+        let mut rounded = mesh.clone();
+        rounded.positions = positions.iter().map(|p| p.map(|c| c as f32)).collect();
+        return write_atomic(path, |w| write_named(&rounded, w, format, &name, None));
+    }
+    write_atomic(path, |w| {
+        write_named(mesh, w, format, &name, Some(positions))
+    })
+}
+
+fn check_f64_positions(mesh: &Mesh, positions: &[[f64; 3]]) -> Result<(), MeshError> {
+    if positions.len() != mesh.positions.len() {
+        return Err(MeshError::Invalid(format!(
+            "{} f64 positions for a mesh of {} vertices",
+            positions.len(),
+            mesh.positions.len()
+        )));
+    }
+    if let Some(i) = positions
+        .iter()
+        .position(|p| !p.iter().all(|c| c.is_finite()))
+    {
+        return Err(MeshError::Invalid(format!(
+            "f64 position {i} is not finite: {:?}",
+            positions[i]
+        )));
+    }
+    Ok(())
+}
+
+fn write_named(
+    mesh: &Mesh,
+    w: impl Write,
+    format: Format,
+    name: &str,
+    f64_positions: Option<&[[f64; 3]]>,
+) -> Result<(), MeshError> {
     let io_err = |source| MeshError::Io {
         path: name.to_string(),
         source,
     };
     let mut w = BufWriter::with_capacity(source::BUF_SIZE, w);
     match format {
-        Format::Obj => obj::write(mesh, &mut w).map_err(io_err)?,
-        Format::Ply => ply::write(mesh, &mut w).map_err(io_err)?,
+        Format::Obj => obj::write(mesh, &mut w, f64_positions).map_err(io_err)?,
+        Format::Ply => ply::write(mesh, &mut w, f64_positions).map_err(io_err)?,
         Format::Stl => stl::write(mesh, &mut w, name)?,
-        Format::Off => off::write(mesh, &mut w).map_err(io_err)?,
+        Format::Off => off::write(mesh, &mut w, f64_positions).map_err(io_err)?,
     }
     w.flush().map_err(io_err)
 }
@@ -309,5 +359,96 @@ mod tests {
         )
         .unwrap();
         assert_eq!((m.vertex_count(), m.face_count()), (3, 1));
+    }
+}
+
+#[cfg(test)]
+mod f64_positions {
+    use super::*;
+
+    /// A triangle 2·10⁴ units out, whose f64 corners f32 cannot hold (spacing 0.002 there).
+    fn far() -> (Mesh, Vec<[f64; 3]>) {
+        let exact = vec![
+            [20000.0001, 0.0, 0.0],
+            [20001.0003, 0.0, 0.0],
+            [20000.0001, 1.0000007, 0.0],
+        ];
+        let mesh = Mesh {
+            positions: exact.iter().map(|p| p.map(|c| c as f32)).collect(),
+            face_offsets: vec![0, 3],
+            face_indices: vec![0, 1, 2],
+            ..Mesh::default()
+        };
+        (mesh, exact)
+    }
+
+    /// Reads the f64 coordinates of a written file back: OBJ and OFF as text, PLY's doubles.
+    fn read_back(path: &Path, format: Format) -> Vec<[f64; 3]> {
+        let bytes = std::fs::read(path).unwrap();
+        match format {
+            Format::Obj | Format::Off => {
+                let text = String::from_utf8(bytes).unwrap();
+                let lines: Vec<&str> = match format {
+                    Format::Obj => text.lines().filter_map(|l| l.strip_prefix("v ")).collect(),
+                    _ => text.lines().skip(2).take(3).collect(),
+                };
+                lines
+                    .iter()
+                    .map(|l| {
+                        let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+                        [v[0], v[1], v[2]]
+                    })
+                    .collect()
+            }
+            _ => {
+                let text = String::from_utf8_lossy(&bytes);
+                assert!(text.contains("property double x\nproperty double y\nproperty double z\n"));
+                let start = text.find("end_header\n").unwrap() + "end_header\n".len();
+                (0..3)
+                    .map(|v| {
+                        std::array::from_fn(|k| {
+                            let o = start + 8 * (3 * v + k);
+                            f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap())
+                        })
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    #[test]
+    fn text_and_ply_keep_every_f64_bit() {
+        let (mesh, exact) = far();
+        let dir = tempfile::tempdir().unwrap();
+        for format in [Format::Obj, Format::Off, Format::Ply] {
+            let path = dir.path().join(format!("far.{}", format.extension()));
+            write_path_f64(&mesh, &exact, &path).unwrap();
+            assert_eq!(read_back(&path, format), exact, "{format:?}");
+            // The readers (f32) still read the file, near the f32 positions.
+            let back = read_path(&path, &ReadOptions::default()).unwrap();
+            assert_eq!(back.positions, mesh.positions, "{format:?}");
+        }
+        // f32 files of the same mesh are unchanged by the new entry point's existence.
+        let path = dir.path().join("plain.ply");
+        write_path(&mesh, &path).unwrap();
+        assert!(
+            String::from_utf8_lossy(&std::fs::read(&path).unwrap()).contains("property float x")
+        );
+    }
+
+    #[test]
+    fn stl_rounds_and_bad_positions_are_refused() {
+        let (mesh, exact) = far();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("far.stl");
+        write_path_f64(&mesh, &exact, &path).unwrap();
+        let back = read_path(&path, &ReadOptions::default()).unwrap();
+        assert_eq!(back.positions, mesh.positions);
+        let e = write_path_f64(&mesh, &exact[..2], &dir.path().join("x.obj")).unwrap_err();
+        assert!(matches!(e, MeshError::Invalid(_)), "{e}");
+        let mut nan = exact.clone();
+        nan[1][2] = f64::NAN;
+        let e = write_path_f64(&mesh, &nan, &dir.path().join("x.obj")).unwrap_err();
+        assert!(e.to_string().contains("position 1"), "{e}");
     }
 }

@@ -391,7 +391,37 @@ pub(crate) fn write_values<const N: usize>(
     Ok(())
 }
 
-pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
+/// Writes `v x y z` lines of f64 positions, each coordinate the shortest decimal that reads
+/// back as the same f64 (shared with OFF, whose vertex lines have no prefix).
+pub(crate) fn write_f64_values(
+    w: &mut impl Write,
+    prefix: &[u8],
+    values: &[[f64; 3]],
+) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let mut line = Vec::with_capacity(128);
+    for v in values {
+        line.clear();
+        line.extend_from_slice(prefix);
+        for (k, &c) in v.iter().enumerate() {
+            if k > 0 || !prefix.is_empty() {
+                line.push(b' ');
+            }
+            // Writing to a Vec cannot fail.
+            let _ = write!(line, "{c}");
+        }
+        line.push(b'\n');
+        w.write_all(&line)?;
+    }
+    Ok(())
+}
+
+/// Writes `mesh` as OBJ; with `f64_positions`, those as its `v` lines.
+pub(crate) fn write(
+    mesh: &Mesh,
+    w: &mut impl Write,
+    f64_positions: Option<&[[f64; 3]]>,
+) -> std::io::Result<()> {
     writeln!(w, "# written by tessd-mesh")?;
     writeln!(
         w,
@@ -399,7 +429,10 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
         mesh.vertex_count(),
         mesh.face_count()
     )?;
-    write_values(w, b"v", &mesh.positions)?;
+    match f64_positions {
+        Some(p) => write_f64_values(w, b"v", p)?,
+        None => write_values(w, b"v", &mesh.positions)?,
+    }
     if let Some(uv) = &mesh.uvs {
         write_values(w, b"vt", &uv.values)?;
     }

@@ -195,9 +195,17 @@ pub(crate) fn read<R: Read>(
     Ok(mesh)
 }
 
-pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
+/// Writes `mesh` as OFF; with `f64_positions`, those as its vertex lines.
+pub(crate) fn write(
+    mesh: &Mesh,
+    w: &mut impl Write,
+    f64_positions: Option<&[[f64; 3]]>,
+) -> std::io::Result<()> {
     writeln!(w, "OFF\n{} {} 0", mesh.vertex_count(), mesh.face_count())?;
-    write_values(w, b"", &mesh.positions)?;
+    match f64_positions {
+        Some(p) => super::obj::write_f64_values(w, b"", p)?,
+        None => write_values(w, b"", &mesh.positions)?,
+    }
     let mut line = Vec::with_capacity(128);
     for face in mesh.faces() {
         line.clear();

@@ -726,7 +726,12 @@ pub(crate) fn read<R: Read>(
     Ok(mesh)
 }
 
-pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
+/// Writes `mesh` as binary PLY; with `f64_positions`, those as `double` x, y, z.
+pub(crate) fn write(
+    mesh: &Mesh,
+    w: &mut impl Write,
+    f64_positions: Option<&[[f64; 3]]>,
+) -> std::io::Result<()> {
     let normals = mesh.normals.as_ref().and_then(|n| per_vertex(mesh, n));
     let uvs = mesh.uvs.as_ref().and_then(|t| per_vertex(mesh, t));
     let big_faces = mesh.face_offsets.windows(2).any(|w| w[1] - w[0] > 255);
@@ -738,7 +743,11 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
     let mut h =
         String::from("ply\nformat binary_little_endian 1.0\ncomment written by tessd-mesh\n");
     h += &format!("element vertex {}\n", mesh.positions.len());
-    h += "property float x\nproperty float y\nproperty float z\n";
+    h += if f64_positions.is_some() {
+        "property double x\nproperty double y\nproperty double z\n"
+    } else {
+        "property float x\nproperty float y\nproperty float z\n"
+    };
     if normals.is_some() {
         h += "property float nx\nproperty float ny\nproperty float nz\n";
     }
@@ -756,7 +765,19 @@ pub(crate) fn write(mesh: &Mesh, w: &mut impl Write) -> std::io::Result<()> {
     for (v, p) in mesh.positions.iter().enumerate() {
         let n = normals.as_ref().map(|n| n[v]);
         let t = uvs.as_ref().map(|t| t[v]);
-        for c in p.iter().chain(n.iter().flatten()).chain(t.iter().flatten()) {
+        match f64_positions {
+            Some(f) => {
+                for c in f[v] {
+                    buf.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            None => {
+                for c in p {
+                    buf.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
+        for c in n.iter().flatten().chain(t.iter().flatten()) {
             buf.extend_from_slice(&c.to_le_bytes());
         }
         spill(&mut buf, w, false)?;

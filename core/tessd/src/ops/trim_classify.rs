@@ -2,7 +2,10 @@
 //! document at a world tolerance ε and classifies (u, v) points on or off each face with the
 //! CPU classifier, the reference for the GPU one. Hosts use it to test points against trims;
 //! the OCP cross-check (tests/brep/test_classify.py) uses it as our side of the comparison.
-//! With it come the structure's figures (tables 1, 3 and 4 of the paper) per face.
+//! With it come the structure's figures (tables 1, 3 and 4 of the paper) per face, and
+//! warnings: a face whose trims could not be fitted within ε_uv (section 3.1) is built and
+//! classified all the same, its fit error reported in a sentence per face and in the
+//! result's `warnings` (issue 20: tolerances are estimates, reported, never refused).
 //!
 //! Parameters are described in docs/protocol.md ("trim.classify").
 
@@ -45,6 +48,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
 
     let mut on = vec![0u8; faces.len() * points];
     let mut reports = Vec::with_capacity(faces.len());
+    let mut warnings: Vec<String> = Vec::new();
     let mut classify_s = 0.0;
     for (k, &fi) in faces.iter().enumerate() {
         ctx.progress(
@@ -74,9 +78,12 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         }
         classify_s += start.elapsed().as_secs_f64();
         let s = &trim.stats;
+        let face_warnings = trim.warnings();
+        warnings.extend(face_warnings.iter().cloned());
         reports.push(json!({
             "id": face.id,
             "eps_uv": trim.tolerance.eps_uv,
+            "eps_uv_samples": trim.tolerance.samples,
             "quadratics": s.quadratics,
             "lines": s.lines,
             "nodes": s.nodes,
@@ -87,6 +94,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             "bytes": s.bytes,
             "max_fit_error_uv": s.max_fit_error_uv,
             "build_ms": s.build_time.as_secs_f64() * 1e3,
+            "warnings": face_warnings,
         }));
     }
     ctx.progress(1.0, "done", "")?;
@@ -99,6 +107,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         "classify_ms": classify_s * 1e3,
         "points_per_second": if classify_s > 0.0 { total as f64 / classify_s } else { 0.0 },
         "faces": reports,
+        "warnings": warnings,
     });
     Ok(Response {
         result,

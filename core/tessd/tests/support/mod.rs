@@ -1,5 +1,6 @@
 //! What the binary's integration tests share: running the binary, finding the shared data,
-//! and a daemon process that is killed when the test ends.
+//! a daemon process that is killed when the test ends, and one operation run through the
+//! registry the daemon and job files share.
 #![allow(dead_code)] // each test file uses its own subset
 
 use std::path::{Path, PathBuf};
@@ -71,4 +72,26 @@ impl Drop for Daemon {
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
+}
+
+/// Runs `op` with `params` (a JSON object) and `arrays` through the daemon's registry, in
+/// process; returns the result's JSON.
+pub fn run_op(
+    op: &str,
+    params: serde_json::Value,
+    arrays: &[tessd_ipc::arrays::OwnedArray],
+) -> Result<serde_json::Value, tessd_ipc::error::OpError> {
+    let serde_json::Value::Object(params) = params else {
+        panic!("params must be an object")
+    };
+    let request = tessd_ipc::registry::Request {
+        params,
+        arrays: tessd_ipc::arrays::Arrays::from_owned(arrays),
+        base_dir: None,
+    };
+    let sink = |_| {};
+    let ctx = tessd_ipc::job::JobContext::new(&sink, tessd_ipc::job::CancelToken::default());
+    tessd::ops::registry()
+        .run(op, request, &ctx)
+        .map(|r| r.result)
 }
