@@ -137,11 +137,13 @@ pub fn deviation(doc: &tessd_brep::Document, t: &Tessellation, tol: f64) -> Devi
         let n = f.len() as f64;
         let mut uv = [0.0; 2];
         let mut c = [0.0; 3];
+        // The absolute positions: the f32 ones are relative to `t.placement`'s origin for a
+        // part far from the origin (hammer.iges).
         for &v in f {
-            let (q, p) = (t.uvs[v as usize], mesh.positions[v as usize]);
+            let (q, p) = (t.uvs[v as usize], t.points[v as usize]);
             uv = [uv[0] + q[0] / n, uv[1] + q[1] / n];
             for k in 0..3 {
-                c[k] += f64::from(p[k]) / n;
+                c[k] += p[k] / n;
             }
         }
         let d = distance_to_surface(face, c, uv);
