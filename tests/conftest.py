@@ -1,6 +1,7 @@
 """Shared pytest setup: make `python/` (the tessd package), `tests/` (locate.py), `tests/daemon`
 (daemon_util) and `tests/usd` (usd_checks) importable; the module-scoped `daemon` fixture that
-the simplification and subdivision tests share (tests/daemon has its own)."""
+the simplification, subdivision, render and tessellation-precision tests share (tests/daemon
+has its own), and the shared test data (never skipped: a missing folder fails)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,14 @@ import pytest  # noqa: E402
 
 import locate  # noqa: E402
 from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def shared_data():
+    """The shared test-data folder (fails when missing)."""
+    path = locate.shared_data()
+    assert (path / "mesh").is_dir(), f"shared test data not found at {path} (set TESSD_SHARED_DATA)"
+    return path
 
 
 @pytest.fixture(scope="module")

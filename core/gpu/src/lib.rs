@@ -18,6 +18,10 @@
 
 #![warn(missing_docs)]
 
+pub mod context;
+
+pub use context::{ErrorScopes, GpuContext, describe};
+
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -151,46 +155,21 @@ impl GpuTables {
 impl GpuStencils {
     /// Opens a device: the Vulkan backend (which covers lavapipe, the software driver) plus
     /// whatever other backend this build has, preferring a real GPU but accepting a fallback
-    /// (CPU) adapter. Limits are wgpu's defaults except the buffer sizes, raised to the
-    /// adapter's so large meshes fit.
+    /// (CPU) adapter ([`GpuContext::open`], shared with the renderer). Limits are wgpu's
+    /// defaults except the buffer sizes, raised to the adapter's so large meshes fit.
     pub fn new() -> Result<Self, GpuError> {
         pollster::block_on(Self::new_async())
     }
 
     async fn new_async() -> Result<Self, GpuError> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Instance::enabled_backend_features();
-        let instance = wgpu::Instance::new(desc.with_env());
-        let adapter = instance
-            .request_adapter(&wgpu::RequestAdapterOptions {
-                power_preference: wgpu::PowerPreference::HighPerformance,
-                force_fallback_adapter: false,
-                compatible_surface: None,
-                apply_limit_buckets: false,
-            })
-            .await
-            .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        let adapter_info = adapter.get_info();
-        let adapter_limits = adapter.limits();
-        let required_limits = wgpu::Limits {
-            max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
-            max_buffer_size: adapter_limits.max_buffer_size,
-            ..wgpu::Limits::default()
-        };
-        let (device, queue) = adapter
-            .request_device(&wgpu::DeviceDescriptor {
-                label: Some("tessd-gpu"),
-                required_limits,
-                ..Default::default()
-            })
-            .await
-            .map_err(|source| GpuError::DeviceRequest {
-                adapter: describe(&adapter_info),
-                source,
-            })?;
+        let GpuContext {
+            adapter_info,
+            device,
+            queue,
+        } = GpuContext::open_async("tessd-gpu").await?;
         let limits = device.limits();
 
-        let scopes = Scopes::push(&device);
+        let scopes = ErrorScopes::push(&device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("stencil_apply.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SHADER.into()),
@@ -282,7 +261,7 @@ impl GpuStencils {
             self.check_binding("sources", bytes_of_len(t.sources.len()))?;
             self.check_binding("weights", bytes_of_len(t.weights.len()))?;
         }
-        let scopes = Scopes::push(&self.device);
+        let scopes = ErrorScopes::push(&self.device);
         let levels = tables
             .iter()
             .map(|t| GpuLevel {
@@ -383,7 +362,7 @@ impl GpuStencils {
             params[at..at + PARAMS_SIZE as usize].copy_from_slice(bytemuck::cast_slice(&p));
         }
 
-        let scopes = Scopes::push(&self.device);
+        let scopes = ErrorScopes::push(&self.device);
         let params = self
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -534,34 +513,6 @@ impl GpuStencils {
     }
 }
 
-/// Validation and out-of-memory error scopes around a group of wgpu calls, so that an error
-/// becomes a [`GpuError`] instead of reaching wgpu's default handler, which panics.
-///
-/// Fields drop in declaration order, and scopes must pop innermost first: `validation` (pushed
-/// last) comes first.
-struct Scopes {
-    validation: wgpu::ErrorScopeGuard,
-    oom: wgpu::ErrorScopeGuard,
-}
-
-impl Scopes {
-    fn push(device: &wgpu::Device) -> Self {
-        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        Self { validation, oom }
-    }
-
-    async fn pop(self) -> Result<(), GpuError> {
-        // Scopes are a stack: the inner one first.
-        let validation = self.validation.pop().await;
-        let oom = self.oom.pop().await;
-        match validation.or(oom) {
-            Some(e) => Err(GpuError::Wgpu(e.to_string())),
-            None => Ok(()),
-        }
-    }
-}
-
 /// Checks the compressed-row invariants the kernel relies on.
 fn check_table(level: usize, t: &StencilTable) -> Result<(), GpuError> {
     let bad = |reason: String| Err(GpuError::InvalidTable { level, reason });
@@ -627,13 +578,6 @@ fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
         binding,
         resource: buffer.as_entire_binding(),
     }
-}
-
-fn describe(info: &wgpu::AdapterInfo) -> String {
-    format!(
-        "{} ({:?}, {:?}; driver {} {})",
-        info.name, info.backend, info.device_type, info.driver, info.driver_info
-    )
 }
 
 #[cfg(test)]

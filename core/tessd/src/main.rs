@@ -215,6 +215,63 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Render a mesh (OBJ, PLY, STL, OFF) or a B-Rep document (.json) to a PNG, headless on the
+    /// GPU (lavapipe without one).
+    Render {
+        /// Mesh file or `tessd-brep` JSON document.
+        input: PathBuf,
+        /// The colour image (.png); with --turntable N, OUT_000.png ... OUT_<N-1>.png.
+        output: PathBuf,
+        /// Image size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "1280x720")]
+        size: String,
+        /// A standard view fitted to the part's bounding box (Z up; front looks along +Y).
+        #[arg(long, value_parser = ["iso", "front", "back", "left", "right", "top", "bottom"], conflicts_with = "eye")]
+        view: Option<String>,
+        /// Explicit eye position, X,Y,Z (instead of --view).
+        #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+        eye: Option<String>,
+        /// The point looked at, X,Y,Z (default: the bounding box's centre).
+        #[arg(
+            long,
+            value_name = "X,Y,Z",
+            allow_hyphen_values = true,
+            requires = "eye"
+        )]
+        target: Option<String>,
+        /// The up direction, X,Y,Z (default: Z, or Y when looking along Z).
+        #[arg(
+            long,
+            value_name = "X,Y,Z",
+            allow_hyphen_values = true,
+            requires = "eye"
+        )]
+        up: Option<String>,
+        /// Vertical field of view, degrees.
+        #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+        fov: f64,
+        /// Crack filling between faces (paper 001): only `none` until issue 21 step 2.
+        #[arg(long, default_value = "none", value_parser = ["none", "image", "object"])]
+        cracks: String,
+        /// Ray-cast the trimmed surfaces per pixel (issue 21 step 2; not implemented yet).
+        #[arg(long)]
+        raycast: bool,
+        /// Shading of the colour image.
+        #[arg(long, default_value = "lit", value_parser = ["lit", "gooch", "toon", "face-ids"])]
+        shading: String,
+        /// Overlay the triangle edges.
+        #[arg(long)]
+        edges: bool,
+        /// Also write the face ids as a PNG: face index + 1 = R + 256·G + 65536·B, 0 background.
+        #[arg(long, value_name = "IDS.png")]
+        face_ids: Option<PathBuf>,
+        /// Write N frames turning the eye about the up axis through the target.
+        #[arg(long, value_name = "N")]
+        turntable: Option<u64>,
+        /// Print the result (timings per step, adapter, pixel counts) as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Run the main job on built-in sample data, through a real daemon, into ./tessd-demo/.
     Demo {
         /// Output folder.
@@ -473,6 +530,61 @@ fn run(cli: Cli) -> Result<()> {
                 }
             })
         }
+        Command::Render {
+            input,
+            output,
+            size,
+            view,
+            eye,
+            target,
+            up,
+            fov,
+            cracks,
+            raycast,
+            shading,
+            edges,
+            face_ids,
+            turntable,
+            json,
+        } => {
+            let params = serde_json::json!({
+                "input": input,
+                "output": output,
+                "size": size,
+                "view": view,
+                "eye": eye.as_deref().map(vec3_arg),
+                "target": target.as_deref().map(vec3_arg),
+                "up": up.as_deref().map(vec3_arg),
+                "fov": fov,
+                "cracks": cracks,
+                "raycast": raycast,
+                "shading": shading,
+                "edges": edges,
+                "face_ids": face_ids,
+                "turntable": turntable,
+            });
+            report_or_json(run_local("render", params)?, json, |r| {
+                let r = &r.result;
+                let t = &r["timings_ms"];
+                let files = r["files"].as_array().map_or(0, Vec::len);
+                println!(
+                    "render: {}x{} {} view, {} triangles, {} of {} pixels covered -> {} ({} file{}; {} {}; draw {:.1} ms, total {:.1} ms)",
+                    r["width"],
+                    r["height"],
+                    r["view"].as_str().unwrap_or(""),
+                    r["triangles"],
+                    r["covered"],
+                    r["pixels"],
+                    output.display(),
+                    files,
+                    if files == 1 { "" } else { "s" },
+                    r["adapter"]["name"].as_str().unwrap_or(""),
+                    r["adapter"]["device_type"].as_str().unwrap_or(""),
+                    t["draw"].as_f64().unwrap_or(0.0),
+                    t["total"].as_f64().unwrap_or(0.0),
+                );
+            })
+        }
         Command::Demo { out } => tessd::demo::run(&out),
     }
 }
@@ -485,6 +597,12 @@ fn origin_param(s: &str) -> serde_json::Value {
         [Some(x), Some(y), Some(z)] => serde_json::json!([x, y, z]),
         _ => serde_json::Value::from(s),
     }
+}
+
+/// `X,Y,Z` as a list of three numbers (anything else is passed on as text for the op to refuse,
+/// naming it).
+fn vec3_arg(s: &str) -> serde_json::Value {
+    origin_param(s)
 }
 
 fn serve(socket: Option<&str>, log_file: Option<&Path>, max_payload: u64) -> Result<()> {

@@ -10,6 +10,7 @@ pub mod lod;
 pub mod mesh_arrays;
 pub mod mesh_convert;
 pub mod mesh_stats;
+pub mod render;
 pub mod simplify;
 pub mod subdivide;
 pub mod tessellate;
@@ -29,6 +30,7 @@ pub fn registry() -> Registry {
         .register("brep.load", brep_load::run)
         .register("tessellate", tessellate::run)
         .register("trim.classify", trim_classify::run)
+        .register("render", render::run)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [
@@ -44,6 +46,7 @@ pub fn registry() -> Registry {
         "usd.lod.variants",
         "usd.lod.usdlod",
         "brep.format.1",
+        "render.png",
         "progress",
         "cancel",
     ] {

@@ -1,0 +1,130 @@
+//! Opening a headless wgpu device, shared by every GPU stage of tessd (the stencil apply phase
+//! here, the renderer of `tessd-render`), so that all of them pick adapters, raise limits and
+//! report failures the same way.
+//!
+//! Vulkan is the backend (which covers lavapipe, Mesa's software driver, what CI runs on); a
+//! real GPU is preferred and a CPU adapter accepted. wgpu's validation and out-of-memory errors
+//! are caught with [`ErrorScopes`], so bad input gives an error, never wgpu's default panic.
+
+use crate::GpuError;
+
+/// A device and its queue, with what the adapter said about itself.
+pub struct GpuContext {
+    /// The adapter the device was opened on.
+    pub adapter_info: wgpu::AdapterInfo,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+}
+
+impl GpuContext {
+    /// Opens a device labelled `label`: the Vulkan backend plus whatever other backend this
+    /// build has, preferring a real GPU but accepting a fallback (CPU) adapter. Limits are
+    /// wgpu's defaults except buffer sizes and the 2D texture size, raised to the adapter's so
+    /// large meshes and large images fit.
+    ///
+    /// # Errors
+    /// [`GpuError::NoAdapter`] when there is no adapter at all (the message says which packages
+    /// give the software one), [`GpuError::DeviceRequest`] when the adapter refuses the device.
+    pub fn open(label: &str) -> Result<Self, GpuError> {
+        pollster::block_on(Self::open_async(label))
+    }
+
+    /// [`open`](Self::open), as a future (for callers already inside one).
+    ///
+    /// # Errors
+    /// As [`open`](Self::open).
+    pub async fn open_async(label: &str) -> Result<Self, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Instance::enabled_backend_features();
+        let instance = wgpu::Instance::new(desc.with_env());
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            })
+            .await
+            .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let adapter_info = adapter.get_info();
+        let adapter_limits = adapter.limits();
+        let required_limits = wgpu::Limits {
+            max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
+            max_buffer_size: adapter_limits.max_buffer_size,
+            max_texture_dimension_2d: adapter_limits.max_texture_dimension_2d,
+            ..wgpu::Limits::default()
+        };
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some(label),
+                required_limits,
+                ..Default::default()
+            })
+            .await
+            .map_err(|source| GpuError::DeviceRequest {
+                adapter: describe(&adapter_info),
+                source,
+            })?;
+        Ok(Self {
+            adapter_info,
+            device,
+            queue,
+        })
+    }
+
+    /// The adapter as one line: name, backend, device type and driver (lavapipe shows as
+    /// `llvmpipe ... (Vulkan, Cpu; driver llvmpipe ...)`), for logs and test output.
+    pub fn describe(&self) -> String {
+        describe(&self.adapter_info)
+    }
+}
+
+/// `info` as one line: name, backend, device type and driver.
+pub fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!(
+        "{} ({:?}, {:?}; driver {} {})",
+        info.name, info.backend, info.device_type, info.driver, info.driver_info
+    )
+}
+
+/// Validation and out-of-memory error scopes around a group of wgpu calls, so that an error
+/// becomes a [`GpuError`] instead of reaching wgpu's default handler, which panics.
+///
+/// Fields drop in declaration order, and scopes must pop innermost first: `validation` (pushed
+/// last) comes first.
+pub struct ErrorScopes {
+    validation: wgpu::ErrorScopeGuard,
+    oom: wgpu::ErrorScopeGuard,
+}
+
+impl ErrorScopes {
+    /// Pushes an out-of-memory scope, then a validation scope.
+    pub fn push(device: &wgpu::Device) -> Self {
+        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        Self { validation, oom }
+    }
+
+    /// Pops both scopes (inner first).
+    ///
+    /// # Errors
+    /// [`GpuError::Wgpu`] with the first error either caught.
+    pub async fn pop(self) -> Result<(), GpuError> {
+        let validation = self.validation.pop().await;
+        let oom = self.oom.pop().await;
+        match validation.or(oom) {
+            Some(e) => Err(GpuError::Wgpu(e.to_string())),
+            None => Ok(()),
+        }
+    }
+
+    /// [`pop`](Self::pop), blocking.
+    ///
+    /// # Errors
+    /// As [`pop`](Self::pop).
+    pub fn pop_blocking(self) -> Result<(), GpuError> {
+        pollster::block_on(self.pop())
+    }
+}

@@ -1,0 +1,244 @@
+//! The surface pass: one draw of the scene's triangles into [`Targets`], depth-tested, writing
+//! the shaded colour, the face id and the (u, v) of the nearest surface at each pixel centre
+//! (`shaders/render_surface.wgsl`). No multisampling: the metadata must be the value of one
+//! surface point, the one on the pixel's ray, not a blend.
+
+use crate::camera::Camera;
+use crate::scene::Vertex;
+use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FACE_ID_FORMAT, Targets, UV_FORMAT};
+use crate::{RenderSettings, Shading};
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+/// The WGSL of the pass.
+pub const SHADER: &str = include_str!("../../../shaders/render_surface.wgsl");
+
+/// The background: a light grey (RGB 224).
+pub const BACKGROUND: [u8; 4] = [224, 224, 224, 255];
+
+/// The uniform block (`Params` in the shader, 96 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    clip_from_world: [[f32; 4]; 4],
+    eye: [f32; 3],
+    shading: u32,
+    light: [f32; 3],
+    edges: u32,
+}
+
+/// The compiled pass: pipeline and bind group layout, made once per device.
+pub struct SurfacePass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl SurfacePass {
+    /// Compiles the shader and builds the pipeline.
+    pub fn new(device: &wgpu::Device) -> SurfacePass {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render_surface.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("render_surface"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("render_surface"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let attributes = wgpu::vertex_attr_array![
+            0 => Float32x3,
+            1 => Uint32,
+            2 => Float32x3,
+            3 => Float32x2,
+            4 => Float32x2,
+        ];
+        let target = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("render_surface"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: size_of::<Vertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &attributes,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                // CAD and scanned meshes are not reliably closed or consistently wound.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[
+                    target(COLOR_FORMAT),
+                    target(FACE_ID_FORMAT),
+                    target(UV_FORMAT),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        SurfacePass { layout, pipeline }
+    }
+
+    /// Records the pass: clears the targets (background grey, face id 0, (u, v) 0, depth 1)
+    /// and draws `vertex_count` vertices of `vertices` (positions relative to `origin`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+        vertices: &wgpu::Buffer,
+        vertex_count: u32,
+        origin: [f64; 3],
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) {
+        let (forward, right, up) = camera.basis();
+        // Key light above and to the left of the viewer, a little behind the camera.
+        let light = crate::camera::normalize(
+            [0, 1, 2].map(|k| 0.55 * up[k] - 0.35 * right[k] - 0.75 * forward[k]),
+        );
+        let params = Params {
+            clip_from_world: camera.clip_from_world(origin, targets.width, targets.height),
+            eye: [0, 1, 2].map(|k| (camera.eye[k] - origin[k]) as f32),
+            shading: match settings.shading {
+                Shading::Lit => 0,
+                Shading::Gooch => 1,
+                Shading::Toon => 2,
+                Shading::FaceIds => 3,
+            },
+            light: light.map(|x| x as f32),
+            edges: settings.edges as u32,
+        };
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("render_surface params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render_surface"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            }],
+        });
+        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+        let (color, face_id, uv, depth) = (
+            view(&targets.color),
+            view(&targets.face_id),
+            view(&targets.uv),
+            view(&targets.depth),
+        );
+        let bg = BACKGROUND.map(|c| c as f64 / 255.0);
+        let attach = |view, clear| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("render_surface"),
+            color_attachments: &[
+                attach(
+                    &color,
+                    wgpu::Color {
+                        r: bg[0],
+                        g: bg[1],
+                        b: bg[2],
+                        a: 1.0,
+                    },
+                ),
+                attach(&face_id, wgpu::Color::TRANSPARENT),
+                attach(&uv, wgpu::Color::TRANSPARENT),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if vertex_count > 0 {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.set_vertex_buffer(0, vertices.slice(..));
+            pass.draw(0..vertex_count, 0..1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use wgpu::naga;
+
+    /// The WGSL parses and validates without a device, and its `Params` block is 96 bytes.
+    #[test]
+    fn shader_validates_with_naga() {
+        let module = naga::front::wgsl::parse_str(super::SHADER).expect("WGSL parses");
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .expect("WGSL validates");
+        let params = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Params"))
+            .expect("Params");
+        assert_eq!(params.1.inner.size(module.to_ctx()), 96);
+    }
+
+    #[test]
+    fn params_match_the_shader_block() {
+        assert_eq!(size_of::<super::Params>(), 96);
+        assert_eq!(size_of::<crate::scene::Vertex>(), 44);
+    }
+}

@@ -1,0 +1,526 @@
+//! `render`: a picture of a mesh or a B-Rep part (`tessd-render`, issue 21 step 1): colour,
+//! depth, face ids and (u, v) rendered headless on the GPU (lavapipe without one), as PNG files
+//! or arrays. B-Rep documents are tessellated on the CPU at half a pixel's footprint until GPU
+//! trimming (step 2) lands; `cracks` other than `none` and `raycast` belong to step 2 and are
+//! refused for now.
+//!
+//! Parameters are described in docs/protocol.md ("render").
+
+use super::brep_load::{brep_error, request_document};
+use super::common::{bool_param, u64_param};
+use super::mesh_arrays::{input_mesh, output_path};
+use super::tessellate::parse_tolerance;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use tessd_brep::Document;
+use tessd_ipc::arrays::OwnedArray;
+use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::job::JobContext;
+use tessd_ipc::registry::{Request, Response};
+use tessd_render::camera::DEFAULT_FOV;
+use tessd_render::{
+    Bounds, Camera, Frame, RenderError, RenderSettings, Renderer, Scene, Shading, View,
+};
+use tessd_tessellate::{Options, TessellateError};
+
+/// The default image size.
+pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
+
+/// The most turntable frames.
+pub const MAX_FRAMES: u64 = 3600;
+
+/// What issue 21 step 2 will add; refused until then.
+const STEP2: &str = "not implemented yet (issue 21 step 2)";
+
+/// The process's renderer: opening a device and compiling the shaders costs ~100 ms on a GPU
+/// and far more on lavapipe, so the daemon does it once, on the first render. A failure is
+/// not kept: a later request tries again.
+fn renderer() -> Result<Arc<Renderer>, OpError> {
+    static RENDERER: Mutex<Option<Arc<Renderer>>> = Mutex::new(None);
+    let mut slot = RENDERER.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some(r) = slot.as_ref() {
+        return Ok(r.clone());
+    }
+    let r = Arc::new(Renderer::new().map_err(render_error)?);
+    *slot = Some(r.clone());
+    Ok(r)
+}
+
+/// Maps a renderer error onto the protocol's codes.
+fn render_error(e: RenderError) -> OpError {
+    let code = match &e {
+        RenderError::Size(_) | RenderError::Camera(_) => ErrorCode::InvalidRequest,
+        RenderError::Io(_) => ErrorCode::Io,
+        _ => ErrorCode::Internal,
+    };
+    OpError::new(code, e.to_string())
+}
+
+/// Parses `size`: `"WIDTHxHEIGHT"` or `[width, height]`, checked against the renderer's limits
+/// ([`tessd_render::check_size`]).
+///
+/// # Errors
+/// `invalid_request` naming the value.
+pub fn parse_size(v: Option<&Value>) -> Result<(u32, u32), OpError> {
+    let bad = |v: &Value| {
+        OpError::request(format!(
+            "`size` must be \"WIDTHxHEIGHT\" (such as \"1280x720\") or [width, height], got {v}"
+        ))
+    };
+    let (w, h) = match v {
+        None | Some(Value::Null) => DEFAULT_SIZE,
+        Some(v @ Value::String(s)) => {
+            let (a, b) = s.trim().split_once(['x', 'X']).ok_or_else(|| bad(v))?;
+            let parse = |t: &str| t.trim().parse::<u32>().map_err(|_| bad(v));
+            (parse(a)?, parse(b)?)
+        }
+        Some(v @ Value::Array(items)) if items.len() == 2 => {
+            let side = |x: &Value| {
+                x.as_u64()
+                    .and_then(|n| u32::try_from(n).ok())
+                    .ok_or_else(|| bad(v))
+            };
+            (side(&items[0])?, side(&items[1])?)
+        }
+        Some(v) => return Err(bad(v)),
+    };
+    tessd_render::check_size(w, h, tessd_render::MAX_SIDE).map_err(render_error)?;
+    Ok((w, h))
+}
+
+/// An optional `[x, y, z]` of finite numbers.
+fn vec3_param(request: &Request, key: &str) -> Result<Option<[f64; 3]>, OpError> {
+    match request.params.get(key) {
+        None | Some(Value::Null) => Ok(None),
+        Some(v) => {
+            let bad = || {
+                OpError::request(format!(
+                    "`{key}` must be [x, y, z] (finite numbers), got {v}"
+                ))
+            };
+            let items = v.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
+            let mut out = [0.0; 3];
+            for (k, item) in items.iter().enumerate() {
+                out[k] = item.as_f64().filter(|x| x.is_finite()).ok_or_else(bad)?;
+            }
+            Ok(Some(out))
+        }
+    }
+}
+
+/// How the camera is given: a standard view, or an explicit eye (with target and up).
+#[derive(Clone, Copy, Debug)]
+enum CameraSpec {
+    View(View),
+    Explicit {
+        eye: [f64; 3],
+        target: Option<[f64; 3]>,
+        up: Option<[f64; 3]>,
+    },
+}
+
+/// Everything a request asks for, parsed and checked before any work.
+struct Params {
+    width: u32,
+    height: u32,
+    spec: CameraSpec,
+    fov: f64,
+    settings: RenderSettings,
+    frames: u32,
+    output: Option<PathBuf>,
+    face_ids: Option<PathBuf>,
+}
+
+fn parse(request: &Request) -> Result<Params, OpError> {
+    match request.str_param("cracks")? {
+        None | Some("none") => {}
+        Some(c @ ("image" | "object")) => {
+            return Err(OpError::new(
+                ErrorCode::Unsupported,
+                format!("`cracks: \"{c}\"` (crack filling, paper 001) is {STEP2}"),
+            ));
+        }
+        Some(c) => {
+            return Err(OpError::request(format!(
+                "`cracks` must be \"none\", \"image\" or \"object\", got {c:?}"
+            )));
+        }
+    }
+    if bool_param(request, "raycast")?.unwrap_or(false) {
+        return Err(OpError::new(
+            ErrorCode::Unsupported,
+            format!("`raycast` (per-pixel trimmed-surface ray casting, paper 000 §5–7) is {STEP2}"),
+        ));
+    }
+    let (width, height) = parse_size(request.params.get("size"))?;
+    let fov = request.f64_param("fov")?.unwrap_or(DEFAULT_FOV);
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(OpError::request(format!(
+            "`fov` must be a vertical field of view in degrees between 0 and 180, got {fov}"
+        )));
+    }
+    let shading = match request.str_param("shading")? {
+        None => Shading::Lit,
+        Some(s) => Shading::parse(s).ok_or_else(|| {
+            OpError::request(format!(
+                "`shading` must be \"lit\", \"gooch\", \"toon\" or \"face-ids\", got {s:?}"
+            ))
+        })?,
+    };
+    let edges = bool_param(request, "edges")?.unwrap_or(false);
+    let eye = vec3_param(request, "eye")?;
+    let target = vec3_param(request, "target")?;
+    let up = vec3_param(request, "up")?;
+    let view = request.str_param("view")?;
+    let spec = match (view, eye) {
+        (Some(_), Some(_)) => {
+            return Err(OpError::request(
+                "give a standard `view` or an explicit `eye` (with `target`, `up`), not both",
+            ));
+        }
+        (_, Some(eye)) => CameraSpec::Explicit { eye, target, up },
+        (view, None) => {
+            if target.is_some() || up.is_some() {
+                return Err(OpError::request(
+                    "`target` and `up` go with an explicit `eye`",
+                ));
+            }
+            let view = match view {
+                None => View::Iso,
+                Some(v) => View::parse(v).ok_or_else(|| {
+                    OpError::request(format!(
+                        "`view` must be one of iso, front, back, left, right, top, bottom, got {v:?}"
+                    ))
+                })?,
+            };
+            CameraSpec::View(view)
+        }
+    };
+    let output = output_path(request)?;
+    let face_ids = request.str_param("face_ids")?.map(|p| request.resolve(p));
+    for (key, path) in [("output", &output), ("face_ids", &face_ids)] {
+        if let Some(p) = path
+            && !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))
+        {
+            return Err(OpError::new(
+                ErrorCode::Unsupported,
+                format!("`{key}` must be a .png file, got {}", p.display()),
+            ));
+        }
+    }
+    let frames = match u64_param(request, "turntable")? {
+        None => 1,
+        Some(n) if (1..=MAX_FRAMES).contains(&n) => n as u32,
+        Some(n) => {
+            return Err(OpError::request(format!(
+                "`turntable` must be a number of frames from 1 to {MAX_FRAMES}, got {n}"
+            )));
+        }
+    };
+    if request
+        .params
+        .get("turntable")
+        .is_some_and(|v| !v.is_null())
+        && output.is_none()
+    {
+        return Err(OpError::request(
+            "`turntable` writes files OUT_000.png, ...: it needs `output`",
+        ));
+    }
+    Ok(Params {
+        width,
+        height,
+        spec,
+        fov,
+        settings: RenderSettings::new(width, height)
+            .with_shading(shading)
+            .with_edges(edges),
+        frames,
+        output,
+        face_ids,
+    })
+}
+
+/// The cameras of the frames: the view fitted to `bounds` or the explicit eye, turned about the
+/// up axis through the target for a turntable.
+fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
+    let aspect = p.settings.aspect();
+    let base = match p.spec {
+        CameraSpec::View(v) => Camera::fit(v, bounds, p.fov, aspect),
+        CameraSpec::Explicit { eye, target, up } => {
+            let target = target.unwrap_or_else(|| bounds.center());
+            let up = up.unwrap_or_else(|| {
+                // Z up, unless the view is along Z.
+                let d = tessd_render::camera::normalize(tessd_render::camera::sub(target, eye));
+                if d[2].abs() > 0.999 {
+                    [0.0, 1.0, 0.0]
+                } else {
+                    [0.0, 0.0, 1.0]
+                }
+            });
+            Camera::new(eye, target, up, p.fov)
+        }
+    };
+    base.check().map_err(render_error)?;
+    Ok((0..p.frames)
+        .map(|i| {
+            let angle = std::f64::consts::TAU * i as f64 / p.frames as f64;
+            base.orbit(angle).clipped_to(bounds)
+        })
+        .collect())
+}
+
+/// `OUT.png` for one frame, `OUT_007.png` for frame 7 of a turntable.
+fn frame_path(path: &Path, frame: u32, frames: u32) -> PathBuf {
+    if frames == 1 {
+        return path.to_path_buf();
+    }
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}_{frame:03}.png"))
+}
+
+/// Removes already written files when a later one fails (best effort).
+struct Written(Vec<PathBuf>);
+
+impl Drop for Written {
+    fn drop(&mut self) {
+        for p in &self.0 {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+fn point(v: [f64; 3]) -> Value {
+    json!(v)
+}
+
+/// The operation.
+///
+/// # Errors
+/// `invalid_request` for bad parameters (naming them and the value), `unsupported` for
+/// `cracks` other than `none`, `raycast` (issue 21 step 2) and outputs that are not `.png`;
+/// as `tessellate` and the mesh ops for the input; `internal` when the GPU fails; `cancelled`.
+pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+    let total = Instant::now();
+    ctx.progress(0.0, "read", "")?;
+    let p = parse(&request)?;
+
+    // The input: a B-Rep document (`brep`, or an `input` ending in .json) or a mesh.
+    let t = Instant::now();
+    let is_brep = request.params.get("brep").is_some_and(|v| !v.is_null())
+        || request.str_param("input")?.is_some_and(|s| {
+            Path::new(s)
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        });
+    let asked_tolerance = request
+        .params
+        .get("tolerance")
+        .cloned()
+        .filter(|v| !v.is_null());
+    let mut result = json!({});
+    let (scene, cams, tessellate_ms) = if is_brep {
+        let value = request_document(&mut request)?;
+        let doc = Document::from_value(&value).map_err(brep_error)?;
+        drop(value);
+        doc.validate().map_err(brep_error)?;
+        let b = doc
+            .bounding_box()
+            .ok_or_else(|| OpError::request("the document has no faces to render"))?;
+        let bounds = Bounds {
+            min: b.min,
+            max: b.max,
+        };
+        let cams = cameras(&p, &bounds)?;
+        let tolerance = match &asked_tolerance {
+            Some(v) => match parse_tolerance(v, doc.units)? {
+                super::tessellate::Tolerance::Length(x) => x,
+                super::tessellate::Tolerance::Percent(pc) => pc / 100.0 * 2.0 * bounds.radius(),
+            },
+            None => cams
+                .iter()
+                .map(|c| tessd_render::pixel_tolerance(c, &bounds, p.height))
+                .fold(f64::INFINITY, f64::min),
+        };
+        ctx.progress(0.05, "tessellate", "")?;
+        let read_ms = ms(t.elapsed());
+        let t = Instant::now();
+        let progress = |done: usize, total: usize| {
+            let _ = ctx.progress(
+                0.05 + 0.45 * done as f64 / total.max(1) as f64,
+                "tessellate",
+                &format!("face {done} of {total}"),
+            );
+        };
+        let tess =
+            tessd_tessellate::tessellate_with_progress(&doc, &Options::new(tolerance), &progress)
+                .map_err(|e| match e {
+                TessellateError::Invalid(e) => brep_error(e),
+                TessellateError::Options(m) => OpError::request(m),
+            })?;
+        ctx.checkpoint()?;
+        result["tolerance"] = json!(tolerance);
+        result["units"] = json!(doc.units.name());
+        result["faces"] = json!(doc.faces.len());
+        result["timings_ms"] = json!({"read": read_ms});
+        (Scene::from_tessellation(&tess), cams, ms(t.elapsed()))
+    } else {
+        let mesh = input_mesh(&request, ctx)?;
+        ctx.checkpoint()?;
+        let scene = Scene::from_mesh(&mesh);
+        let bounds = scene.bounds.ok_or_else(|| {
+            OpError::new(ErrorCode::InvalidMesh, "the mesh has no faces to render")
+        })?;
+        let cams = cameras(&p, &bounds)?;
+        result["faces"] = json!(scene.max_id);
+        result["timings_ms"] = json!({"read": ms(t.elapsed())});
+        (scene, cams, 0.0)
+    };
+
+    ctx.progress(0.5, "upload", "")?;
+    let t = Instant::now();
+    let renderer = renderer()?;
+    let device_ms = ms(t.elapsed());
+    let t = Instant::now();
+    let gpu = renderer.upload(&scene).map_err(render_error)?;
+    let upload_ms = ms(t.elapsed());
+
+    let mut written = Written(Vec::new());
+    let (mut draw, mut readback, mut encode) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
+    let mut covered = Vec::with_capacity(cams.len());
+    let mut last: Option<Frame> = None;
+    for (i, camera) in cams.iter().enumerate() {
+        ctx.checkpoint()?;
+        let (frame, timings) = renderer
+            .render(&gpu, camera, &p.settings)
+            .map_err(render_error)?;
+        draw += timings.draw;
+        readback += timings.readback;
+        covered.push(frame.covered());
+        let t = Instant::now();
+        for (path, ids) in [(&p.output, false), (&p.face_ids, true)] {
+            let Some(path) = path else { continue };
+            let path = frame_path(path, i as u32, p.frames);
+            ctx.checkpoint()?;
+            let encoded;
+            let rgba = if ids {
+                encoded = tessd_render::image::face_ids_to_rgba(&frame.face_id);
+                &encoded
+            } else {
+                &frame.color
+            };
+            tessd_render::image::write_png(&path, frame.width, frame.height, rgba)
+                .map_err(render_error)?;
+            written.0.push(path);
+        }
+        encode += t.elapsed();
+        let _ = ctx.progress(
+            0.5 + 0.5 * (i + 1) as f64 / cams.len() as f64,
+            "render",
+            &format!("frame {} of {}", i + 1, cams.len()),
+        );
+        last = Some(frame);
+    }
+    let files = std::mem::take(&mut written.0);
+
+    let first = &cams[0];
+    let a = renderer.adapter();
+    let read_ms = result["timings_ms"]["read"].as_f64().unwrap_or(0.0);
+    result["width"] = json!(p.width);
+    result["height"] = json!(p.height);
+    result["frames"] = json!(p.frames);
+    result["adapter"] = json!({
+        "name": a.name, "backend": a.backend, "device_type": a.device_type, "driver": a.driver,
+    });
+    result["view"] = json!(match p.spec {
+        CameraSpec::View(v) => v.name(),
+        CameraSpec::Explicit { .. } => "explicit",
+    });
+    result["camera"] = json!({
+        "eye": point(first.eye), "target": point(first.target), "up": point(first.up),
+        "fov": first.fov, "near": first.near, "far": first.far,
+    });
+    result["shading"] = json!(p.settings.shading.name());
+    result["edges"] = json!(p.settings.edges);
+    result["triangles"] = json!(scene.triangles());
+    result["pixels"] = json!(p.width as u64 * p.height as u64);
+    result["covered"] = json!(covered[0]);
+    if p.frames > 1 {
+        result["covered_per_frame"] = json!(covered);
+    }
+    result["output"] = json!(p.output.as_ref().map(|o| o.display().to_string()));
+    result["files"] = json!(
+        files
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect::<Vec<_>>()
+    );
+    result["timings_ms"] = json!({
+        "read": read_ms,
+        "tessellate": tessellate_ms,
+        "device": device_ms,
+        "upload": upload_ms,
+        "draw": ms(draw),
+        "readback": ms(readback),
+        "encode": ms(encode),
+        "total": ms(total.elapsed()),
+    });
+    ctx.progress(1.0, "done", "")?;
+    let arrays = match (&p.output, last) {
+        (None, Some(f)) => {
+            let (h, w) = (f.height as u64, f.width as u64);
+            let uv: Vec<f32> = f.uv.iter().flatten().copied().collect();
+            vec![
+                OwnedArray::new("color", vec![h, w, 4], f.color),
+                OwnedArray::new("depth", vec![h, w], f.depth),
+                OwnedArray::new("face_id", vec![h, w], f.face_id),
+                OwnedArray::new("uv", vec![h, w, 2], uv),
+            ]
+        }
+        _ => Vec::new(),
+    };
+    Ok(Response {
+        result,
+        arrays,
+        files,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size(None).unwrap(), (1280, 720));
+        assert_eq!(parse_size(Some(&json!("640x480"))).unwrap(), (640, 480));
+        assert_eq!(parse_size(Some(&json!([3, 2]))).unwrap(), (3, 2));
+        for (bad, shown) in [
+            (json!("0x0"), "0x0"),
+            (json!("100000x100000"), "100000x100000"),
+            (json!("12"), "\"12\""),
+            (json!("-1x5"), "\"-1x5\""),
+            (json!([1]), "[1]"),
+        ] {
+            let e = parse_size(Some(&bad)).unwrap_err();
+            assert_eq!(e.code, ErrorCode::InvalidRequest);
+            assert!(e.message.contains(shown), "{}", e.message);
+        }
+    }
+
+    #[test]
+    fn frame_names() {
+        let p = Path::new("/tmp/out.png");
+        assert_eq!(frame_path(p, 0, 1), p);
+        assert_eq!(frame_path(p, 7, 12), Path::new("/tmp/out_007.png"));
+    }
+}

@@ -1,0 +1,150 @@
+"""The `render` op through the real daemon and the Python client: arrays (colour, depth, face
+ids, (u, v)) with the documented shapes and dtypes, PNG files that a PNG decoder written here
+(zlib and the five row filters, independent of tessd) reads back to the same pixels, mesh arrays
+in, B-Rep inline, progress frames, cancellation and refusals."""
+
+from __future__ import annotations
+
+import json
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tessd
+from tessd.client import TessdError
+
+REPO = Path(__file__).resolve().parents[2]
+CRANK = REPO / "core/tessellate/tests/data/CrankArm.json"
+
+
+def read_png(path: Path) -> np.ndarray:
+    """An 8-bit RGBA, non-interlaced PNG as a uint8 array [H, W, 4]."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, header = 8, b"", None
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+    w, h, depth, color, _, _, interlace = header
+    assert (depth, color, interlace) == (8, 6, 0), header
+    raw = zlib.decompress(idat)
+    stride, bpp = 4 * w, 4
+    out = np.zeros((h, stride), dtype=np.uint8)
+    prev = np.zeros(stride, dtype=np.int32)
+    for y in range(h):
+        f = raw[y * (stride + 1)]
+        line = np.frombuffer(raw, dtype=np.uint8, count=stride, offset=y * (stride + 1) + 1).astype(np.int32)
+        cur = np.zeros(stride, dtype=np.int32)
+        for x in range(stride):
+            a = cur[x - bpp] if x >= bpp else 0
+            b = prev[x]
+            c = prev[x - bpp] if x >= bpp else 0
+            if f == 0:
+                p = 0
+            elif f == 1:
+                p = a
+            elif f == 2:
+                p = b
+            elif f == 3:
+                p = (a + b) // 2
+            else:
+                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+                p = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+            cur[x] = (line[x] + p) & 0xFF
+        out[y] = cur
+        prev = cur
+    return out.reshape(h, w, 4)
+
+
+def test_arrays_of_the_bunny(daemon, shared_data):
+    seen = []
+    with tessd.Client(daemon.socket) as c:
+        r, a = c.call("render", {"input": str(shared_data / "mesh/stanford_bunny.obj"),
+                                 "size": "160x120", "view": "front"},
+                      progress=lambda f, stage, msg: seen.append((f, stage)))
+    color, depth, ids, uv = (np.asarray(a[k]) for k in ("color", "depth", "face_id", "uv"))
+    assert color.shape == (120, 160, 4) and color.dtype == np.uint8
+    assert depth.shape == (120, 160) and depth.dtype == np.float32
+    assert ids.shape == (120, 160) and ids.dtype == np.uint32
+    assert uv.shape == (120, 160, 2) and uv.dtype == np.float32
+    covered = ids != 0
+    assert r["covered"] == int(covered.sum()) > 500
+    assert r["pixels"] == 160 * 120 and r["triangles"] == 69451
+    assert set(np.unique(ids)) == {0, 1}  # no groups: face index 0 everywhere
+    # Depth: within the camera's planes where covered, infinite on the background.
+    cam = r["camera"]
+    assert np.all((depth[covered] >= cam["near"]) & (depth[covered] <= cam["far"]))
+    assert np.all(np.isinf(depth[~covered]))
+    assert np.all(color[~covered] == [224, 224, 224, 255])
+    assert np.all(uv == 0)  # the bunny has no uvs
+    assert not r["files"] and r["output"] is None
+    stages = [s for _, s in seen]
+    assert "upload" in stages and "render" in stages
+    assert [f for f, _ in seen] == sorted(f for f, _ in seen)
+    for step in ("tessellate", "upload", "draw", "readback", "encode"):
+        assert r["timings_ms"][step] >= 0
+    assert r["adapter"]["backend"] and r["adapter"]["name"]
+
+
+def test_png_output_and_face_ids_png(daemon, tmp_path):
+    out, ids_png = tmp_path / "crank.png", tmp_path / "ids.png"
+    params = {"input": str(CRANK), "size": [120, 90], "shading": "face-ids", "edges": True}
+    with tessd.Client(daemon.socket) as c:
+        r, _ = c.call("render", {**params, "output": str(out), "face_ids": str(ids_png)})
+        _, a = c.call("render", params)
+    assert sorted(Path(f).name for f in r["files"]) == ["crank.png", "ids.png"]
+    color = read_png(out)
+    assert np.array_equal(color, np.asarray(a["color"]))
+    rgba = read_png(ids_png).astype(np.uint32)
+    decoded = rgba[..., 0] + 256 * rgba[..., 1] + 65536 * rgba[..., 2]
+    assert np.all(rgba[..., 3] == 255)
+    assert np.array_equal(decoded, np.asarray(a["face_id"]))
+    # One id per B-Rep face (index in document order + 1).
+    faces = len(json.loads(CRANK.read_text())["faces"])
+    assert 10 < len(np.unique(decoded)) <= faces + 1 and decoded.max() <= faces
+    assert r["tolerance"] > 0 and r["faces"] == faces
+
+
+def test_mesh_arrays_and_inline_brep(daemon):
+    # A unit cube from arrays, one group per side.
+    p = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=np.float32)
+    sides = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    f = np.array([[s[0], s[1], s[2]] for s in sides] + [[s[0], s[2], s[3]] for s in sides], dtype=np.uint32)
+    groups = np.array(list(range(6)) * 2, dtype=np.uint32)
+    with tessd.Client(daemon.socket) as c:
+        r, a = c.call("render", {"size": "64x48", "view": "iso"},
+                      arrays={"positions": p, "face_indices": f, "face_groups": groups})
+        # iso from (+1, −1, +1): sides x = 1, y = 0, z = 1 (groups 5, 2, 1).
+        assert set(np.unique(np.asarray(a["face_id"]))) == {0, 2, 3, 6}
+        doc = json.loads(CRANK.read_text())
+        r2, a2 = c.call("render", {"brep": doc, "size": "64x48", "view": "top"})
+    assert r2["view"] == "top" and np.asarray(a2["face_id"]).max() >= 1
+
+
+def test_cancel_and_refusals_write_nothing(daemon, tmp_path, shared_data):
+    bunny = str(shared_data / "mesh/stanford_bunny.obj")
+    with tessd.Client(daemon.socket) as c:
+        with pytest.raises(TessdError) as e:
+            c.call("render", {"input": bunny, "output": str(tmp_path / "x.png"), "turntable": 4},
+                   progress=lambda f, stage, msg: stage != "render")
+        assert e.value.code == "cancelled"
+        for params, code, text in [
+            ({"size": "0x0"}, "invalid_request", "0x0"),
+            ({"size": "100000x100000"}, "invalid_request", "100000x100000"),
+            ({"cracks": "image"}, "unsupported", "not implemented yet (issue 21 step 2)"),
+            ({"raycast": True}, "unsupported", "not implemented yet (issue 21 step 2)"),
+            ({"view": "sideways"}, "invalid_request", "sideways"),
+            ({"output": str(tmp_path / "x.jpg")}, "unsupported", "x.jpg"),
+        ]:
+            with pytest.raises(TessdError) as e:
+                c.call("render", {"input": bunny, "output": str(tmp_path / "y.png"), **params})
+            assert e.value.code == code and text in str(e.value), (params, e.value)
+    assert list(tmp_path.iterdir()) == []
