@@ -12,7 +12,10 @@
 //!   5.3, 6, table 4);
 //! - [`classify`]: the CPU classifier with the multiresolution stop (5.3), the reference for
 //!   the GPU one, and triangle classification (6);
-//! - [`pack`]: the flat layout for GPU storage buffers and its size (7, table 3).
+//! - [`pack`]: the flat layout for GPU storage buffers and its size (7, table 3);
+//! - [`multi_pack`]: several faces' packed structures in one set of buffers with a per-face
+//!   header table, the f32 walk the fragment shader runs over them (5, 7) and the hand-off
+//!   from triangle classification (6).
 //!
 //! ```
 //! let doc = tessd_brep::Document::from_json(r#"{
@@ -32,6 +35,7 @@ pub mod bezier;
 pub mod classify;
 pub mod implicit;
 pub mod knot_removal;
+pub mod multi_pack;
 pub mod pack;
 pub mod quadratic_fit;
 pub mod quadtree;
@@ -41,6 +45,7 @@ pub mod winding;
 
 pub use bezier::Quadratic;
 pub use classify::{Classification, TrimSource};
+pub use multi_pack::{CellHandoff, FaceHeader, MultiPack};
 pub use pack::PackedTrim;
 pub use quadtree::{MAX_DEPTH, NodeKind, Quadtree};
 pub use tolerance::UvTolerance;
