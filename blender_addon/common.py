@@ -112,6 +112,10 @@ def arrays_of(context, obj, evaluated, **kw):
     Shape keys travel only with the object's own mesh: an object with shape keys and no
     modifiers sends its own mesh (the keys' reference shape) even when modifiers are
     applied; with modifiers applied, its keys are listed as not carried."""
+    if obj.mode == 'EDIT':
+        # In Edit Mode the mesh's own data is stale (the edit mesh holds the truth; its UV
+        # layers even read as empty), and a Replace would be overwritten on leaving it.
+        raise UserError("%s is in Edit Mode: leave Edit Mode first" % obj.name)
     keys = has_shape_keys(obj)
     if keys and evaluated and not has_modifiers(obj):
         evaluated = False

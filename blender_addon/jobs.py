@@ -199,6 +199,11 @@ class Job:
         except UserError as e:
             self._skip(str(e))
             return False
+        except (tessd.DaemonUnavailable, OSError):
+            raise
+        except Exception as e:  # a conversion bug must not take the batch (or Blender) down
+            self._skip("could not be converted (%s: %s)" % (type(e).__name__, e))
+            return False
         self._preparing = False
         if not task.requests:
             self._skip("nothing to send")

@@ -512,29 +512,35 @@ def test_animation_bake_finishes_over_several_ticks(bpy, jobs, tmp_path):
 
 
 def test_replace_refused_when_object_entered_edit_mode(bpy, jobs, capfd):
-    """An object put in Edit Mode while the daemon worked is not replaced (its edit mesh
-    would overwrite the result on leaving Edit Mode)."""
+    """An object in Edit Mode is neither sent nor replaced (its mesh data is stale while the
+    edit mesh holds the truth, and the edit mesh would overwrite a result on leaving Edit
+    Mode). The object is put in Edit Mode before the call with another object active, so the
+    operator's poll (Object mode) passes and the add-on's own check decides: calling
+    `mode_set` from a tick hook, i.e. an operator inside the running operator, crashes
+    headless bpy now and then (the same check runs again before a Replace is applied, for an
+    object entering Edit Mode while a modal job runs)."""
     src = scenes.suzanne()
+    bpy.ops.mesh.primitive_cube_add(location=(4.0, 0.0, 0.0))
+    other = bpy.context.object
+    other.name = "Other"
     select(src)
     mesh_before, n_before = src.data.name, len(src.data.vertices)
-
-    def enter_edit(job):
-        if src.mode != 'EDIT':
-            with bpy.context.temp_override(active_object=src, object=src, selected_objects=[src]):
-                bpy.ops.object.mode_set(mode='EDIT')
-
-    jobs.TICK_HOOKS.append(enter_edit)
+    with bpy.context.temp_override(active_object=src, object=src, selected_objects=[src]):
+        bpy.ops.object.mode_set(mode='EDIT')
+    bpy.context.view_layer.objects.active = other  # the context is in Object mode again
     try:
+        assert src.mode == 'EDIT' and bpy.context.mode == 'OBJECT'
+        assert [o.name for o in bpy.context.selected_objects] == ["Suzanne"]
         with pytest.raises(RuntimeError, match="Edit Mode") as err:
             bpy.ops.tessd.simplify(method='COMPLEXITY', target=30, replace=True)
         assert src.mode == 'EDIT'
     finally:
-        jobs.TICK_HOOKS.clear()
+        bpy.context.view_layer.objects.active = src
         with bpy.context.temp_override(active_object=src, object=src, selected_objects=[src]):
             bpy.ops.object.mode_set(mode='OBJECT')
     print("\n[edit mode] " + str(err.value).strip())
     assert src.data.name == mesh_before and len(src.data.vertices) == n_before
-    assert names() == ["Suzanne"]
+    assert names() == ["Other", "Suzanne"]
 
 
 def test_lods_with_usd_are_one_request(bpy, jobs, tmp_path):

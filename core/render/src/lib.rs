@@ -6,7 +6,9 @@
 //! mesh or a CPU tessellation of a B-Rep), [`camera`] (the pixel-ray convention hosts rely on,
 //! standard views fitted to the part), [`surface`] (the raster pass: colour and the metadata
 //! buffer of paper 001 §3.1, face id and (u, v), plus depth), [`targets`] (the render targets
-//! and their read-back), [`image`] (PNG encoding, including the face-id encoding).
+//! and their read-back), [`image`] (PNG encoding, including the face-id encoding),
+//! [`trim_walk`] (the trim-quadtree walk of paper 000 §5.1–5.3 as a compute pass over query
+//! points, checked against its CPU reference).
 //!
 //! Later steps of issue 21 build on the same targets: GPU trimming (paper 000 §5–7) will
 //! discard fragments outside a face's trims in the surface pass, and crack filling (paper 001)
@@ -31,9 +33,11 @@ pub mod image;
 pub mod scene;
 pub mod surface;
 pub mod targets;
+pub mod trim_walk;
 
 pub use camera::{Bounds, Camera, View};
 pub use scene::Scene;
+pub use trim_walk::TrimWalk;
 
 use std::time::{Duration, Instant};
 use tessd_gpu::{ErrorScopes, GpuContext, GpuError};
