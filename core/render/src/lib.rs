@@ -34,6 +34,8 @@ pub mod scene;
 pub mod surface;
 pub mod targets;
 pub mod trim_walk;
+#[cfg(test)]
+mod wgsl_check;
 
 pub use camera::{Bounds, Camera, View};
 pub use scene::Scene;

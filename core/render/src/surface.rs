@@ -216,24 +216,13 @@ impl SurfacePass {
 
 #[cfg(test)]
 mod tests {
-    use wgpu::naga;
+    use crate::wgsl_check::{struct_size, validated};
 
     /// The WGSL parses and validates without a device, and its `Params` block is 96 bytes.
     #[test]
     fn shader_validates_with_naga() {
-        let module = naga::front::wgsl::parse_str(super::SHADER).expect("WGSL parses");
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .expect("WGSL validates");
-        let params = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some("Params"))
-            .expect("Params");
-        assert_eq!(params.1.inner.size(module.to_ctx()), 96);
+        let module = validated(super::SHADER);
+        assert_eq!(struct_size(&module, "Params"), 96);
     }
 
     #[test]

@@ -282,32 +282,18 @@ impl TrimWalk {
 
 #[cfg(test)]
 mod tests {
-    use wgpu::naga;
+    use crate::wgsl_check::{struct_size, validated};
 
     /// The WGSL parses and validates without a device, and its `FaceHeader` and `Query`
     /// structs have the sizes of the Rust ones (40 and 12 bytes).
     #[test]
     fn shader_validates_with_naga() {
-        let module = naga::front::wgsl::parse_str(super::SHADER).expect("WGSL parses");
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .expect("WGSL validates");
-        let size = |name: &str| {
-            let t = module
-                .types
-                .iter()
-                .find(|(_, t)| t.name.as_deref() == Some(name))
-                .unwrap_or_else(|| panic!("{name}"));
-            t.1.inner.size(module.to_ctx()) as usize
-        };
+        let module = validated(super::SHADER);
         assert_eq!(
-            size("FaceHeader"),
+            struct_size(&module, "FaceHeader"),
             tessd_trim::multi_pack::FACE_HEADER_BYTES
         );
-        assert_eq!(size("Query"), size_of::<super::Query>());
+        assert_eq!(struct_size(&module, "Query"), size_of::<super::Query>());
         assert_eq!(size_of::<super::Query>(), 12);
     }
 }
