@@ -375,20 +375,7 @@ pub(crate) fn write_values<const N: usize>(
     prefix: &[u8],
     values: &[[f32; N]],
 ) -> std::io::Result<()> {
-    let mut line = Vec::with_capacity(128);
-    for v in values {
-        line.clear();
-        line.extend_from_slice(prefix);
-        for (k, &c) in v.iter().enumerate() {
-            if k > 0 || !prefix.is_empty() {
-                line.push(b' ');
-            }
-            push_f32(&mut line, c);
-        }
-        line.push(b'\n');
-        w.write_all(&line)?;
-    }
-    Ok(())
+    write_rows(w, prefix, values, push_f32)
 }
 
 /// Writes `v x y z` lines of f64 positions, each coordinate the shortest decimal that reads
@@ -398,7 +385,20 @@ pub(crate) fn write_f64_values(
     prefix: &[u8],
     values: &[[f64; 3]],
 ) -> std::io::Result<()> {
-    use std::io::Write as _;
+    write_rows(w, prefix, values, |line, c| {
+        use std::io::Write as _;
+        // Writing to a Vec cannot fail.
+        let _ = write!(line, "{c}");
+    })
+}
+
+/// Writes one `prefix c0 c1 ...` line per row, each coordinate formatted by `push`.
+fn write_rows<T: Copy, const N: usize>(
+    w: &mut impl Write,
+    prefix: &[u8],
+    values: &[[T; N]],
+    push: impl Fn(&mut Vec<u8>, T),
+) -> std::io::Result<()> {
     let mut line = Vec::with_capacity(128);
     for v in values {
         line.clear();
@@ -407,8 +407,7 @@ pub(crate) fn write_f64_values(
             if k > 0 || !prefix.is_empty() {
                 line.push(b' ');
             }
-            // Writing to a Vec cannot fail.
-            let _ = write!(line, "{c}");
+            push(&mut line, c);
         }
         line.push(b'\n');
         w.write_all(&line)?;
