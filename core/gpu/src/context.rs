@@ -54,12 +54,21 @@ impl GpuContext {
             max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
             max_buffer_size: adapter_limits.max_buffer_size,
             max_texture_dimension_2d: adapter_limits.max_texture_dimension_2d,
+            // The renderer's B-Rep passes bind a part's six surface and trim buffers beside
+            // the frame's own (up to 14 in one stage); every Vulkan driver offers far more.
+            max_storage_buffers_per_shader_stage: adapter_limits
+                .max_storage_buffers_per_shader_stage
+                .clamp(8, 16),
             ..wgpu::Limits::default()
         };
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some(label),
                 required_limits,
+                // Early depth tests forced on fragment shaders with side effects, where the
+                // adapter has them: object-space crack filling relies on the depth mask
+                // culling fragments before they run (paper 001 §3.4.1).
+                required_features: adapter.features() & wgpu::Features::SHADER_EARLY_DEPTH_TEST,
                 ..Default::default()
             })
             .await

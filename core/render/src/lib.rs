@@ -28,15 +28,29 @@
 
 #![warn(missing_docs)]
 
+pub mod bindings;
+pub mod brep_render;
+pub mod brep_scene;
 pub mod camera;
+pub mod crack_detect;
+pub mod frame_buffers;
 pub mod image;
+pub mod image_fill;
+pub mod object_fill;
+pub mod patch_tessellation;
+pub mod ray_cast;
 pub mod scene;
 pub mod surface;
+pub mod surface_pack;
 pub mod targets;
+pub mod triangle_classification;
 pub mod trim_walk;
+pub mod trimmed_surface;
 #[cfg(test)]
 mod wgsl_check;
 
+pub use brep_render::{BrepReport, Cracks, GpuBrepScene, StepTimings};
+pub use brep_scene::BrepScene;
 pub use camera::{Bounds, Camera, View};
 pub use scene::Scene;
 pub use trim_walk::TrimWalk;
@@ -239,6 +253,9 @@ pub struct GpuScene {
 pub struct Renderer {
     gpu: GpuContext,
     surface: surface::SurfacePass,
+    /// The B-Rep passes, compiled on the first B-Rep render (a mesh-only process never pays
+    /// for them).
+    brep: std::sync::OnceLock<brep_render::BrepPasses>,
 }
 
 impl Renderer {
@@ -252,7 +269,63 @@ impl Renderer {
         let scopes = ErrorScopes::push(&gpu.device);
         let surface = surface::SurfacePass::new(&gpu.device);
         scopes.pop_blocking()?;
-        Ok(Renderer { gpu, surface })
+        Ok(Renderer {
+            gpu,
+            surface,
+            brep: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// The B-Rep passes, compiled on first use.
+    ///
+    /// # Errors
+    /// [`RenderError::Gpu`] when a shader does not compile on this device.
+    fn brep_passes(&self) -> Result<&brep_render::BrepPasses, RenderError> {
+        if let Some(p) = self.brep.get() {
+            return Ok(p);
+        }
+        let scopes = ErrorScopes::push(&self.gpu.device);
+        let passes = brep_render::BrepPasses::new(&self.gpu.device);
+        scopes.pop_blocking()?;
+        Ok(self.brep.get_or_init(|| passes))
+    }
+
+    /// Uploads a B-Rep part prepared by [`BrepScene::new`].
+    ///
+    /// # Errors
+    /// [`RenderError::Gpu`] when a buffer is over the device's limits or a pass does not
+    /// compile.
+    pub fn upload_brep(&self, scene: BrepScene) -> Result<GpuBrepScene, RenderError> {
+        self.brep_passes()?.upload(&self.gpu, scene)
+    }
+
+    /// Renders a B-Rep part with GPU trimming and crack handling `cracks` (paper 001).
+    ///
+    /// # Errors
+    /// As [`brep_render::BrepPasses::render`].
+    pub fn render_brep(
+        &self,
+        part: &GpuBrepScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        cracks: Cracks,
+    ) -> Result<(Frame, BrepReport), RenderError> {
+        self.brep_passes()?
+            .render(&self.gpu, part, camera, settings, cracks)
+    }
+
+    /// Ray casts a B-Rep part (the full-scene reference of paper 001 §4.1.2).
+    ///
+    /// # Errors
+    /// As [`brep_render::BrepPasses::ray_cast`].
+    pub fn ray_cast_brep(
+        &self,
+        part: &GpuBrepScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<(Frame, BrepReport), RenderError> {
+        self.brep_passes()?
+            .ray_cast(&self.gpu, part, camera, settings)
     }
 
     /// The adapter as one line: name, backend, device type, driver.

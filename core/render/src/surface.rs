@@ -11,7 +11,10 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 /// The WGSL of the pass.
-pub const SHADER: &str = include_str!("../../../shaders/render_surface.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../../../shaders/shading.wgsl"),
+    include_str!("../../../shaders/render_surface.wgsl")
+);
 
 /// The background: a light grey (RGB 224).
 pub const BACKGROUND: [u8; 4] = [224, 224, 224, 255];
@@ -19,12 +22,42 @@ pub const BACKGROUND: [u8; 4] = [224, 224, 224, 255];
 /// The uniform block (`Params` in the shader, 96 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct Params {
+pub(crate) struct Params {
     clip_from_world: [[f32; 4]; 4],
     eye: [f32; 3],
     shading: u32,
     light: [f32; 3],
     edges: u32,
+}
+
+impl Params {
+    /// The block for `camera` (positions relative to `origin`), a `width × height` image and
+    /// `settings`; the key light sits above and to the left of the viewer, a little behind
+    /// the camera. Shared by every pass that shades ([`crate::trimmed_surface`] too).
+    pub(crate) fn new(
+        camera: &Camera,
+        origin: [f64; 3],
+        width: u32,
+        height: u32,
+        settings: &RenderSettings,
+    ) -> Params {
+        let (forward, right, up) = camera.basis();
+        let light = crate::camera::normalize(
+            [0, 1, 2].map(|k| 0.55 * up[k] - 0.35 * right[k] - 0.75 * forward[k]),
+        );
+        Params {
+            clip_from_world: camera.clip_from_world(origin, width, height),
+            eye: [0, 1, 2].map(|k| (camera.eye[k] - origin[k]) as f32),
+            shading: match settings.shading {
+                Shading::Lit => 0,
+                Shading::Gooch => 1,
+                Shading::Toon => 2,
+                Shading::FaceIds => 3,
+            },
+            light: light.map(|x| x as f32),
+            edges: settings.edges as u32,
+        }
+    }
 }
 
 /// The compiled pass: pipeline and bind group layout, made once per device.
@@ -65,13 +98,6 @@ impl SurfacePass {
             3 => Float32x2,
             4 => Float32x2,
         ];
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("render_surface"),
             layout: Some(&pipeline_layout),
@@ -91,23 +117,13 @@ impl SurfacePass {
                 cull_mode: None,
                 ..Default::default()
             },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
+            depth_stencil: Some(depth_state()),
             multisample: wgpu::MultisampleState::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[
-                    target(COLOR_FORMAT),
-                    target(FACE_ID_FORMAT),
-                    target(UV_FORMAT),
-                ],
+                targets: &color_targets(),
             }),
             multiview_mask: None,
             cache: None,
@@ -129,23 +145,7 @@ impl SurfacePass {
         camera: &Camera,
         settings: &RenderSettings,
     ) {
-        let (forward, right, up) = camera.basis();
-        // Key light above and to the left of the viewer, a little behind the camera.
-        let light = crate::camera::normalize(
-            [0, 1, 2].map(|k| 0.55 * up[k] - 0.35 * right[k] - 0.75 * forward[k]),
-        );
-        let params = Params {
-            clip_from_world: camera.clip_from_world(origin, targets.width, targets.height),
-            eye: [0, 1, 2].map(|k| (camera.eye[k] - origin[k]) as f32),
-            shading: match settings.shading {
-                Shading::Lit => 0,
-                Shading::Gooch => 1,
-                Shading::Toon => 2,
-                Shading::FaceIds => 3,
-            },
-            light: light.map(|x| x as f32),
-            edges: settings.edges as u32,
-        };
+        let params = Params::new(camera, origin, targets.width, targets.height, settings);
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("render_surface params"),
             contents: bytemuck::bytes_of(&params),
@@ -159,13 +159,43 @@ impl SurfacePass {
                 resource: uniform.as_entire_binding(),
             }],
         });
+        let views = TargetViews::new(targets);
+        let mut pass = views.clear_pass(encoder, "render_surface");
+        if vertex_count > 0 {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.set_vertex_buffer(0, vertices.slice(..));
+            pass.draw(0..vertex_count, 0..1);
+        }
+    }
+}
+
+/// Views of the four targets, for a pass that draws into them.
+pub(crate) struct TargetViews {
+    color: wgpu::TextureView,
+    face_id: wgpu::TextureView,
+    uv: wgpu::TextureView,
+    depth: wgpu::TextureView,
+}
+
+impl TargetViews {
+    /// Views of `targets`.
+    pub(crate) fn new(targets: &Targets) -> TargetViews {
         let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-        let (color, face_id, uv, depth) = (
-            view(&targets.color),
-            view(&targets.face_id),
-            view(&targets.uv),
-            view(&targets.depth),
-        );
+        TargetViews {
+            color: view(&targets.color),
+            face_id: view(&targets.face_id),
+            uv: view(&targets.uv),
+            depth: view(&targets.depth),
+        }
+    }
+
+    /// A render pass that clears the targets (background grey, face id 0, (u, v) 0, depth 1).
+    pub(crate) fn clear_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+    ) -> wgpu::RenderPass<'e> {
         let bg = BACKGROUND.map(|c| c as f64 / 255.0);
         let attach = |view, clear| {
             Some(wgpu::RenderPassColorAttachment {
@@ -178,11 +208,11 @@ impl SurfacePass {
                 },
             })
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("render_surface"),
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
             color_attachments: &[
                 attach(
-                    &color,
+                    &self.color,
                     wgpu::Color {
                         r: bg[0],
                         g: bg[1],
@@ -190,11 +220,11 @@ impl SurfacePass {
                         a: 1.0,
                     },
                 ),
-                attach(&face_id, wgpu::Color::TRANSPARENT),
-                attach(&uv, wgpu::Color::TRANSPARENT),
+                attach(&self.face_id, wgpu::Color::TRANSPARENT),
+                attach(&self.uv, wgpu::Color::TRANSPARENT),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth,
+                view: &self.depth,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(1.0),
                     store: wgpu::StoreOp::Store,
@@ -204,13 +234,29 @@ impl SurfacePass {
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
-        });
-        if vertex_count > 0 {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.set_vertex_buffer(0, vertices.slice(..));
-            pass.draw(0..vertex_count, 0..1);
-        }
+        })
+    }
+}
+
+/// The colour, face-id and (u, v) targets of the surface passes, unblended.
+pub(crate) fn color_targets() -> [Option<wgpu::ColorTargetState>; 3] {
+    [COLOR_FORMAT, FACE_ID_FORMAT, UV_FORMAT].map(|format| {
+        Some(wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })
+    })
+}
+
+/// The depth state of the surface passes: test `Less`, write.
+pub(crate) fn depth_state() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
     }
 }
 

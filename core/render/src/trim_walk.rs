@@ -18,7 +18,10 @@ use wgpu::util::DeviceExt;
 use crate::RenderError;
 
 /// The WGSL of the pass.
-pub const SHADER: &str = include_str!("../../../shaders/trim_walk.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../../../shaders/trim_quadtree.wgsl"),
+    include_str!("../../../shaders/trim_walk.wgsl")
+);
 
 /// Invocations per workgroup (`@workgroup_size` in the shader).
 pub const WORKGROUP: u32 = 64;
@@ -284,13 +287,13 @@ impl TrimWalk {
 mod tests {
     use crate::wgsl_check::{struct_size, validated};
 
-    /// The WGSL parses and validates without a device, and its `FaceHeader` and `Query`
+    /// The WGSL parses and validates without a device, and its `TrimHeader` and `Query`
     /// structs have the sizes of the Rust ones (40 and 12 bytes).
     #[test]
     fn shader_validates_with_naga() {
         let module = validated(super::SHADER);
         assert_eq!(
-            struct_size(&module, "FaceHeader"),
+            struct_size(&module, "TrimHeader"),
             tessd_trim::multi_pack::FACE_HEADER_BYTES
         );
         assert_eq!(struct_size(&module, "Query"), size_of::<super::Query>());

@@ -1,0 +1,287 @@
+//! A B-Rep part prepared once for GPU rendering (paper 001 §3: "this conversion, done once in
+//! a CPU preprocess"): every face's basis surface ([`SurfacePack`]) and trim structure
+//! ([`MultiPack`], paper 000 §3–4 and §7) in flat storage buffers, and per face what the
+//! per-frame tessellation factors need (its world box and a bound of its second derivatives).
+//!
+//! Coordinates: positions on the GPU are f32 relative to [`BrepScene::origin`] (the box
+//! centre), so a part far from the world origin keeps its precision. The tessellation grid of
+//! a face covers its *quadtree's root square* (the face's `bounds`, grown to hold every trim
+//! piece), so that grid cells at level k are quadtree cells at depth k and triangle
+//! classification (paper 000 §6) applies; a patch point (s, t) is normalised over `bounds`
+//! (see [`tessd_trim::multi_pack`]).
+
+use crate::RenderError;
+use crate::camera::Bounds;
+use crate::surface_pack::SurfacePack;
+use tessd_brep::{Document, Face};
+use tessd_gpu::{ErrorScopes, GpuError};
+use tessd_trim::TrimStructure;
+use tessd_trim::multi_pack::{MultiPack, NO_LEVEL};
+use wgpu::util::DeviceExt;
+
+/// The finest tessellation level per axis: 2^9 = 512 grid cells along each side of a face's
+/// domain (the hardware tessellators of paper 000 §7 stop at 64; a compute pass has no such
+/// limit, but a face finer than 512 × 512 cells at 0.5 pixel would be larger than a 4K screen).
+pub const MAX_LEVEL: u32 = 9;
+
+/// Samples per side of the grid on which a face's second derivatives are estimated.
+const CURVATURE_SAMPLES: usize = 16;
+
+/// Safety factor on the sampled second-derivative bound (sampling can miss the maximum
+/// between samples).
+const CURVATURE_SAFETY: f64 = 1.5;
+
+/// The default world tolerance of the trim approximation relative to the part's box diagonal:
+/// 10⁻⁴, a tenth of a pixel when the part fills a 1080p image.
+pub const TRIM_TOLERANCE: f64 = 1e-4;
+
+/// What the per-frame factors need of one face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceInfo {
+    /// The face's world box (sampled on the trimmed face and grown by 5 % of its diagonal).
+    pub bounds: Bounds,
+    /// Bounds of |∂²S/∂x²|, |∂²S/∂y²| and |∂²S/∂x∂y| over the quadtree's root square, in
+    /// world units per (normalised quadtree unit)²: the chordal error of a grid of steps
+    /// (h_x, h_y) is at most (M_xx h_x² + 2 M_xy h_x h_y + M_yy h_y²) / 8.
+    pub curvature: [f64; 3],
+    /// The triangle-classification level k_i of paper 000 §6, capped at [`MAX_LEVEL`]
+    /// (`None` without one).
+    pub k_i: Option<u32>,
+}
+
+/// A part's faces ready to upload (see the module documentation).
+pub struct BrepScene {
+    /// What GPU positions are relative to (the box centre, world coordinates).
+    pub origin: [f64; 3],
+    /// The part's world box.
+    pub bounds: Bounds,
+    /// Per face (document order).
+    pub faces: Vec<FaceInfo>,
+    /// The basis surfaces.
+    pub surfaces: SurfacePack,
+    /// The trim structures, patch = the face's `bounds`.
+    pub trims: MultiPack,
+    /// Faces whose trim structure could not be built, with why; they are not drawn.
+    pub skipped: Vec<String>,
+    /// The world tolerance the trims were approximated with.
+    pub trim_tolerance: f64,
+}
+
+impl BrepScene {
+    /// Prepares `doc`, approximating trims at `trim_tolerance` (world units; `None`:
+    /// [`TRIM_TOLERANCE`] × the box diagonal).
+    ///
+    /// # Errors
+    /// [`RenderError::Camera`] when the part has no finite bounding box (nothing to look at).
+    pub fn new(doc: &Document, trim_tolerance: Option<f64>) -> Result<BrepScene, RenderError> {
+        let b = doc
+            .bounding_box()
+            .ok_or_else(|| RenderError::Camera("the part has no finite point to look at".into()))?;
+        let bounds = Bounds {
+            min: b.min,
+            max: b.max,
+        };
+        let origin = bounds.center();
+        let diagonal = 2.0 * bounds.radius();
+        let eps = trim_tolerance.unwrap_or(TRIM_TOLERANCE * diagonal.max(f64::MIN_POSITIVE));
+        let mut scene = BrepScene {
+            origin,
+            bounds,
+            faces: Vec::with_capacity(doc.faces.len()),
+            surfaces: SurfacePack::new(origin),
+            trims: MultiPack::new(),
+            skipped: Vec::new(),
+            trim_tolerance: eps,
+        };
+        for face in &doc.faces {
+            scene.surfaces.push(face);
+            let trim = match TrimStructure::build(face, eps) {
+                Ok(t) => t,
+                Err(e) => {
+                    // An empty structure keeps the face indices aligned; its face is culled.
+                    scene.skipped.push(e.to_string());
+                    scene.trims.push(&empty_trim(face, eps), face.bounds);
+                    scene.faces.push(FaceInfo {
+                        bounds: Bounds {
+                            min: origin,
+                            max: origin,
+                        },
+                        curvature: [0.0; 3],
+                        k_i: None,
+                    });
+                    continue;
+                }
+            };
+            let info = face_info(face, &trim, &bounds);
+            scene.trims.push(&trim, face.bounds);
+            scene.faces.push(info);
+        }
+        Ok(scene)
+    }
+}
+
+/// A structure for a face whose own could not be built: the whole bounds rectangle with no
+/// trims, used only to keep indices aligned (the face is marked empty and never drawn).
+fn empty_trim(face: &Face, eps: f64) -> TrimStructure {
+    let mut bare = face.clone();
+    bare.loops.clear();
+    let [u0, u1, v0, v1] = bare.bounds;
+    if !(u0 < u1 && v0 < v1 && bare.bounds.iter().all(|x| x.is_finite())) {
+        bare.bounds = [0.0, 1.0, 0.0, 1.0];
+    }
+    TrimStructure::build(&bare, eps).expect("a bare unit rectangle always builds")
+}
+
+/// The face's world box, second-derivative bounds over its quadtree's root square, and k_i.
+fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds) -> FaceInfo {
+    let d = trim.packed.domain;
+    let (w, h) = (d[1] - d[0], d[3] - d[2]);
+    let n = CURVATURE_SAMPLES;
+    let step = 1.0 / n as f64;
+    let p = |i: usize, j: usize| {
+        face.surface
+            .point(d[0] + w * i as f64 * step, d[2] + h * j as f64 * step)
+    };
+    let grid: Vec<[f64; 3]> = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| (i, j)))
+        .map(|(i, j)| p(i, j))
+        .collect();
+    let at = |i: usize, j: usize| grid[j * (n + 1) + i];
+    let second = |a: [f64; 3], b: [f64; 3], c: [f64; 3], e: [f64; 3]| {
+        let v = [0, 1, 2].map(|k| a[k] - b[k] - c[k] + e[k]);
+        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() / (step * step)
+    };
+    let mut m = [0f64; 3];
+    for j in 0..=n {
+        for i in 0..=n {
+            if i > 0 && i < n {
+                m[0] = m[0].max(second(at(i + 1, j), at(i, j), at(i, j), at(i - 1, j)));
+            }
+            if j > 0 && j < n {
+                m[1] = m[1].max(second(at(i, j + 1), at(i, j), at(i, j), at(i, j - 1)));
+            }
+            if i < n && j < n {
+                m[2] = m[2].max(second(
+                    at(i + 1, j + 1),
+                    at(i + 1, j),
+                    at(i, j + 1),
+                    at(i, j),
+                ));
+            }
+        }
+    }
+    // A surface that does not evaluate (NaN) gets the part's size as its bound: finest factors.
+    let fallback = 8.0 * part.radius();
+    let curvature = m.map(|x| {
+        if x.is_finite() {
+            CURVATURE_SAFETY * x
+        } else {
+            fallback
+        }
+    });
+    let bounds = match face.bounding_box() {
+        Some(b) => {
+            let grow = 0.05
+                * [0, 1, 2]
+                    .map(|k| b.max[k] - b.min[k])
+                    .iter()
+                    .fold(0.0, |s, x| s + x * x)
+                    .sqrt();
+            Bounds {
+                min: b.min.map(|x| x - grow),
+                max: b.max.map(|x| x + grow),
+            }
+        }
+        None => *part,
+    };
+    let k_i = trim
+        .stats
+        .k_i
+        .filter(|&k| k != NO_LEVEL)
+        .map(|k| k.min(MAX_LEVEL));
+    FaceInfo {
+        bounds,
+        curvature,
+        k_i,
+    }
+}
+
+/// A [`BrepScene`] on the device: the six storage buffers the passes bind.
+pub struct GpuBrep {
+    /// Per-face surface headers.
+    pub surf_headers: wgpu::Buffer,
+    /// Surface data words.
+    pub surf_words: wgpu::Buffer,
+    /// Per-face trim headers.
+    pub trim_headers: wgpu::Buffer,
+    /// Quadtree node words.
+    pub trim_nodes: wgpu::Buffer,
+    /// Curve maps.
+    pub trim_curves: wgpu::Buffer,
+    /// Two-curve records.
+    pub trim_lines: wgpu::Buffer,
+    /// Bytes of the trim buffers (table 3 of paper 000).
+    pub trim_bytes: usize,
+}
+
+impl GpuBrep {
+    /// Uploads `scene`'s packs.
+    ///
+    /// # Errors
+    /// [`RenderError::Gpu`] when a buffer is over the device's limits.
+    pub fn upload(device: &wgpu::Device, scene: &BrepScene) -> Result<GpuBrep, RenderError> {
+        let limit = device.limits().max_storage_buffer_binding_size;
+        let scopes = ErrorScopes::push(device);
+        let make = |label: &'static str, bytes: &[u8]| -> Result<wgpu::Buffer, RenderError> {
+            if bytes.len() as u64 > limit {
+                return Err(GpuError::BufferTooLarge {
+                    what: label,
+                    size: bytes.len() as u64,
+                    limit,
+                    limit_name: "max_storage_buffer_binding_size",
+                }
+                .into());
+            }
+            let pad = [0u8; 16];
+            Ok(
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: if bytes.is_empty() { &pad } else { bytes },
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+            )
+        };
+        let t = &scene.trims;
+        let out = GpuBrep {
+            surf_headers: make("surface headers", scene.surfaces.header_bytes())?,
+            surf_words: make("surface words", bytemuck::cast_slice(&scene.surfaces.words))?,
+            trim_headers: make("trim headers", t.header_bytes())?,
+            trim_nodes: make("trim nodes", bytemuck::cast_slice(&t.nodes))?,
+            trim_curves: make("trim curves", bytemuck::cast_slice(&t.curves))?,
+            trim_lines: make("trim lines", bytemuck::cast_slice(&t.lines))?,
+            trim_bytes: t.bytes(),
+        };
+        scopes.pop_blocking()?;
+        Ok(out)
+    }
+
+    /// Bind-group entries for the six buffers at bindings `first..first + 6`, in the order
+    /// surface headers, surface words, trim headers, nodes, curves, lines.
+    pub fn entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'_>> {
+        [
+            &self.surf_headers,
+            &self.surf_words,
+            &self.trim_headers,
+            &self.trim_nodes,
+            &self.trim_curves,
+            &self.trim_lines,
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(k, b)| wgpu::BindGroupEntry {
+            binding: first + k as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect()
+    }
+}

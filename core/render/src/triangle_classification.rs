@@ -1,0 +1,89 @@
+//! Triangle classification (paper 000 §6; `shaders/triangle_classify.wgsl`): once per grid
+//! cell of the frame's tessellation, before rasterisation, the quadtree node at depth
+//! k_f = min(ku, kv) that holds the cell. A cell wholly off the face is dropped by the raster
+//! pass's vertex shader (the paper's geometry-shader culling), a cell wholly on needs no
+//! per-fragment walk, and any other cell hands its node to its fragments, whose walk resumes
+//! there instead of at the root. The factors are at least 2^k_i (see
+//! [`crate::patch_tessellation`]), the level at which section 6 finds at least 40 % of the
+//! domain decided.
+
+use crate::bindings::{self, dispatch_1d};
+use crate::patch_tessellation::{FrameTessellation, GpuTessellation, TessParams};
+
+/// The WGSL of the pass.
+pub const SHADER: &str = concat!(
+    include_str!("../../../shaders/brep_bindings.wgsl"),
+    include_str!("../../../shaders/trim_quadtree.wgsl"),
+    include_str!("../../../shaders/surface_eval.wgsl"),
+    include_str!("../../../shaders/patch_grid.wgsl"),
+    include_str!("../../../shaders/triangle_classify.wgsl"),
+);
+
+/// The compiled pass.
+pub struct ClassificationPass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl ClassificationPass {
+    /// Compiles the shader; `brep` is the layout of bind group 1.
+    pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> ClassificationPass {
+        let c = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("triangle_classify"),
+            entries: &[
+                bindings::uniform(0, c),
+                bindings::storage(1, true, c),
+                bindings::storage(2, false, c),
+            ],
+        });
+        let pipeline =
+            bindings::compute_pipeline(device, "triangle_classify", SHADER, &[&layout, brep]);
+        ClassificationPass { layout, pipeline }
+    }
+
+    /// Records the classification of every cell of `tess` into its cell records.
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        brep_group: &wgpu::BindGroup,
+        frame: &FrameTessellation,
+        tess: &GpuTessellation,
+    ) {
+        if frame.cells == 0 {
+            return;
+        }
+        let (x, y, row) = dispatch_1d(frame.cells);
+        let params = TessParams {
+            patch_count: frame.patches.len() as u32,
+            vertex_count: frame.vertices,
+            cell_count: frame.cells,
+            row,
+        };
+        let uniform = bindings::uniform_buffer(device, "classify params", &params);
+        let group = bindings::bind_buffers(
+            device,
+            "triangle_classify",
+            &self.layout,
+            &[&uniform, &tess.patches, &tess.cells],
+        );
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("triangle_classify"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_bind_group(1, brep_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The WGSL parses and validates without a device.
+    #[test]
+    fn shader_validates_with_naga() {
+        crate::wgsl_check::validated(super::SHADER);
+    }
+}

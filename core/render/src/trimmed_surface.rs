@@ -1,0 +1,151 @@
+//! Step 1 of paper 001 (§3.1): the initial rendering of a B-Rep part from the frame's
+//! basis-surface tessellation ([`crate::patch_tessellation`]) with direct GPU trimming
+//! (paper 000 §5: each fragment walks the face's trim quadtree from the node triangle
+//! classification handed down, §6, stopping at a node under the pixel's footprint, §5.3, and
+//! off-face fragments are discarded), into the same targets as the mesh pass: colour, depth
+//! and the metadata buffer (face id, (u, v)) (`shaders/trimmed_surface.wgsl`).
+//!
+//! Back faces are kept (no culling): a tessellation triangle can face away while part of the
+//! surface it stands for faces the eye (paper 001 figure 11), and the fragment's normal comes
+//! from the surface, not the triangle.
+
+use crate::camera::Camera;
+use crate::patch_tessellation::GpuTessellation;
+use crate::surface::{Params, TargetViews, color_targets, depth_state};
+use crate::targets::Targets;
+use crate::{RenderSettings, bindings};
+
+/// The WGSL of the pass.
+pub const SHADER: &str = concat!(
+    include_str!("../../../shaders/shading.wgsl"),
+    include_str!("../../../shaders/brep_bindings.wgsl"),
+    include_str!("../../../shaders/trim_quadtree.wgsl"),
+    include_str!("../../../shaders/surface_eval.wgsl"),
+    include_str!("../../../shaders/patch_grid.wgsl"),
+    include_str!("../../../shaders/grid_raster.wgsl"),
+    include_str!("../../../shaders/trimmed_surface.wgsl"),
+);
+
+/// The compiled pass.
+pub struct TrimmedSurfacePass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+}
+
+/// Bind group 0 of the passes that draw the frame's grid: the shading block, the patches,
+/// the cells and the grid vertices.
+pub(crate) fn grid_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[
+            bindings::uniform(0, vf),
+            bindings::storage(1, true, vf),
+            bindings::storage(2, true, vf),
+            bindings::storage(3, true, vf),
+        ],
+    })
+}
+
+impl TrimmedSurfacePass {
+    /// Compiles the shader; `brep` is the layout of bind group 1.
+    pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> TrimmedSurfacePass {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trimmed_surface.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let layout = grid_layout(device, "trimmed_surface");
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("trimmed_surface"),
+            bind_group_layouts: &[Some(&layout), Some(brep)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("trimmed_surface"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(depth_state()),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &color_targets(),
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        TrimmedSurfacePass { layout, pipeline }
+    }
+
+    /// The bind group 0 of a frame: its shading block and its tessellation.
+    pub(crate) fn frame_group(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        tess: &GpuTessellation,
+        camera: &Camera,
+        origin: [f64; 3],
+        targets: &Targets,
+        settings: &RenderSettings,
+    ) -> wgpu::BindGroup {
+        let params = Params::new(camera, origin, targets.width, targets.height, settings);
+        let uniform = bindings::uniform_buffer(device, "trimmed_surface params", &params);
+        bindings::bind_buffers(
+            device,
+            "trimmed_surface",
+            layout,
+            &[&uniform, &tess.patches, &tess.cells, &tess.grid],
+        )
+    }
+
+    /// Records the pass: clears the targets and draws every cell of `tess`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+        brep_group: &wgpu::BindGroup,
+        tess: &GpuTessellation,
+        origin: [f64; 3],
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) {
+        let group = Self::frame_group(
+            device,
+            &self.layout,
+            tess,
+            camera,
+            origin,
+            targets,
+            settings,
+        );
+        let views = TargetViews::new(targets);
+        let mut pass = views.clear_pass(encoder, "trimmed_surface");
+        if tess.cell_count > 0 {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.set_bind_group(1, brep_group, &[]);
+            pass.draw(0..tess.cell_count * 6, 0..1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The WGSL parses and validates without a device.
+    #[test]
+    fn shader_validates_with_naga() {
+        crate::wgsl_check::validated(super::SHADER);
+    }
+}
