@@ -4,7 +4,7 @@
 //
 // 1. `cast_rays`: the pixel's ray (the camera convention of `tessd_render::camera`) against every
 //    face's world box, then against the boxes of the face's seed cells (a grid over its
-//    patch, built on the CPU by `ray_cast.rs`); Newton (ray_newton.wgsl) from the centre of
+//    patch, built on the CPU by `ray_cast.rs` with the part's `BrepScene`); Newton (ray_newton.wgsl) from the centre of
 //    each seed cell the ray crosses; a converged hit counts when the trim walk (paper 000 §5,
 //    trim_quadtree.wgsl) puts its (u, v) on the face, as paper 001 §3.4.2.a classifies
 //    ray-cast points. The nearest such hit goes to `hits`.
@@ -12,9 +12,10 @@
 //    frame's per-pixel buffers (`tessd_render::frame_buffers` layout: index y·W + x, row 0 at
 //    the top).
 //
-// Two passes because one would bind eleven storage buffers, over the eight per stage that
-// wgpu's default limits allow. Concatenated after surface_eval.wgsl, ray_newton.wgsl,
-// trim_quadtree.wgsl and shading.wgsl.
+// Two passes: the search (the heavy loop) and the shading of its result, each kernel small.
+// Bind group 0 is the pass's own (below), group 1 the part's shared buffers
+// (brep_bindings.wgsl). Concatenated after brep_bindings.wgsl, surface_eval.wgsl,
+// ray_newton.wgsl, trim_quadtree.wgsl and shading.wgsl.
 
 // `ray_cast::Params` (96 bytes). Positions relative to the scene origin.
 struct RayParams {
@@ -54,18 +55,12 @@ struct CastHit {
 }
 
 @group(0) @binding(0) var<uniform> params: RayParams;
-@group(0) @binding(1) var<storage, read> surf_headers: array<SurfaceHeader>;
-@group(0) @binding(2) var<storage, read> surf_words: array<f32>;
-@group(0) @binding(3) var<storage, read> trim_headers: array<TrimHeader>;
-@group(0) @binding(4) var<storage, read> trim_nodes: array<u32>;
-@group(0) @binding(5) var<storage, read> trim_curves: array<f32>;
-@group(0) @binding(6) var<storage, read> trim_lines: array<u32>;
-@group(0) @binding(7) var<storage, read> seed_boxes: array<SeedBox>;
-@group(0) @binding(8) var<storage, read_write> hits: array<CastHit>;
-@group(0) @binding(9) var<storage, read_write> frame_color: array<u32>;
-@group(0) @binding(10) var<storage, read_write> frame_depth: array<f32>;
-@group(0) @binding(11) var<storage, read_write> frame_face: array<u32>;
-@group(0) @binding(12) var<storage, read_write> frame_uv: array<vec2<f32>>;
+@group(0) @binding(1) var<storage, read> seed_boxes: array<SeedBox>;
+@group(0) @binding(2) var<storage, read_write> hits: array<CastHit>;
+@group(0) @binding(3) var<storage, read_write> frame_color: array<u32>;
+@group(0) @binding(4) var<storage, read_write> frame_depth: array<f32>;
+@group(0) @binding(5) var<storage, read_write> frame_face: array<u32>;
+@group(0) @binding(6) var<storage, read_write> frame_uv: array<vec2<f32>>;
 
 const F32_MAX: f32 = 3.4028235e38;
 

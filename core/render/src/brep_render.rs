@@ -21,6 +21,7 @@ use crate::frame_buffers::{FrameBuffers, GatherPass};
 use crate::image_fill::ImageFillPass;
 use crate::object_fill::ObjectFillPass;
 use crate::patch_tessellation::{FrameTessellation, PIXEL_ACCURACY, TessellationPass, brep_group};
+use crate::ray_cast::RayCastPass;
 use crate::targets::Targets;
 use crate::triangle_classification::ClassificationPass;
 use crate::trimmed_surface::TrimmedSurfacePass;
@@ -123,6 +124,7 @@ pub struct BrepPasses {
     detect: CrackDetectPass,
     image_fill: ImageFillPass,
     object_fill: ObjectFillPass,
+    ray_cast: RayCastPass,
 }
 
 /// A part on the device, ready for any number of frames.
@@ -153,6 +155,7 @@ impl BrepPasses {
             detect: CrackDetectPass::new(device),
             image_fill: ImageFillPass::new(device),
             object_fill: ObjectFillPass::new(device, &brep_layout),
+            ray_cast: RayCastPass::new(device, &brep_layout),
             brep_layout,
         }
     }
@@ -273,7 +276,18 @@ impl BrepPasses {
         let mut report = BrepReport::default();
         let scopes = ErrorScopes::push(device);
         let buffers = FrameBuffers::new(device, width, height);
-        let _ = (&buffers, &mut report.timings.ray_cast, settings); // TODO ray cast
+        step(gpu, &mut report.timings.ray_cast, |e| {
+            self.ray_cast.encode(
+                device,
+                e,
+                &part.group,
+                &part.buffers,
+                &part.scene,
+                camera,
+                settings,
+                &buffers,
+            )
+        })?;
         scopes.pop_blocking()?;
         let start = Instant::now();
         let (frame, _) = buffers.read(device, &gpu.queue)?;

@@ -12,6 +12,7 @@
 
 use crate::RenderError;
 use crate::camera::Bounds;
+use crate::ray_cast::{SeedBox, face_seeds};
 use crate::surface_pack::SurfacePack;
 use tessd_brep::{Document, Face};
 use tessd_gpu::{ErrorScopes, GpuError};
@@ -65,6 +66,9 @@ pub struct BrepScene {
     pub skipped: Vec<String>,
     /// The world tolerance the trims were approximated with.
     pub trim_tolerance: f64,
+    /// The ray caster's seed boxes ([`crate::ray_cast`]): one box per face first (document
+    /// order; a skipped face's is empty, no cells), then every face's seed cells.
+    pub seeds: Vec<SeedBox>,
 }
 
 impl BrepScene {
@@ -92,7 +96,13 @@ impl BrepScene {
             trims: MultiPack::new(),
             skipped: Vec::new(),
             trim_tolerance: eps,
+            seeds: Vec::with_capacity(doc.faces.len()),
         };
+        // Seed boxes are inflated by Newton's tolerance (that of object filling) and a hair.
+        let seed_margin =
+            (crate::object_fill::NEWTON_TOLERANCE + 1e-6) * diagonal.max(f64::MIN_POSITIVE);
+        let first_cell = doc.faces.len() as u32;
+        let mut cells = Vec::new();
         for face in &doc.faces {
             scene.surfaces.push(face);
             let trim = match TrimStructure::build(face, eps) {
@@ -109,14 +119,40 @@ impl BrepScene {
                         curvature: [0.0; 3],
                         k_i: None,
                     });
+                    scene
+                        .seeds
+                        .push(face_box(&[], first_cell + cells.len() as u32, 0, 0));
                     continue;
                 }
             };
             let info = face_info(face, &trim, &bounds);
             scene.trims.push(&trim, face.bounds);
             scene.faces.push(info);
+            let (ns, nt, face_cells) = face_seeds(face, origin, seed_margin);
+            let first = first_cell + cells.len() as u32;
+            scene.seeds.push(face_box(&face_cells, first, ns, nt));
+            cells.extend(face_cells);
         }
+        scene.seeds.extend(cells);
         Ok(scene)
+    }
+}
+
+/// The face box of a face's seed `cells` (`ns × nt` of them, the first at index `first` of
+/// the seed array): their union, empty (and never crossed) without cells.
+fn face_box(cells: &[SeedBox], first: u32, ns: usize, nt: usize) -> SeedBox {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for c in cells {
+        for k in 0..3 {
+            lo[k] = lo[k].min(c.lo[k]);
+            hi[k] = hi[k].max(c.hi[k]);
+        }
+    }
+    SeedBox {
+        lo,
+        a: first,
+        hi,
+        b: ns as u32 | (nt as u32) << 16,
     }
 }
 
@@ -206,7 +242,8 @@ fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds) -> FaceInfo {
     }
 }
 
-/// A [`BrepScene`] on the device: the six storage buffers the passes bind.
+/// A [`BrepScene`] on the device: the six storage buffers the passes bind (bind group 1,
+/// [`GpuBrep::entries`]) and the ray caster's seed boxes (bound by [`crate::ray_cast`] alone).
 pub struct GpuBrep {
     /// Per-face surface headers.
     pub surf_headers: wgpu::Buffer,
@@ -220,6 +257,8 @@ pub struct GpuBrep {
     pub trim_curves: wgpu::Buffer,
     /// Two-curve records.
     pub trim_lines: wgpu::Buffer,
+    /// The ray caster's seed boxes ([`BrepScene::seeds`]); not part of bind group 1.
+    pub seeds: wgpu::Buffer,
     /// Bytes of the trim buffers (table 3 of paper 000).
     pub trim_bytes: usize,
 }
@@ -242,7 +281,8 @@ impl GpuBrep {
                 }
                 .into());
             }
-            let pad = [0u8; 16];
+            // An empty array still binds at least one element (a seed box is 32 bytes).
+            let pad = [0u8; 64];
             Ok(
                 device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some(label),
@@ -259,6 +299,7 @@ impl GpuBrep {
             trim_nodes: make("trim nodes", bytemuck::cast_slice(&t.nodes))?,
             trim_curves: make("trim curves", bytemuck::cast_slice(&t.curves))?,
             trim_lines: make("trim lines", bytemuck::cast_slice(&t.lines))?,
+            seeds: make("seed boxes", bytemuck::cast_slice(&scene.seeds))?,
             trim_bytes: t.bytes(),
         };
         scopes.pop_blocking()?;

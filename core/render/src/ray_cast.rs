@@ -11,24 +11,27 @@
 //! 8, more along a direction in which the normal turns a lot), each with a world box of
 //! sampled surface points inflated by a bound of the surface's bulge between samples. A ray
 //! runs Newton from the centre of every cell whose box it crosses, inside every face box it
-//! crosses. Built once per scene on the CPU ([`RayCastScene::new`]).
-
-use std::time::{Duration, Instant};
+//! crosses. Built once per scene on the CPU with the rest of the part
+//! ([`BrepScene::seeds`](crate::brep_scene::BrepScene::seeds), by [`face_seeds`]) and uploaded
+//! with it ([`GpuBrep::seeds`]).
+//!
+//! Bindings: group 0 is the pass's own (parameters, seed boxes, the per-pixel hits, the
+//! frame's buffers), group 1 the part's shared buffers ([`crate::bindings::brep_layout`],
+//! `shaders/brep_bindings.wgsl`). Run by [`crate::brep_render::BrepPasses::ray_cast`].
 
 use bytemuck::{Pod, Zeroable};
-use tessd_brep::{Document, Face};
-use tessd_gpu::{ErrorScopes, GpuContext, GpuError};
-use tessd_trim::TrimStructure;
-use tessd_trim::multi_pack::MultiPack;
-use wgpu::util::DeviceExt;
+use tessd_brep::Face;
 
-use crate::camera::{Camera, normalize};
+use crate::RenderSettings;
+use crate::bindings::{self, storage, uniform};
+use crate::brep_scene::{BrepScene, GpuBrep};
+use crate::camera::Camera;
 use crate::frame_buffers::FrameBuffers;
-use crate::surface_pack::SurfacePack;
-use crate::{Frame, RenderError, Shading};
+use crate::object_fill::NEWTON_TOLERANCE;
 
 /// The WGSL of the two passes (`cast_rays`, `resolve_hits`) with the libraries they use.
 pub const SHADER: &str = concat!(
+    include_str!("../../../shaders/brep_bindings.wgsl"),
     include_str!("../../../shaders/surface_eval.wgsl"),
     include_str!("../../../shaders/ray_newton.wgsl"),
     include_str!("../../../shaders/trim_quadtree.wgsl"),
@@ -85,27 +88,6 @@ struct Params {
 
 /// The nearest hit of a pixel (`CastHit`, 16 bytes).
 const HIT_BYTES: u64 = 16;
-
-/// A document's faces ready to ray cast: the surfaces ([`SurfacePack`]), the trims
-/// ([`MultiPack`]) and the seed boxes, on the device.
-pub struct RayCastScene {
-    /// The scene origin (the document's bounding-box centre) positions are relative to.
-    pub origin: [f64; 3],
-    /// The bounding box's diagonal, world units.
-    pub diagonal: f64,
-    /// Newton's convergence tolerance, world units (10⁻⁵ of the diagonal by default).
-    pub tolerance: f64,
-    /// Number of faces.
-    pub faces: usize,
-    /// Seed cells over all faces.
-    pub cells: usize,
-    /// Faces left out (their trim structure failed to build), with why.
-    pub warnings: Vec<String>,
-    surf_headers: wgpu::Buffer,
-    surf_words: wgpu::Buffer,
-    trim: [wgpu::Buffer; 4],
-    seeds: wgpu::Buffer,
-}
 
 /// The seed cells of one face: cells along s and t and their boxes (relative to `origin`);
 /// no cells when the surface does not evaluate to finite points.
@@ -199,365 +181,128 @@ pub fn face_seeds(face: &Face, origin: [f64; 3], margin: f64) -> (usize, usize, 
     (ns, nt, boxes)
 }
 
-impl RayCastScene {
-    /// Packs and uploads `doc`'s faces: the surfaces relative to the document's bounding-box
-    /// centre, the trims built by [`TrimStructure::build`] at `eps_world` (world units), the
-    /// seed cells. A face whose trim structure fails to build is left out (never hit) and
-    /// named in [`warnings`](Self::warnings).
-    ///
-    /// # Errors
-    /// [`RenderError::Gpu`] when a buffer is over the device's limits or wgpu fails.
-    pub fn new(
-        device: &wgpu::Device,
-        doc: &Document,
-        eps_world: f64,
-    ) -> Result<RayCastScene, RenderError> {
-        let bbox = doc.bounding_box();
-        let (origin, diagonal) = match bbox {
-            Some(b) => (
-                [0, 1, 2].map(|k| 0.5 * (b.min[k] + b.max[k])),
-                [0, 1, 2]
-                    .map(|k| (b.max[k] - b.min[k]).powi(2))
-                    .iter()
-                    .sum::<f64>()
-                    .sqrt(),
-            ),
-            None => ([0.0; 3], 1.0),
-        };
-        let diagonal = if diagonal > 0.0 { diagonal } else { 1.0 };
-        let tolerance = 1e-5 * diagonal;
-        let mut surfaces = SurfacePack::new(origin);
-        let mut trims = MultiPack::new();
-        let mut warnings = Vec::new();
-        let mut face_boxes = Vec::with_capacity(doc.faces.len());
-        let mut cell_boxes = Vec::new();
-        let first = doc.faces.len() as u32;
-        for face in &doc.faces {
-            surfaces.push(face);
-            let (mut ns, mut nt, mut cells) = face_seeds(face, origin, 1e-6 * diagonal + tolerance);
-            match TrimStructure::build(face, eps_world) {
-                Ok(trim) => {
-                    trims.push(&trim, face.bounds);
-                }
-                Err(e) => {
-                    // Keep the indices aligned: the whole patch as a stand-in, never cast.
-                    warnings.push(format!("face {}: {e}; left out", face.id));
-                    let mut whole = face.clone();
-                    whole.loops.clear();
-                    let trim = TrimStructure::build(&whole, eps_world)
-                        .map_err(|e| RenderError::Io(format!("face {}: {e}", face.id)))?;
-                    trims.push(&trim, face.bounds);
-                    (ns, nt, cells) = (0, 0, Vec::new());
-                }
-            }
-            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-            for c in &cells {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(c.lo[k]);
-                    hi[k] = hi[k].max(c.hi[k]);
-                }
-            }
-            face_boxes.push(SeedBox {
-                lo,
-                a: first + cell_boxes.len() as u32,
-                hi,
-                b: ns as u32 | (nt as u32) << 16,
-            });
-            cell_boxes.extend(cells);
-        }
-        let cells = cell_boxes.len();
-        face_boxes.extend(cell_boxes);
-
-        let scopes = ErrorScopes::push(device);
-        let limit = device.limits().max_storage_buffer_binding_size;
-        let buffer = |label: &'static str, bytes: &[u8]| {
-            if bytes.len() as u64 > limit {
-                return Err(RenderError::Gpu(GpuError::BufferTooLarge {
-                    what: label,
-                    size: bytes.len() as u64,
-                    limit,
-                    limit_name: "max_storage_buffer_binding_size",
-                }));
-            }
-            // An empty array still needs a binding of at least one element.
-            let pad = [0u8; 64];
-            let contents = if bytes.is_empty() { &pad[..] } else { bytes };
-            Ok(
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-            )
-        };
-        let scene = RayCastScene {
-            origin,
-            diagonal,
-            tolerance,
-            faces: doc.faces.len(),
-            cells,
-            warnings,
-            surf_headers: buffer("surface headers", surfaces.header_bytes())?,
-            surf_words: buffer("surface words", surfaces.word_bytes())?,
-            trim: [
-                buffer("trim headers", trims.header_bytes())?,
-                buffer("trim nodes", bytemuck::cast_slice(&trims.nodes))?,
-                buffer("trim curves", bytemuck::cast_slice(&trims.curves))?,
-                buffer("trim lines", bytemuck::cast_slice(&trims.lines))?,
-            ],
-            seeds: buffer("seed boxes", bytemuck::cast_slice(&face_boxes))?,
-        };
-        scopes.pop_blocking()?;
-        Ok(scene)
-    }
-
-    /// With Newton's convergence tolerance set to `tolerance` (world units).
-    pub fn with_tolerance(mut self, tolerance: f64) -> Self {
-        self.tolerance = tolerance;
-        self
-    }
-}
-
 /// The compiled passes: made once per device.
 pub struct RayCastPass {
-    cast_layout: wgpu::BindGroupLayout,
-    resolve_layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
     cast: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
 }
 
-fn entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    entry(binding, wgpu::BufferBindingType::Storage { read_only })
-}
-
-fn bind<'a>(binding: u32, buffer: &'a wgpu::Buffer) -> wgpu::BindGroupEntry<'a> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
-    }
-}
-
 impl RayCastPass {
-    /// Compiles the shader and builds both pipelines (wgpu reports failures through the
-    /// device's error scopes).
-    pub fn new(device: &wgpu::Device) -> RayCastPass {
+    /// Compiles the shader and builds both pipelines, group 1 being `brep_layout` (wgpu
+    /// reports failures through the device's error scopes).
+    pub fn new(device: &wgpu::Device, brep_layout: &wgpu::BindGroupLayout) -> RayCastPass {
+        let c = wgpu::ShaderStages::COMPUTE;
+        // Params, seed boxes, hits, then the frame's colour, depth, face and (u, v).
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ray_cast"),
+            entries: &[
+                uniform(0, c),
+                storage(1, true, c),
+                storage(2, false, c),
+                storage(3, false, c),
+                storage(4, false, c),
+                storage(5, false, c),
+                storage(6, false, c),
+            ],
+        });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("ray_cast.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SHADER.into()),
         });
-        let uniform = entry(0, wgpu::BufferBindingType::Uniform);
-        let cast_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ray_cast cast"),
-            entries: &[
-                uniform,
-                storage(1, true),
-                storage(2, true),
-                storage(3, true),
-                storage(4, true),
-                storage(5, true),
-                storage(6, true),
-                storage(7, true),
-                storage(8, false),
-            ],
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("ray_cast"),
+            bind_group_layouts: &[Some(&layout), Some(brep_layout)],
+            immediate_size: 0,
         });
-        let resolve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ray_cast resolve"),
-            entries: &[
-                uniform,
-                storage(1, true),
-                storage(2, true),
-                storage(8, false),
-                storage(9, false),
-                storage(10, false),
-                storage(11, false),
-                storage(12, false),
-            ],
-        });
-        let pipeline = |layout: &wgpu::BindGroupLayout, entry: &str| {
-            let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            });
+        let pipeline = |entry: &str| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
-                layout: Some(&pl),
+                layout: Some(&pipeline_layout),
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),
                 cache: None,
             })
         };
-        let cast = pipeline(&cast_layout, "cast_rays");
-        let resolve = pipeline(&resolve_layout, "resolve_hits");
         RayCastPass {
-            cast_layout,
-            resolve_layout,
-            cast,
-            resolve,
+            cast: pipeline("cast_rays"),
+            resolve: pipeline("resolve_hits"),
+            layout,
         }
     }
 
-    /// Records both passes: every pixel of a `width × height` image of `scene` seen from
-    /// `camera` written to the four per-pixel buffers (`color` RGBA8 packed, `depth` camera z
-    /// or `f32::MAX`, `face` index + 1 or 0, `uv` native (u, v); index y·W + x, row 0 at the
-    /// top), shaded in mode `shading` with the raster pass's key light.
+    /// Records both passes: every pixel of `out` (its `width × height`) of the part `scene`
+    /// (on the device as `brep`, bound as `brep_group`) seen from `camera` written to the
+    /// frame's colour (RGBA8 packed), depth (camera z, or the background depth), face (its
+    /// index plus one, or 0) and (u, v) (native) buffers; index y·W + x, row 0 at the top.
+    /// Shaded in `settings.shading` with the raster pass's key light; Newton's tolerance is
+    /// [`NEWTON_TOLERANCE`] of the part's box diagonal (as object filling). The crack flags
+    /// are left as they are.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &RayCastScene,
+        brep_group: &wgpu::BindGroup,
+        brep: &GpuBrep,
+        scene: &BrepScene,
         camera: &Camera,
-        shading: Shading,
-        width: u32,
-        height: u32,
-        color: &wgpu::Buffer,
-        depth: &wgpu::Buffer,
-        face: &wgpu::Buffer,
-        uv: &wgpu::Buffer,
+        settings: &RenderSettings,
+        out: &FrameBuffers,
     ) {
+        let (width, height) = (out.width, out.height);
         let (forward, right, up) = camera.basis();
-        // The raster pass's key light (surface.rs): above and to the left of the viewer.
-        let light =
-            normalize([0, 1, 2].map(|k| 0.55 * up[k] - 0.35 * right[k] - 0.75 * forward[k]));
+        let lit = crate::surface::Params::new(camera, scene.origin, width, height, settings);
         let tan_y = (0.5 * camera.fov.to_radians()).tan();
         let f32s = |v: [f64; 3]| v.map(|x| x as f32);
         let params = Params {
             eye: f32s([0, 1, 2].map(|k| camera.eye[k] - scene.origin[k])),
-            tol: scene.tolerance as f32,
+            tol: (NEWTON_TOLERANCE * 2.0 * scene.bounds.radius()) as f32,
             forward: f32s(forward),
             width,
             right: f32s(right),
             height,
             up: f32s(up),
-            faces: scene.faces as u32,
-            light: f32s(light),
-            shading: match shading {
-                Shading::Lit => 0,
-                Shading::Gooch => 1,
-                Shading::Toon => 2,
-                Shading::FaceIds => 3,
-            },
+            faces: scene.faces.len() as u32,
+            light: lit.light,
+            shading: lit.shading,
             tan_x: (tan_y * width as f64 / height.max(1) as f64) as f32,
             tan_y: tan_y as f32,
             pad: [0; 2],
         };
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("ray_cast params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniform = bindings::uniform_buffer(device, "ray_cast params", &params);
         let hits = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ray_cast hits"),
             size: (width as u64 * height as u64 * HIT_BYTES).max(HIT_BYTES),
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let [t0, t1, t2, t3] = &scene.trim;
-        let cast_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ray_cast cast"),
-            layout: &self.cast_layout,
-            entries: &[
-                bind(0, &uniform),
-                bind(1, &scene.surf_headers),
-                bind(2, &scene.surf_words),
-                bind(3, t0),
-                bind(4, t1),
-                bind(5, t2),
-                bind(6, t3),
-                bind(7, &scene.seeds),
-                bind(8, &hits),
+        let group = bindings::bind_buffers(
+            device,
+            "ray_cast",
+            &self.layout,
+            &[
+                &uniform,
+                &brep.seeds,
+                &hits,
+                &out.color,
+                &out.depth,
+                &out.face,
+                &out.uv,
             ],
-        });
-        let resolve_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ray_cast resolve"),
-            layout: &self.resolve_layout,
-            entries: &[
-                bind(0, &uniform),
-                bind(1, &scene.surf_headers),
-                bind(2, &scene.surf_words),
-                bind(8, &hits),
-                bind(9, color),
-                bind(10, depth),
-                bind(11, face),
-                bind(12, uv),
-            ],
-        });
+        );
         let groups = (width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ray_cast"),
             timestamp_writes: None,
         });
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_bind_group(1, brep_group, &[]);
         pass.set_pipeline(&self.cast);
-        pass.set_bind_group(0, &cast_bind, &[]);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
         pass.set_pipeline(&self.resolve);
-        pass.set_bind_group(0, &resolve_bind, &[]);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
-    }
-
-    /// Renders `scene` from `camera` into fresh [`FrameBuffers`] and reads them back; also
-    /// returns the wall time from recording to the device reporting the passes done.
-    ///
-    /// # Errors
-    /// [`RenderError::Size`] for an empty image, [`RenderError::Camera`] for a camera that
-    /// defines no view, [`RenderError::Gpu`] when wgpu fails.
-    pub fn render(
-        &self,
-        gpu: &GpuContext,
-        scene: &RayCastScene,
-        camera: &Camera,
-        shading: Shading,
-        width: u32,
-        height: u32,
-    ) -> Result<(Frame, Duration), RenderError> {
-        crate::check_size(width, height, crate::MAX_SIDE)?;
-        camera.check()?;
-        let device = &gpu.device;
-        let start = Instant::now();
-        let scopes = ErrorScopes::push(device);
-        let buffers = FrameBuffers::new(device, width, height);
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("ray_cast"),
-        });
-        self.encode(
-            device,
-            &mut encoder,
-            scene,
-            camera,
-            shading,
-            width,
-            height,
-            &buffers.color,
-            &buffers.depth,
-            &buffers.face,
-            &buffers.uv,
-        );
-        let index = gpu.queue.submit([encoder.finish()]);
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(index),
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-        scopes.pop_blocking()?;
-        let elapsed = start.elapsed();
-        let (frame, _) = buffers.read(device, &gpu.queue)?;
-        Ok((frame, elapsed))
     }
 }
 

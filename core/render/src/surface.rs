@@ -25,8 +25,8 @@ pub const BACKGROUND: [u8; 4] = [224, 224, 224, 255];
 pub(crate) struct Params {
     clip_from_world: [[f32; 4]; 4],
     eye: [f32; 3],
-    shading: u32,
-    light: [f32; 3],
+    pub(crate) shading: u32,
+    pub(crate) light: [f32; 3],
     edges: u32,
 }
 

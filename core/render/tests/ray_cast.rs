@@ -1,4 +1,4 @@
-//! Full-scene ray casting (`tessd_render::ray_cast`, paper 001 §4.1.2) against independent
+//! Full-scene ray casting (`Renderer::ray_cast_brep`, paper 001 §4.1.2) against independent
 //! references: (a) a sphere of known radius, whose every pixel's depth must be the analytic
 //! ray–sphere intersection's (f64, the camera convention written out here) within 10⁻³ of
 //! the radius, and whose coverage must be the analytic disk's except on silhouette pixels;
@@ -13,23 +13,19 @@
 use std::sync::OnceLock;
 
 use tessd_brep::Document;
-use tessd_gpu::GpuContext;
 use tessd_render::camera::{add, dot, scale, sub};
-use tessd_render::ray_cast::{RayCastPass, RayCastScene};
-use tessd_render::{Bounds, Camera, Frame, Shading, View};
+use tessd_render::{Bounds, BrepScene, Camera, Frame, RenderSettings, Renderer, View};
 use tessd_trim::TrimStructure;
 
 const W: u32 = 96;
 const H: u32 = 64;
 
-fn gpu() -> &'static (GpuContext, RayCastPass) {
-    static G: OnceLock<(GpuContext, RayCastPass)> = OnceLock::new();
-    G.get_or_init(|| {
-        let gpu = GpuContext::open("tessd-render ray_cast test")
-            .unwrap_or_else(|e| panic!("no GPU for the ray-cast tests: {e}"));
-        println!("adapter: {}", gpu.describe());
-        let pass = RayCastPass::new(&gpu.device);
-        (gpu, pass)
+fn renderer() -> &'static Renderer {
+    static R: OnceLock<Renderer> = OnceLock::new();
+    R.get_or_init(|| {
+        let r = Renderer::new().unwrap_or_else(|e| panic!("no GPU for the ray-cast tests: {e}"));
+        println!("adapter: {}", r.adapter_info());
+        r
     })
 }
 
@@ -41,23 +37,37 @@ fn bounds(doc: &Document) -> Bounds {
     }
 }
 
-fn cast(doc: &Document, camera: &Camera) -> (Frame, RayCastScene) {
-    let (gpu, pass) = gpu();
+/// What a test needs of the prepared part besides the frame.
+struct Part {
+    /// The box diagonal.
+    diagonal: f64,
+    /// The world tolerance its trims were approximated with.
+    trim_tolerance: f64,
+}
+
+/// Ray casts `doc` (prepared with the default trim tolerance) from `camera` at W × H, lit.
+fn cast(doc: &Document, camera: &Camera) -> (Frame, Part) {
+    let r = renderer();
     let start = std::time::Instant::now();
-    let scene = RayCastScene::new(&gpu.device, doc, 1e-3).unwrap();
+    let scene = BrepScene::new(doc, None).unwrap();
     let built = start.elapsed();
-    let (frame, elapsed) = pass
-        .render(gpu, &scene, camera, Shading::Lit, W, H)
-        .unwrap();
+    assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
+    let (faces, cells) = (scene.faces.len(), scene.seeds.len() - scene.faces.len());
+    let info = Part {
+        diagonal: 2.0 * scene.bounds.radius(),
+        trim_tolerance: scene.trim_tolerance,
+    };
+    let part = r.upload_brep(scene).unwrap();
+    let settings = RenderSettings::new(W, H);
+    let (frame, report) = r.ray_cast_brep(&part, camera, &settings).unwrap();
     println!(
-        "{} faces, {} seed cells (built in {built:.2?}); {W}x{H} ray cast in {elapsed:.2?}, {} \
-         pixels covered",
-        scene.faces,
-        scene.cells,
+        "{faces} faces, {cells} seed cells (scene built in {built:.2?}); {W}x{H} ray cast in \
+         {:.2?}, {} pixels covered",
+        report.timings.ray_cast,
         frame.covered()
     );
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    (frame, scene)
+    assert_eq!(report.timings.ray_cast, report.timings.frame());
+    (frame, info)
 }
 
 /// The pixel's ray direction, written out from the convention (not `Camera::ray`).
@@ -164,13 +174,15 @@ fn plate_with_hole() -> Document {
     Document::from_json(&text).unwrap()
 }
 
-/// Every covered pixel: on its face by the CPU classification at its (u, v), and the CPU
-/// surface point there on the pixel's ray (distance ≤ `tol`) at the returned depth.
-fn check_hits(doc: &Document, camera: &Camera, frame: &Frame, tol: f64) {
+/// Every covered pixel: on its face by the CPU classification (trims at the part's trim
+/// tolerance) at its (u, v), and the CPU surface point there on the pixel's ray (distance ≤
+/// 10⁻⁴ of the diagonal) at the returned depth.
+fn check_hits(doc: &Document, camera: &Camera, frame: &Frame, part: &Part) {
+    let tol = 1e-4 * part.diagonal;
     let trims: Vec<TrimStructure> = doc
         .faces
         .iter()
-        .map(|f| TrimStructure::build(f, 1e-3).unwrap())
+        .map(|f| TrimStructure::build(f, part.trim_tolerance).unwrap())
         .collect();
     let (forward, _, _) = camera.basis();
     let (mut worst, mut worst_depth, mut n) = (0.0f64, 0.0f64, 0);
@@ -218,7 +230,7 @@ fn plate_hole_is_background_and_hits_are_on_the_face() {
     let doc = plate_with_hole();
     let b = bounds(&doc);
     let camera = Camera::fit(View::Iso, &b, 30.0, W as f64 / H as f64);
-    let (frame, scene) = cast(&doc, &camera);
+    let (frame, part) = cast(&doc, &camera);
     // The analytic plane hit's (x − 1000, y) of each pixel.
     let plane = |x: u32, y: u32| {
         let d = ray(&camera, x, y);
@@ -250,7 +262,7 @@ fn plate_hole_is_background_and_hits_are_on_the_face() {
     }
     println!("plate: {hole} hole pixels background, {plate} plate pixels covered");
     assert!(hole > 50 && plate > 300, "{hole} {plate}");
-    check_hits(&doc, &camera, &frame, 1e-4 * scene.diagonal);
+    check_hits(&doc, &camera, &frame, &part);
 }
 
 #[test]
@@ -261,8 +273,8 @@ fn tube_window_hits_are_on_their_faces() {
     .unwrap();
     // Looking at the window (u = π, the −x side) from −x, a little above.
     let camera = Camera::new([-60.0, -8.0, 18.0], [0.0, 0.0, 10.0], [0.0, 0.0, 1.0], 30.0);
-    let (frame, scene) = cast(&doc, &camera);
-    check_hits(&doc, &camera, &frame, 1e-4 * scene.diagonal);
+    let (frame, part) = cast(&doc, &camera);
+    check_hits(&doc, &camera, &frame, &part);
     // Through the window the inside of the far wall shows: some tube pixels have u near 0
     // (or 2π) — the far side, x > 0.
     let far = frame

@@ -250,16 +250,19 @@ enum Command {
         /// Vertical field of view, degrees.
         #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
         fov: f64,
-        /// Crack filling between faces (paper 001): only `none` until issue 21 step 2.
-        #[arg(long, default_value = "none", value_parser = ["none", "image", "object"])]
+        /// B-Rep parts: what to do with cracks between faces (paper 001): `object` fills them
+        /// by ray casting the neighbouring faces (exact), `image` from neighbouring pixels
+        /// (fast), `none` leaves them (and counts them). Ignored for meshes.
+        #[arg(long, default_value = "object", value_parser = ["none", "image", "object"])]
         cracks: String,
-        /// Ray-cast the trimmed surfaces per pixel (issue 21 step 2; not implemented yet).
+        /// B-Rep parts: ray cast every pixel against the trimmed surfaces instead of
+        /// rasterising their per-frame tessellation (the reference of paper 001 §4.1.2).
         #[arg(long)]
         raycast: bool,
         /// Shading of the colour image.
         #[arg(long, default_value = "lit", value_parser = ["lit", "gooch", "toon", "face-ids"])]
         shading: String,
-        /// Overlay the triangle edges.
+        /// Overlay the triangle edges (B-Rep parts: the per-frame tessellation grid).
         #[arg(long)]
         edges: bool,
         /// Also write the face ids as a PNG: face index + 1 = R + 256·G + 65536·B, 0 background.
@@ -567,14 +570,22 @@ fn run(cli: Cli) -> Result<()> {
                 let r = &r.result;
                 let t = &r["timings_ms"];
                 let files = r["files"].as_array().map_or(0, Vec::len);
+                let cracks = match r["cracks"]["mode"].as_str() {
+                    Some(mode) => format!(
+                        ", cracks {}: {} detected, {} filled",
+                        mode, r["cracks"]["detected"], r["cracks"]["filled"]
+                    ),
+                    None => String::new(),
+                };
                 println!(
-                    "render: {}x{} {} view, {} triangles, {} of {} pixels covered -> {} ({} file{}; {} {}; draw {:.1} ms, total {:.1} ms)",
+                    "render: {}x{} {} view, {} triangles, {} of {} pixels covered{} -> {} ({} file{}; {} {}; draw {:.1} ms, total {:.1} ms)",
                     r["width"],
                     r["height"],
                     r["view"].as_str().unwrap_or(""),
                     r["triangles"],
                     r["covered"],
                     r["pixels"],
+                    cracks,
                     output.display(),
                     files,
                     if files == 1 { "" } else { "s" },

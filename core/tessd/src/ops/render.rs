@@ -1,8 +1,9 @@
-//! `render`: a picture of a mesh or a B-Rep part (`tessd-render`, issue 21 step 1): colour,
-//! depth, face ids and (u, v) rendered headless on the GPU (lavapipe without one), as PNG files
-//! or arrays. B-Rep documents are tessellated on the CPU at half a pixel's footprint until GPU
-//! trimming (step 2) lands; `cracks` other than `none` and `raycast` belong to step 2 and are
-//! refused for now.
+//! `render`: a picture of a mesh or a B-Rep part (`tessd-render`, issue 21): colour, depth,
+//! face ids and (u, v) rendered headless on the GPU (lavapipe without one), as PNG files or
+//! arrays. Meshes are rasterised as they are; B-Rep documents go through paper 001's pipeline
+//! — per-frame tessellation of the basis surfaces, GPU trimming with the trim quadtree (paper
+//! 000), crack detection and `cracks` filling (`object` by default) — or, with `raycast`,
+//! through full-scene ray casting.
 //!
 //! Parameters are described in docs/protocol.md ("render").
 
@@ -21,18 +22,15 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_render::camera::DEFAULT_FOV;
 use tessd_render::{
-    Bounds, Camera, Frame, RenderError, RenderSettings, Renderer, Scene, Shading, View,
+    BrepReport, BrepScene, Bounds, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
+    Scene, Shading, StepTimings, View,
 };
-use tessd_tessellate::{Options, TessellateError};
 
 /// The default image size.
 pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
 
 /// The most turntable frames.
 pub const MAX_FRAMES: u64 = 3600;
-
-/// What issue 21 step 2 will add; refused until then.
-const STEP2: &str = "not implemented yet (issue 21 step 2)";
 
 /// The process's renderer: opening a device and compiling the shaders costs ~100 ms on a GPU
 /// and far more on lavapipe, so the daemon does it once, on the first render. A failure is
@@ -125,6 +123,10 @@ enum CameraSpec {
 struct Params {
     width: u32,
     height: u32,
+    /// B-Rep parts: crack handling (paper 001 §3.3–3.4).
+    cracks: Cracks,
+    /// B-Rep parts: full-scene ray casting instead of the raster pipeline.
+    raycast: bool,
     spec: CameraSpec,
     fov: f64,
     settings: RenderSettings,
@@ -134,26 +136,15 @@ struct Params {
 }
 
 fn parse(request: &Request) -> Result<Params, OpError> {
-    match request.str_param("cracks")? {
-        None | Some("none") => {}
-        Some(c @ ("image" | "object")) => {
-            return Err(OpError::new(
-                ErrorCode::Unsupported,
-                format!("`cracks: \"{c}\"` (crack filling, paper 001) is {STEP2}"),
-            ));
-        }
-        Some(c) => {
-            return Err(OpError::request(format!(
+    let cracks = match request.str_param("cracks")? {
+        None => Cracks::Object,
+        Some(c) => Cracks::parse(c).ok_or_else(|| {
+            OpError::request(format!(
                 "`cracks` must be \"none\", \"image\" or \"object\", got {c:?}"
-            )));
-        }
-    }
-    if bool_param(request, "raycast")?.unwrap_or(false) {
-        return Err(OpError::new(
-            ErrorCode::Unsupported,
-            format!("`raycast` (per-pixel trimmed-surface ray casting, paper 000 §5–7) is {STEP2}"),
-        ));
-    }
+            ))
+        })?,
+    };
+    let raycast = bool_param(request, "raycast")?.unwrap_or(false);
     let (width, height) = parse_size(request.params.get("size"))?;
     let fov = request.f64_param("fov")?.unwrap_or(DEFAULT_FOV);
     if !(fov > 0.0 && fov < 180.0) {
@@ -232,6 +223,8 @@ fn parse(request: &Request) -> Result<Params, OpError> {
     Ok(Params {
         width,
         height,
+        cracks,
+        raycast,
         spec,
         fov,
         settings: RenderSettings::new(width, height)
@@ -272,6 +265,41 @@ fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
         .collect())
 }
 
+/// What is drawn: a mesh's triangles (and their count), or a B-Rep part.
+enum Part {
+    Mesh(tessd_render::GpuScene, usize),
+    Brep(tessd_render::GpuBrepScene),
+}
+
+/// The B-Rep frames' time per step of paper 001 table 1, summed over the frames, ms.
+fn step_timings(reports: &[BrepReport]) -> Value {
+    let mut t = StepTimings::default();
+    for r in reports {
+        let s = &r.timings;
+        t.tessellation += s.tessellation;
+        t.initial += s.initial;
+        t.crack_detection += s.crack_detection;
+        t.image_fill += s.image_fill;
+        t.depth_mask += s.depth_mask;
+        t.object_fill += s.object_fill;
+        t.composite += s.composite;
+        t.ray_cast += s.ray_cast;
+        t.readback += s.readback;
+    }
+    json!({
+        "tessellation": ms(t.tessellation),
+        "initial_render": ms(t.initial),
+        "crack_detection": ms(t.crack_detection),
+        "image_fill": ms(t.image_fill),
+        "depth_mask": ms(t.depth_mask),
+        "object_fill": ms(t.object_fill),
+        "composite": ms(t.composite),
+        "ray_cast": ms(t.ray_cast),
+        "readback": ms(t.readback),
+        "frame": ms(t.frame()),
+    })
+}
+
 /// `OUT.png` for one frame, `OUT_007.png` for frame 7 of a turntable.
 fn frame_path(path: &Path, frame: u32, frames: u32) -> PathBuf {
     if frames == 1 {
@@ -307,8 +335,8 @@ fn point(v: [f64; 3]) -> Value {
 ///
 /// # Errors
 /// `invalid_request` for bad parameters (naming them and the value), `unsupported` for
-/// `cracks` other than `none`, `raycast` (issue 21 step 2) and outputs that are not `.png`;
-/// as `tessellate` and the mesh ops for the input; `internal` when the GPU fails; `cancelled`.
+/// outputs that are not `.png`; as `brep.load` and the mesh ops for the input; `internal`
+/// when the GPU fails; `cancelled`.
 pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     let total = Instant::now();
     ctx.progress(0.0, "read", "")?;
@@ -328,7 +356,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         .cloned()
         .filter(|v| !v.is_null());
     let mut result = json!({});
-    let (scene, cams, tessellate_ms) = if is_brep {
+    let (part, cams, prepare_ms, device_ms, upload_ms) = if is_brep {
         let value = request_document(&mut request)?;
         let doc = Document::from_value(&value).map_err(brep_error)?;
         drop(value);
@@ -341,38 +369,34 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             max: b.max,
         };
         let cams = cameras(&p, &bounds)?;
-        let tolerance = match &asked_tolerance {
-            Some(v) => match parse_tolerance(v, doc.units)? {
+        let trim_tolerance = match &asked_tolerance {
+            Some(v) => Some(match parse_tolerance(v, doc.units)? {
                 super::tessellate::Tolerance::Length(x) => x,
                 super::tessellate::Tolerance::Percent(pc) => pc / 100.0 * 2.0 * bounds.radius(),
-            },
-            None => cams
-                .iter()
-                .map(|c| tessd_render::pixel_tolerance(c, &bounds, p.height))
-                .fold(f64::INFINITY, f64::min),
+            }),
+            None => None,
         };
-        ctx.progress(0.05, "tessellate", "")?;
         let read_ms = ms(t.elapsed());
+        ctx.progress(0.05, "prepare", "trim structures")?;
         let t = Instant::now();
-        let progress = |done: usize, total: usize| {
-            let _ = ctx.progress(
-                0.05 + 0.45 * done as f64 / total.max(1) as f64,
-                "tessellate",
-                &format!("face {done} of {total}"),
-            );
-        };
-        let tess =
-            tessd_tessellate::tessellate_with_progress(&doc, &Options::new(tolerance), &progress)
-                .map_err(|e| match e {
-                TessellateError::Invalid(e) => brep_error(e),
-                TessellateError::Options(m) => OpError::request(m),
-            })?;
+        let scene = BrepScene::new(&doc, trim_tolerance).map_err(render_error)?;
         ctx.checkpoint()?;
-        result["tolerance"] = json!(tolerance);
+        result["tolerance"] = json!(scene.trim_tolerance);
         result["units"] = json!(doc.units.name());
         result["faces"] = json!(doc.faces.len());
+        if !scene.skipped.is_empty() {
+            result["warnings"] = json!(scene.skipped);
+        }
         result["timings_ms"] = json!({"read": read_ms});
-        (Scene::from_tessellation(&tess), cams, ms(t.elapsed()))
+        let prepare_ms = ms(t.elapsed());
+        ctx.progress(0.4, "upload", "")?;
+        let t = Instant::now();
+        let renderer = renderer()?;
+        let device_ms = ms(t.elapsed());
+        let t = Instant::now();
+        let gpu = renderer.upload_brep(scene).map_err(render_error)?;
+        result["trim_bytes"] = json!(gpu.trim_bytes());
+        (Part::Brep(gpu), cams, prepare_ms, device_ms, ms(t.elapsed()))
     } else {
         let mesh = input_mesh(&request, ctx)?;
         ctx.checkpoint()?;
@@ -383,28 +407,52 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         let cams = cameras(&p, &bounds)?;
         result["faces"] = json!(scene.max_id);
         result["timings_ms"] = json!({"read": ms(t.elapsed())});
-        (scene, cams, 0.0)
+        ctx.progress(0.4, "upload", "")?;
+        let t = Instant::now();
+        let renderer = renderer()?;
+        let device_ms = ms(t.elapsed());
+        let t = Instant::now();
+        let gpu = renderer.upload(&scene).map_err(render_error)?;
+        let triangles = scene.triangles();
+        (
+            Part::Mesh(gpu, triangles),
+            cams,
+            0.0,
+            device_ms,
+            ms(t.elapsed()),
+        )
     };
-
-    ctx.progress(0.5, "upload", "")?;
-    let t = Instant::now();
     let renderer = renderer()?;
-    let device_ms = ms(t.elapsed());
-    let t = Instant::now();
-    let gpu = renderer.upload(&scene).map_err(render_error)?;
-    let upload_ms = ms(t.elapsed());
 
     let mut written = Written(Vec::new());
     let (mut draw, mut readback, mut encode) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
     let mut covered = Vec::with_capacity(cams.len());
+    let mut steps = Vec::with_capacity(cams.len());
     let mut last: Option<Frame> = None;
     for (i, camera) in cams.iter().enumerate() {
         ctx.checkpoint()?;
-        let (frame, timings) = renderer
-            .render(&gpu, camera, &p.settings)
-            .map_err(render_error)?;
-        draw += timings.draw;
-        readback += timings.readback;
+        let frame = match &part {
+            Part::Mesh(gpu, _) => {
+                let (frame, timings) = renderer
+                    .render(gpu, camera, &p.settings)
+                    .map_err(render_error)?;
+                draw += timings.draw;
+                readback += timings.readback;
+                frame
+            }
+            Part::Brep(gpu) => {
+                let (frame, report) = if p.raycast {
+                    renderer.ray_cast_brep(gpu, camera, &p.settings)
+                } else {
+                    renderer.render_brep(gpu, camera, &p.settings, p.cracks)
+                }
+                .map_err(render_error)?;
+                draw += report.timings.frame();
+                readback += report.timings.readback;
+                steps.push(report);
+                frame
+            }
+        };
         covered.push(frame.covered());
         let t = Instant::now();
         for (path, ids) in [(&p.output, false), (&p.face_ids, true)] {
@@ -451,7 +499,33 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     });
     result["shading"] = json!(p.settings.shading.name());
     result["edges"] = json!(p.settings.edges);
-    result["triangles"] = json!(scene.triangles());
+    match &part {
+        Part::Mesh(_, triangles) => result["triangles"] = json!(triangles),
+        Part::Brep(_) => {
+            let first = steps.first().copied().unwrap_or_default();
+            // The frame's own tessellation: two triangles per grid cell.
+            result["triangles"] = json!(2 * first.cells);
+            result["grid"] = json!({
+                "faces_drawn": first.faces_drawn,
+                "cells": first.cells,
+                "vertices": first.grid_vertices,
+            });
+            result["method"] = json!(if p.raycast { "raycast" } else { "raster" });
+            if !p.raycast {
+                let detected: usize = steps.iter().map(|r| r.cracks_detected).sum();
+                let filled: usize = steps.iter().map(|r| r.cracks_filled).sum();
+                result["cracks"] = json!({
+                    "mode": p.cracks.name(),
+                    "detected": detected,
+                    "filled": filled,
+                });
+                if p.frames > 1 {
+                    result["cracks"]["detected_per_frame"] =
+                        json!(steps.iter().map(|r| r.cracks_detected).collect::<Vec<_>>());
+                }
+            }
+        }
+    }
     result["pixels"] = json!(p.width as u64 * p.height as u64);
     result["covered"] = json!(covered[0]);
     if p.frames > 1 {
@@ -466,7 +540,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     );
     result["timings_ms"] = json!({
         "read": read_ms,
-        "tessellate": tessellate_ms,
+        "prepare": prepare_ms,
         "device": device_ms,
         "upload": upload_ms,
         "draw": ms(draw),
@@ -474,6 +548,9 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         "encode": ms(encode),
         "total": ms(total.elapsed()),
     });
+    if matches!(part, Part::Brep(_)) {
+        result["timings_ms"]["steps"] = step_timings(&steps);
+    }
     ctx.progress(1.0, "done", "")?;
     let arrays = match (&p.output, last) {
         (None, Some(f)) => {
