@@ -7,16 +7,19 @@
 // by the face's quadtree from the root (§3.4.2.a).
 //
 // WGSL has 32-bit atomics only, and the paper's ZRGB word (depth in the high bits, colour in
-// the low ones) would leave the depth 8 bits. So the winner is found in **two passes** over the
-// same fragments: pass A keeps the nearest hit depth per crack pixel with an atomic min on the
-// f32's bits (non-negative floats order like their bit patterns); pass B repeats the ray casts
-// and the hit whose depth is the minimum (within the Newton tolerance's relative precision)
-// claims the pixel's winner slot with a compare-exchange and writes its face, (u, v) and shaded
-// colour. Patch mailboxing (§3.4.2.b) in pass A: a crack pixel remembers the last face whose
-// ray cast succeeded there, and later fragments of that face skip it; pass B skips pixels
-// whose winner is already claimed. Step 5 (object_fill_composite.wgsl) then writes the winners
-// into the frame. Concatenated after shading, brep_bindings, trim_quadtree, surface_eval,
-// patch_grid, grid_raster, ray_newton.
+// the low ones) would leave the depth 8 bits. Here the atomic word is a **ZF** key: the depth's
+// f32 bits with the low 12 cleared (non-negative floats order like their bit patterns; 11
+// mantissa bits remain, a relative precision of 5·10⁻⁴) and a 12-bit face tag in the low bits
+// (the face index mod 4095; 4095 marks step 1's own surface). Pass A keeps the smallest key
+// per crack pixel with `atomicMin`. Pass B then repeats the ray casts only for fragments whose
+// face carries the winning tag — most fragments stop at that comparison — and the hit whose
+// key equals the winner claims the pixel's payload slot (compare-exchange) and writes its
+// (u, v), exact depth and shaded colour. Two hits within 5·10⁻⁴ of each other in depth are
+// two faces meeting at the crack; either fills it. Patch mailboxing (§3.4.2.b) in pass A: a
+// crack pixel remembers the last face whose ray cast succeeded there, and later fragments of
+// that face skip it. Step 5 (object_fill_composite.wgsl) then writes the winners into the
+// frame. Concatenated after shading, brep_bindings, trim_quadtree, surface_eval, patch_grid,
+// grid_raster, ray_newton.
 
 struct Fill {
     // The eye relative to the scene origin, and the pixel ray basis: a pixel's ray direction
@@ -39,10 +42,18 @@ struct Fill {
 @group(2) @binding(2) var<storage, read_write> zmin: array<atomic<u32>>;
 @group(2) @binding(3) var<storage, read_write> mailbox: array<u32>;
 @group(2) @binding(4) var<storage, read_write> winner_face: array<atomic<u32>>;
-@group(2) @binding(5) var<storage, read_write> winner_uv: array<vec2<f32>>;
-@group(2) @binding(6) var<storage, read_write> winner_color: array<u32>;
+// Per crack pixel: the winner's (u, v), exact depth and packed colour (as f32 bits).
+@group(2) @binding(5) var<storage, read_write> winner: array<vec4<f32>>;
 
 const CRACK_FLAG: u32 = 1u;
+
+// The low bits of a ZF key: the face tag.
+const TAG_BITS: u32 = 0xfffu;
+
+// The ZF key of a hit of face `face` at depth `t`.
+fn zf_key(face: u32, t: f32) -> u32 {
+    return (bitcast<u32>(t) & ~TAG_BITS) | (face % TAG_BITS);
+}
 
 // The cell corners of the wireframe: four edges and the diagonal, two ends each.
 const LINE_A = array<u32, 10>(0u, 1u, 1u, 1u, 1u, 0u, 0u, 0u, 0u, 1u);
@@ -99,20 +110,24 @@ fn fill_ring(face: u32, p: vec2<i32>, uv0: vec2<f32>) {
         if fill.phase == 0u && mailbox[j] == face + 1u {
             continue;
         }
-        if fill.phase == 1u && atomicLoad(&winner_face[j]) != 0u {
-            continue;
+        if fill.phase == 1u {
+            // Only the winning face's fragments cast again, and only until one claims.
+            let key = atomicLoad(&zmin[j]);
+            if (key & TAG_BITS) != face % TAG_BITS || atomicLoad(&winner_face[j]) != 0u {
+                continue;
+            }
         }
         let hit = cast_at(face, q, uv0);
         if !(hit.hit && hit.t > 0.0) {
             continue;
         }
+        let key = zf_key(face, hit.t);
         if fill.phase == 0u {
-            atomicMin(&zmin[j], bitcast<u32>(hit.t));
+            atomicMin(&zmin[j], key);
             mailbox[j] = face + 1u;
             continue;
         }
-        let best = bitcast<f32>(atomicLoad(&zmin[j]));
-        if hit.t > best * (1.0 + 1e-4) {
+        if key != atomicLoad(&zmin[j]) {
             continue;
         }
         let claimed = atomicCompareExchangeWeak(&winner_face[j], 0u, face + 1u);
@@ -120,8 +135,8 @@ fn fill_ring(face: u32, p: vec2<i32>, uv0: vec2<f32>) {
             let n = surface_normal(face, hit.s);
             let view = normalize(fill.eye - hit.s.p);
             let color = shade(params.shading, face + 1u, n, view, params.light);
-            winner_uv[j] = hit.uv;
-            winner_color[j] = pack4x8unorm(vec4<f32>(clamp(color, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));
+            let rgba = pack4x8unorm(vec4<f32>(clamp(color, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));
+            winner[j] = vec4<f32>(hit.uv, hit.t, bitcast<f32>(rgba));
         }
     }
 }

@@ -14,10 +14,9 @@ struct Composite {
 @group(0) @binding(3) var<storage, read_write> face: array<u32>;
 @group(0) @binding(4) var<storage, read_write> uv: array<vec2<f32>>;
 @group(0) @binding(5) var<storage, read_write> flags: array<u32>;
-@group(0) @binding(6) var<storage, read> zmin: array<u32>;
-@group(0) @binding(7) var<storage, read> winner_face: array<u32>;
-@group(0) @binding(8) var<storage, read> winner_uv: array<vec2<f32>>;
-@group(0) @binding(9) var<storage, read> winner_color: array<u32>;
+@group(0) @binding(6) var<storage, read> winner_face: array<u32>;
+// (u, v), depth, colour bits (object_fill.wgsl).
+@group(0) @binding(7) var<storage, read> winner: array<vec4<f32>>;
 
 const CRACK: u32 = 1u;
 const FILLED: u32 = 2u;
@@ -31,9 +30,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (flags[i] & CRACK) == 0u || winner_face[i] == 0u {
         return;
     }
-    color[i] = winner_color[i];
-    depth[i] = bitcast<f32>(zmin[i]);
+    let w = winner[i];
+    color[i] = bitcast<u32>(w.w);
+    depth[i] = w.z;
     face[i] = winner_face[i];
-    uv[i] = winner_uv[i];
+    uv[i] = w.xy;
     flags[i] |= FILLED;
 }

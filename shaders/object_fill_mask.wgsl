@@ -6,7 +6,7 @@
 // test. Where the ring holds no crack the mask is 0 and every fragment is culled — stricter
 // than the paper's "the maximum of the pixel's own depth and its neighbouring cracks' depths",
 // which lets fragments in front of a crack-free pixel through only for them to find no crack.
-// Also: the atomic depth of step 4 starts at the pixel's step-1 depth (a crack showing a far
+// Also: the atomic key of step 4 starts at the pixel's step-1 depth (a crack showing a far
 // face keeps it unless ray casting finds something nearer), and the mailbox and the winner
 // slot are emptied.
 
@@ -44,7 +44,8 @@ fn ndc_depth(d: f32) -> f32 {
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @builtin(frag_depth) f32 {
     let p = vec2<i32>(frag.xy);
     let i = u32(p.y) * m.width + u32(p.x);
-    zmin[i] = bitcast<u32>(depth[i]);
+    // Step 1's surface as the key to beat: its depth, tag 4095 (see object_fill.wgsl).
+    zmin[i] = (bitcast<u32>(depth[i]) & ~0xfffu) | 0xfffu;
     mailbox[i] = 0u;
     winner_face[i] = 0u;
     var mask = 0.0;

@@ -139,8 +139,8 @@ def test_cancel_and_refusals_write_nothing(daemon, tmp_path, shared_data):
         for params, code, text in [
             ({"size": "0x0"}, "invalid_request", "0x0"),
             ({"size": "100000x100000"}, "invalid_request", "100000x100000"),
-            ({"cracks": "image"}, "unsupported", "not implemented yet (issue 21 step 2)"),
-            ({"raycast": True}, "unsupported", "not implemented yet (issue 21 step 2)"),
+            ({"cracks": "sideways"}, "invalid_request", "sideways"),
+            ({"raycast": True}, "unsupported", "B-Rep"),
             ({"view": "sideways"}, "invalid_request", "sideways"),
             ({"output": str(tmp_path / "x.jpg")}, "unsupported", "x.jpg"),
         ]:

@@ -3,8 +3,9 @@
 //! crack pixels from the fragments of a filled and a wireframe draw of the frame's grid,
 //! with patch mailboxing (`shaders/object_fill.wgsl`); step 5, the composite
 //! (`shaders/object_fill_composite.wgsl`). The shaders' headers say how each step departs
-//! from the paper and why — chiefly that WGSL's 32-bit atomics make the nearest hit a
-//! two-pass affair instead of one atomic min on a packed depth-and-colour word.
+//! from the paper and why — chiefly that WGSL's 32-bit atomics leave no room for the paper's
+//! depth-and-colour word: the atomic min runs on a depth-and-face key, and a second pass over
+//! the winning faces' fragments writes the winners' (u, v), depth and colour.
 
 use crate::brep_render::{StepTimings, step};
 use crate::frame_buffers::FrameBuffers;
@@ -167,7 +168,6 @@ impl ObjectFillPass {
                 bindings::storage(3, false, f),
                 bindings::storage(4, false, f),
                 bindings::storage(5, false, f),
-                bindings::storage(6, false, f),
             ],
         });
         let early = device
@@ -202,7 +202,7 @@ impl ObjectFillPass {
         let c = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![bindings::uniform(0, c)];
         entries.extend((1..6).map(|b| bindings::storage(b, false, c)));
-        entries.extend((6..10).map(|b| bindings::storage(b, true, c)));
+        entries.extend((6..8).map(|b| bindings::storage(b, true, c)));
         let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("object_fill_composite"),
             entries: &entries,
@@ -256,8 +256,7 @@ impl ObjectFillPass {
         let zmin = scratch("fill zmin", 4);
         let mailbox = scratch("fill mailbox", 4);
         let winner_face = scratch("fill winner face", 4);
-        let winner_uv = scratch("fill winner uv", 8);
-        let winner_color = scratch("fill winner color", 4);
+        let winner = scratch("fill winner", 16);
         let mask_texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("depth mask"),
             size: wgpu::Extent3d {
@@ -360,8 +359,7 @@ impl ObjectFillPass {
                     &zmin,
                     &mailbox,
                     &winner_face,
-                    &winner_uv,
-                    &winner_color,
+                    &winner,
                 ],
             )
         });
@@ -394,10 +392,8 @@ impl ObjectFillPass {
                 &buffers.face,
                 &buffers.uv,
                 &buffers.flags,
-                &zmin,
                 &winner_face,
-                &winner_uv,
-                &winner_color,
+                &winner,
             ],
         );
         step(gpu, &mut t.composite, |e| {

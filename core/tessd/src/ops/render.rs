@@ -22,7 +22,7 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_render::camera::DEFAULT_FOV;
 use tessd_render::{
-    BrepReport, BrepScene, Bounds, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
+    Bounds, BrepReport, BrepScene, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
     Scene, Shading, StepTimings, View,
 };
 
@@ -396,8 +396,21 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         let t = Instant::now();
         let gpu = renderer.upload_brep(scene).map_err(render_error)?;
         result["trim_bytes"] = json!(gpu.trim_bytes());
-        (Part::Brep(gpu), cams, prepare_ms, device_ms, ms(t.elapsed()))
+        (
+            Part::Brep(gpu),
+            cams,
+            prepare_ms,
+            device_ms,
+            ms(t.elapsed()),
+        )
     } else {
+        if p.raycast {
+            return Err(OpError::new(
+                ErrorCode::Unsupported,
+                "`raycast` ray casts the exact surfaces of a B-Rep document; a mesh is \
+                 rasterised as it is",
+            ));
+        }
         let mesh = input_mesh(&request, ctx)?;
         ctx.checkpoint()?;
         let scene = Scene::from_mesh(&mesh);
@@ -541,6 +554,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     result["timings_ms"] = json!({
         "read": read_ms,
         "prepare": prepare_ms,
+        "tessellate": ms(steps.iter().map(|r| r.timings.tessellation).sum()),
         "device": device_ms,
         "upload": upload_ms,
         "draw": ms(draw),
