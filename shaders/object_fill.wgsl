@@ -85,7 +85,7 @@ fn pixel_ray(q: vec2<i32>) -> vec3<f32> {
 
 // Face `face` ray cast at pixel `q` from (u, v) `uv0`: the hit, `hit.hit` false when none is on the face.
 fn cast_at(face: u32, q: vec2<i32>, uv0: vec2<f32>) -> RayHit {
-    var hit = ray_newton(face, fill.eye, pixel_ray(q), uv0, fill.tolerance);
+    var hit = ray_newton(face, fill.eye, pixel_ray(q), uv0, fill.tolerance, vec2<f32>(0.25));
     if hit.hit && !trim_walk(face, uv_to_patch(face, hit.uv)) {
         hit.hit = false;
     }

@@ -12,7 +12,14 @@
 //    frame's per-pixel buffers (`tessd_render::frame_buffers` layout: index y·W + x, row 0 at
 //    the top).
 //
-// Two passes: the search (the heavy loop) and the shading of its result, each kernel small.
+// The search runs in **batches of seed cells**, one dispatch each, every invocation carrying
+// its pixel's nearest hit so far in `hits` from one batch to the next. One loop over all cells
+// would be simpler, but llvmpipe (lavapipe) bounds the iterations of a loop nest — the
+// outermost loop and everything nested in it, Newton's steps and the B-spline basis loops
+// included — to 65 535 per invocation, and silently leaves the loops past that: a thread's
+// flanks alone would exhaust it and the faces searched after them would go missing.
+//
+// Two kinds of pass: the search (the heavy loop) and the shading of its result.
 // Bind group 0 is the pass's own (below), group 1 the part's shared buffers
 // (brep_bindings.wgsl). Concatenated after brep_bindings.wgsl, surface_eval.wgsl,
 // ray_newton.wgsl, trim_quadtree.wgsl and shading.wgsl.
@@ -39,7 +46,8 @@ struct RayParams {
 
 // `ray_cast::SeedBox` (32 bytes): a world box (relative to the scene origin). The first
 // `faces` entries are the faces' boxes, `a` = index of their first cell, `b` = cells along s
-// | cells along t << 16; then the cells, row by row (s fastest).
+// | cells along t << 16; then the cells, row by row (s fastest), `a` = their face, `b` = the
+// cell's column | row << 16.
 struct SeedBox {
     lo: vec3<f32>,
     a: u32,
@@ -54,7 +62,21 @@ struct CastHit {
     uv: vec2<f32>,
 }
 
+// The seed cells one search dispatch covers, [begin, end) in `order`; `first` is 1 for the
+// first batch (the pixel's search starts from no hit).
+struct Batch {
+    begin: u32,
+    end: u32,
+    first: u32,
+    pad: u32,
+}
+
 @group(0) @binding(0) var<uniform> params: RayParams;
+@group(0) @binding(7) var<uniform> batch: Batch;
+// The seed cells nearest first (by their boxes' nearest depth along the view, sorted on the
+// CPU per frame): once a hit is found, farther cells fail the box test at `best.t` and
+// cost no Newton iteration.
+@group(0) @binding(8) var<storage, read> order: array<u32>;
 @group(0) @binding(1) var<storage, read> seed_boxes: array<SeedBox>;
 @group(0) @binding(2) var<storage, read_write> hits: array<CastHit>;
 @group(0) @binding(3) var<storage, read_write> frame_color: array<u32>;
@@ -94,26 +116,28 @@ fn cast_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
     // 1/dir, with zero components replaced so the slabs stay finite and ordered.
     let safe = select(dir, vec3<f32>(1e-30), abs(dir) < vec3<f32>(1e-30));
     let inv = 1.0 / safe;
+    let i = gid.y * params.width + gid.x;
     var best = CastHit(F32_MAX, 0u, vec2<f32>(0.0));
-    for (var f = 0u; f < params.faces; f += 1u) {
+    if batch.first == 0u {
+        best = hits[i];
+    }
+    for (var k = batch.begin; k < batch.end; k += 1u) {
+        let cell = seed_boxes[order[k]];
+        let f = cell.a;
         let fb = seed_boxes[f];
-        let ns = fb.b & 0xffffu;
-        let nt = fb.b >> 16u;
-        if ns * nt == 0u || !ray_box(o, inv, fb, best.t) {
+        if !ray_box(o, inv, cell, best.t) || !ray_box(o, inv, fb, best.t) {
             continue;
         }
-        for (var k = 0u; k < ns * nt; k += 1u) {
-            if !ray_box(o, inv, seed_boxes[fb.a + k], best.t) {
-                continue;
-            }
-            let st = vec2<f32>((f32(k % ns) + 0.5) / f32(ns), (f32(k / ns) + 0.5) / f32(nt));
-            let h = ray_newton(f, o, dir, patch_to_uv(f, st), params.tol);
-            if h.hit && h.t < best.t && trim_walk(f, uv_to_patch(f, h.uv)) {
-                best = CastHit(h.t, f + 1u, h.uv);
-            }
+        let ns = fb.b & 0xffffu;
+        let nt = fb.b >> 16u;
+        let ij = vec2<f32>(f32(cell.b & 0xffffu), f32(cell.b >> 16u));
+        let st = (ij + vec2<f32>(0.5)) / vec2<f32>(f32(ns), f32(nt));
+        let h = ray_newton(f, o, dir, patch_to_uv(f, st), params.tol, 1.0 / vec2<f32>(f32(ns), f32(nt)));
+        if h.hit && h.t < best.t && trim_walk(f, uv_to_patch(f, h.uv)) {
+            best = CastHit(h.t, f + 1u, h.uv);
         }
     }
-    hits[gid.y * params.width + gid.x] = best;
+    hits[i] = best;
 }
 
 @compute @workgroup_size(8, 8)

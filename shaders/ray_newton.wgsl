@@ -28,7 +28,7 @@ struct RayHit {
 
 // The most Newton steps. From a seed cell's centre (ray_cast.wgsl) quadratic convergence
 // reaches f32 precision in 4–6 steps; more only lets a diverging start wander.
-const RAY_NEWTON_ITERATIONS: u32 = 10u;
+const RAY_NEWTON_ITERATIONS: u32 = 12u;
 
 // How far (in patch units, a fraction of the patch's extent) (u, v) may leave the patch
 // rectangle during the iteration before the start is abandoned.
@@ -41,10 +41,24 @@ fn ray_newton_in_patch(st: vec2<f32>) -> bool {
 
 // Newton from `uv0` for the intersection of the ray `origin + t·dir` (relative to the scene
 // origin, like the surface) with face `face`'s basis surface; converged when |F| < `tol`.
+// A step moves (u, v) by at most `max_step.x` of the patch along u and `max_step.y` along v
+// (the whole
+// step scaled down, a trust region): from a seed cell's centre the iteration stays near the
+// cell instead of jumping to another sheet of a strongly curved surface (a thread's flank),
+// and the start is abandoned once (u, v) is more than three such steps from it: a root
+// farther away belongs to another seed (the ray caster tries every cell its ray crosses), and
+// crawling towards it would only cost time.
 // The surface is evaluated at one place in the loop only: every call site of `surface_eval`
 // is inlined whole by the shader compilers, and on lavapipe (LLVM) each copy costs seconds of
 // pipeline compilation.
-fn ray_newton(face: u32, origin: vec3<f32>, dir: vec3<f32>, uv0: vec2<f32>, tol: f32) -> RayHit {
+fn ray_newton(
+    face: u32,
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    uv0: vec2<f32>,
+    tol: f32,
+    max_step: vec2<f32>,
+) -> RayHit {
     var uv = uv0;
     var t = 0.0;
     let c = -dir;
@@ -75,9 +89,14 @@ fn ray_newton(face: u32, origin: vec3<f32>, dir: vec3<f32>, uv0: vec2<f32>, tol:
         let d_u = dot(r, bc) / det;
         let d_v = dot(a, cross(r, c)) / det;
         let d_t = dot(a, cross(b, r)) / det;
-        uv += vec2<f32>(d_u, d_v);
-        t += d_t;
-        if !ray_newton_in_patch(uv_to_patch(face, uv)) {
+        let pb = surf_headers[face].bounds;
+        let extent = max(abs(vec2<f32>(pb.y - pb.x, pb.w - pb.z)), vec2<f32>(1e-30));
+        let reach = max(abs(d_u) / (extent.x * max_step.x), abs(d_v) / (extent.y * max_step.y));
+        let k = select(1.0, 1.0 / reach, reach > 1.0);
+        uv += k * vec2<f32>(d_u, d_v);
+        t += k * d_t;
+        let travel = abs(uv - uv0) / (extent * max_step);
+        if !ray_newton_in_patch(uv_to_patch(face, uv)) || any(travel > vec2<f32>(3.0)) {
             break;
         }
     }

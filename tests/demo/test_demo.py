@@ -1,15 +1,76 @@
 """`tessd demo` end to end: it starts a real daemon, and its outputs are re-opened with
 usd-core and checked against the bundled sample's known counts (Spot: 2930 vertices, 5856
-triangles, closed — MANIFEST.md), including its LOD chain (50 %, 20 %, 5 % of the vertices)."""
+triangles, closed — MANIFEST.md), including its LOD chain (50 %, 20 %, 5 % of the vertices),
+and its pictures (the bottle with object-space crack filling, Spot's LOD chain) are decoded by a
+PNG reader written here (zlib and the five row filters, independent of tessd)."""
 
 from __future__ import annotations
 
 import json
+import struct
 import subprocess
+import zlib
+from pathlib import Path
 
+import numpy as np
 from locate import tessd_bin
 from pxr import Usd, UsdGeom
 from usd_checks import validate_stage
+
+BACKGROUND = (224, 224, 224)
+
+
+def read_png(path: Path) -> np.ndarray:
+    """An 8-bit RGBA, non-interlaced PNG as a uint8 array [H, W, 4]. Rows with the None, Sub
+    and Up filters are undone with numpy, Average and Paeth rows byte by byte (the
+    tests/render reader does every row byte by byte: too slow for the demo's 1280x720)."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, header = 8, b"", None
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+    w, h, depth, color, _, _, interlace = header
+    assert (depth, color, interlace) == (8, 6, 0), header
+    stride, bpp = 4 * w, 4
+    rows = np.frombuffer(zlib.decompress(idat), dtype=np.uint8).reshape(h, stride + 1)
+    out = np.zeros((h, stride), dtype=np.uint8)
+    prev = np.zeros(stride, dtype=np.int64)
+    for y in range(h):
+        f, line = rows[y, 0], rows[y, 1:].astype(np.int64)
+        if f == 0:
+            cur = line
+        elif f == 1:
+            cur = np.cumsum(line.reshape(w, bpp), axis=0).reshape(stride) & 0xFF
+        elif f == 2:
+            cur = (line + prev) & 0xFF
+        else:
+            assert f in (3, 4), f
+            raw, up, c = line.tolist(), prev.tolist(), [0] * stride
+            for x in range(stride):
+                a = c[x - bpp] if x >= bpp else 0
+                b = up[x]
+                if f == 3:
+                    p = (a + b) // 2
+                else:
+                    d = up[x - bpp] if x >= bpp else 0
+                    pa, pb, pc = abs(b - d), abs(a - d), abs(a + b - 2 * d)
+                    p = a if pa <= pb and pa <= pc else (b if pb <= pc else d)
+                c[x] = (raw[x] + p) & 0xFF
+            cur = np.array(c, dtype=np.int64)
+        out[y] = cur
+        prev = cur
+    return out.reshape(h, w, 4)
+
+
+def covered(rgba: np.ndarray) -> int:
+    """Pixels that are not the renderer's background grey."""
+    return int(np.any(rgba[..., :3] != BACKGROUND, axis=-1).sum())
 
 
 def test_demo_writes_stats_and_valid_usd(tmp_path):
@@ -96,8 +157,37 @@ def test_demo_writes_stats_and_valid_usd(tmp_path):
     assert set(mesh.GetFaceVertexCountsAttr().Get()) == {3}
     assert "tessellate: 71 faces" in run.stdout
 
+    # The bottle rendered at 1280x720 (iso, object-space crack filling): the part covers a
+    # reasonable share of the picture, and its face-id image codes 71 faces' ids exactly on
+    # the pixels the colour image covers.
+    bottle_png = read_png(out / "bottle.png")
+    assert bottle_png.shape == (720, 1280, 4)
+    assert np.all(bottle_png[..., 3] == 255)
+    bottle_covered = covered(bottle_png)
+    assert 0.08 < bottle_covered / (1280 * 720) < 0.6, bottle_covered
+    assert np.all(bottle_png[0, 0, :3] == BACKGROUND)
+    ids_png = read_png(out / "bottle_face_ids.png").astype(np.uint32)
+    assert ids_png.shape == (720, 1280, 4)
+    ids = ids_png[..., 0] + 256 * ids_png[..., 1] + 65536 * ids_png[..., 2]
+    assert ids.max() <= 71 and len(np.unique(ids)) > 10
+    assert abs(int((ids != 0).sum()) - bottle_covered) <= 0.01 * bottle_covered
+    assert "render: bottle 1280x720 iso" in run.stdout and "(object)" in run.stdout
+
+    # Spot's LOD chain from one camera at 640x480: every level covers about as many pixels as
+    # LOD0 (simplification keeps the silhouette within 20 %).
+    lod_covered = []
+    for i in range(4):
+        rgba = read_png(out / f"spot_lod{i}.png")
+        assert rgba.shape == (480, 640, 4)
+        lod_covered.append(covered(rgba))
+        assert f"render: Spot LOD{i}," in run.stdout
+    assert lod_covered[0] > 0.05 * 640 * 480, lod_covered
+    for c in lod_covered[1:]:
+        assert abs(c - lod_covered[0]) <= 0.2 * lod_covered[0], lod_covered
+
     # The socket is gone after the demo's daemon shut down: nothing left in the output folder
     # but the results.
     assert sorted(p.name for p in out.iterdir()) == [
-        "bottle.usda", "spot.usda", "spot_cage.usda", "spot_lods.usda", "spot_stats.json",
-        "spot_subdiv.usda", "spot_subdiv_anim.usda"]
+        "bottle.png", "bottle.usda", "bottle_face_ids.png", "spot.usda", "spot_cage.usda",
+        "spot_lod0.png", "spot_lod1.png", "spot_lod2.png", "spot_lod3.png", "spot_lods.usda",
+        "spot_stats.json", "spot_subdiv.usda", "spot_subdiv_anim.usda"]

@@ -128,8 +128,14 @@ impl BrepScene {
             let info = face_info(face, &trim, &bounds);
             scene.trims.push(&trim, face.bounds);
             scene.faces.push(info);
-            let (ns, nt, face_cells) = face_seeds(face, origin, seed_margin);
+            let (ns, nt, mut face_cells) = face_seeds(face, origin, seed_margin);
             let first = first_cell + cells.len() as u32;
+            // A cell knows its face and its (column, row): the search visits cells alone.
+            let face_index = scene.faces.len() as u32 - 1;
+            for (k, c) in face_cells.iter_mut().enumerate() {
+                c.a = face_index;
+                c.b = (k % ns.max(1)) as u32 | ((k / ns.max(1)) as u32) << 16;
+            }
             scene.seeds.push(face_box(&face_cells, first, ns, nt));
             cells.extend(face_cells);
         }

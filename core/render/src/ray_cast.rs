@@ -21,6 +21,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use tessd_brep::Face;
+use wgpu::util::DeviceExt;
 
 use crate::RenderSettings;
 use crate::bindings::{self, storage, uniform};
@@ -53,7 +54,8 @@ const SAMPLES_PER_CELL: usize = 4;
 
 /// A world box relative to the scene origin (`SeedBox` in `ray_cast.wgsl`, 32 bytes): the
 /// scene's face boxes first (`a` = their first cell's index, `b` = cells along s | cells along
-/// t << 16), then every face's cells, row by row, s fastest (`a`, `b` unused).
+/// t << 16), then every face's cells, row by row, s fastest (`a` = the face, `b` = the cell's
+/// column | row << 16; [`face_seeds`] leaves them 0 and [`crate::BrepScene`] sets them).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct SeedBox {
@@ -86,6 +88,26 @@ struct Params {
     pad: [u32; 2],
 }
 
+/// Seed cells per search dispatch. lavapipe bounds the loop iterations of one invocation
+/// (see `shaders/ray_cast.wgsl`); a cell costs at most 12 Newton steps of some 300 loop
+/// iterations each (a degree-13 B-spline's basis), and Newton leaves a cell after a few
+/// steps when its root lies elsewhere, so 16 cells stay under its 65 535.
+pub const CELLS_PER_BATCH: u32 = 16;
+
+/// Bytes between two batch records in the batch uniform buffer (wgpu's dynamic-offset
+/// alignment).
+const BATCH_STRIDE: u64 = 256;
+
+/// `Batch` in the shader (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Batch {
+    begin: u32,
+    end: u32,
+    first: u32,
+    pad: u32,
+}
+
 /// The nearest hit of a pixel (`CastHit`, 16 bytes).
 const HIT_BYTES: u64 = 16;
 
@@ -95,7 +117,7 @@ pub fn face_seeds(face: &Face, origin: [f64; 3], margin: f64) -> (usize, usize, 
     let [u0, u1, v0, v1] = face.bounds;
     let uv = |s: f64, t: f64| (u0 + s * (u1 - u0), v0 + t * (v1 - v0));
     // How far the normal turns along s and along t (the most over a few lines).
-    const PROBE: usize = 16;
+    const PROBE: usize = 32;
     let normal = |s: f64, t: f64| {
         let (u, v) = uv(s, t);
         face.surface.eval(u, v).normal()
@@ -193,7 +215,8 @@ impl RayCastPass {
     /// reports failures through the device's error scopes).
     pub fn new(device: &wgpu::Device, brep_layout: &wgpu::BindGroupLayout) -> RayCastPass {
         let c = wgpu::ShaderStages::COMPUTE;
-        // Params, seed boxes, hits, then the frame's colour, depth, face and (u, v).
+        // Params, seed boxes, hits, then the frame's colour, depth, face and (u, v), and the
+        // batch (a dynamic offset into the batch records).
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ray_cast"),
             entries: &[
@@ -204,6 +227,17 @@ impl RayCastPass {
                 storage(4, false, c),
                 storage(5, false, c),
                 storage(6, false, c),
+                storage(8, true, c),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 7,
+                    visibility: c,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<Batch>() as u64),
+                    },
+                    count: None,
+                },
             ],
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -278,29 +312,101 @@ impl RayCastPass {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let group = bindings::bind_buffers(
-            device,
-            "ray_cast",
-            &self.layout,
-            &[
-                &uniform,
-                &brep.seeds,
-                &hits,
-                &out.color,
-                &out.depth,
-                &out.face,
-                &out.uv,
-            ],
-        );
+        // The cells (after the face boxes) nearest first, in batches; at least one batch,
+        // which starts every pixel from no hit.
+        let eye = [0, 1, 2].map(|k| camera.eye[k] - scene.origin[k]);
+        let nearest = |b: &SeedBox| {
+            (0..8)
+                .map(|i| {
+                    (0..3)
+                        .map(|k| {
+                            let c = if i >> k & 1 == 0 { b.lo[k] } else { b.hi[k] };
+                            (c as f64 - eye[k]) * forward[k]
+                        })
+                        .sum::<f64>()
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut order: Vec<(f64, u32)> = (scene.faces.len()..scene.seeds.len())
+            .map(|c| (nearest(&scene.seeds[c]), c as u32))
+            .collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let order: Vec<u32> = order.into_iter().map(|(_, c)| c).collect();
+        let order_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ray_cast cell order"),
+            contents: bytemuck::cast_slice(if order.is_empty() {
+                &[0u32][..]
+            } else {
+                &order
+            }),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let end = order.len() as u32;
+        let batches: Vec<Batch> = (0..end.max(1))
+            .step_by(CELLS_PER_BATCH as usize)
+            .enumerate()
+            .map(|(k, b)| Batch {
+                begin: b,
+                end: (b + CELLS_PER_BATCH).min(end),
+                first: u32::from(k == 0),
+                pad: 0,
+            })
+            .collect();
+        let mut records = vec![0u8; batches.len() * BATCH_STRIDE as usize];
+        for (k, b) in batches.iter().enumerate() {
+            let at = k * BATCH_STRIDE as usize;
+            records[at..at + size_of::<Batch>()].copy_from_slice(bytemuck::bytes_of(b));
+        }
+        let batch_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ray_cast batches"),
+            contents: &records,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let mut entries: Vec<wgpu::BindGroupEntry> = [
+            &uniform,
+            &brep.seeds,
+            &hits,
+            &out.color,
+            &out.depth,
+            &out.face,
+            &out.uv,
+        ]
+        .iter()
+        .enumerate()
+        .map(|(k, b)| wgpu::BindGroupEntry {
+            binding: k as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: 8,
+            resource: order_buffer.as_entire_binding(),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &batch_buffer,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<Batch>() as u64),
+            }),
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ray_cast"),
+            layout: &self.layout,
+            entries: &entries,
+        });
         let groups = (width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ray_cast"),
             timestamp_writes: None,
         });
-        pass.set_bind_group(0, &group, &[]);
         pass.set_bind_group(1, brep_group, &[]);
         pass.set_pipeline(&self.cast);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        for k in 0..batches.len() {
+            pass.set_bind_group(0, &group, &[(k as u64 * BATCH_STRIDE) as u32]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        pass.set_bind_group(0, &group, &[0]);
         pass.set_pipeline(&self.resolve);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
     }

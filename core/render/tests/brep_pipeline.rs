@@ -185,17 +185,3 @@ fn gpu_trimming_equals_the_cpu_classifier() {
         );
     }
 }
-
-/// A visible colour per face id.
-fn shade_ids(ids: &[u32]) -> Vec<u8> {
-    ids.iter()
-        .flat_map(|&id| {
-            let h = id.wrapping_mul(2654435761);
-            if id == 0 {
-                [0, 0, 0, 255]
-            } else {
-                [(h >> 24) as u8, (h >> 16) as u8, (h >> 8) as u8, 255]
-            }
-        })
-        .collect()
-}

@@ -6,13 +6,16 @@
 //! for its Catmull–Clark surface (the refined mesh, the cage marked `catmullClark`, and a
 //! 24-frame animation refined with one topology phase), and writes everything to the output
 //! folder; and OpenCASCADE's bottle as B-Rep faces (exported by `python -m tessd.brep`),
-//! tessellated to 0.1 mm into a USD file with one GeomSubset per face.
+//! tessellated to 0.1 mm into a USD file with one GeomSubset per face. Last, pictures through
+//! the `render` op: the bottle with paper 001's object-space crack filling (and its face ids),
+//! and each level of Spot's LOD chain from one camera.
 
 use anyhow::{Context, Result, bail};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+use tessd_ipc::arrays::{Arrays, OwnedArray};
 use tessd_ipc::client::Client;
 use tessd_mesh::io::{Format, ReadOptions};
 
@@ -131,9 +134,14 @@ pub fn run(out: &Path) -> Result<()> {
     );
 
     let lods_path = out.join("spot_lods.usda");
-    let (lods, _) = client.call(
+    let (lods, lod_arrays) = client.call(
         "lod",
-        json!({"output": lods_path, "levels": ["50%", "20%", "5%"], "name": "spot"}),
+        json!({
+            "output": lods_path,
+            "levels": ["50%", "20%", "5%"],
+            "name": "spot",
+            "return_arrays": true,
+        }),
         &arrays,
         |_| {},
     )?;
@@ -152,6 +160,12 @@ pub fn run(out: &Path) -> Result<()> {
     );
     subdivision(&mut client, &out)?;
     tessellation(&mut client, &out)?;
+    render_bottle(&mut client, &out)?;
+    let mut levels = vec![arrays];
+    for i in 1..=counts.len() {
+        levels.push(level_arrays(&lod_arrays, i)?);
+    }
+    render_lods(&mut client, &out, &levels)?;
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);
     println!("tessd demo: done, results in {}", out.display());
@@ -204,11 +218,7 @@ fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
         cage_path.display()
     );
     let mut with_frames = arrays;
-    with_frames.push(tessd_ipc::arrays::OwnedArray::new(
-        "frames",
-        vec![FRAMES as u64, v, 3],
-        frames,
-    ));
+    with_frames.push(OwnedArray::new("frames", vec![FRAMES as u64, v, 3], frames));
     let anim = out.join("spot_subdiv_anim.usda");
     let (r, _) = client.call(
         "subdivide",
@@ -250,6 +260,86 @@ fn tessellation(client: &mut Client, out: &Path) -> Result<()> {
         usd.display()
     );
     Ok(())
+}
+
+/// The bottle rendered through paper 001's pipeline with object-space crack filling, and its
+/// face ids (one colour code per B-Rep face).
+fn render_bottle(client: &mut Client, out: &Path) -> Result<()> {
+    let doc: serde_json::Value = serde_json::from_slice(BOTTLE_JSON)?;
+    let png = out.join("bottle.png");
+    let ids = out.join("bottle_face_ids.png");
+    let (r, _) = client.call(
+        "render",
+        json!({
+            "brep": doc, "cracks": "object", "size": "1280x720", "view": "iso",
+            "output": png, "face_ids": ids,
+        }),
+        &[],
+        |_| {},
+    )?;
+    println!(
+        "  render: bottle {}x{} iso, {} cracks detected / {} filled (object), {} of {} pixels covered, {:.0} ms -> {}",
+        r["width"],
+        r["height"],
+        r["cracks"]["detected"],
+        r["cracks"]["filled"],
+        r["covered"],
+        r["pixels"],
+        r["timings_ms"]["total"].as_f64().unwrap_or(0.0),
+        png.display()
+    );
+    println!("  render: bottle face ids -> {}", ids.display());
+    Ok(())
+}
+
+/// Where the LOD pictures look from: Spot is Y up, seen from the front left and above.
+const SPOT_EYE: [f64; 3] = [-2.6, 1.2, -3.6];
+const SPOT_TARGET: [f64; 3] = [0.0, 0.1, 0.2];
+
+/// Each level of Spot's LOD chain (`levels[0]` the input), from one camera, so the pictures
+/// compare directly.
+fn render_lods(client: &mut Client, out: &Path, levels: &[Vec<OwnedArray>]) -> Result<()> {
+    for (i, arrays) in levels.iter().enumerate() {
+        let png = out.join(format!("spot_lod{i}.png"));
+        let (r, _) = client.call(
+            "render",
+            json!({
+                "size": "640x480", "eye": SPOT_EYE, "target": SPOT_TARGET, "up": [0.0, 1.0, 0.0],
+                "output": png,
+            }),
+            arrays,
+            |_| {},
+        )?;
+        println!(
+            "  render: Spot LOD{i}, {} triangles, {} of {} pixels covered -> {}",
+            r["triangles"],
+            r["covered"],
+            r["pixels"],
+            png.display()
+        );
+    }
+    Ok(())
+}
+
+/// LOD level `i`'s mesh from the `lod` op's `lod<i>.*` arrays, under the plain mesh-array names
+/// (positions and faces: all the render op needs).
+fn level_arrays(arrays: &Arrays, i: usize) -> Result<Vec<OwnedArray>> {
+    let mut level = Vec::new();
+    let positions = format!("lod{i}.positions");
+    let (p, shape) = arrays
+        .get::<f32>(&positions)
+        .with_context(|| format!("the lod op returned no `{positions}`"))?
+        .map_err(anyhow::Error::msg)?;
+    level.push(OwnedArray::new("positions", shape.to_vec(), p.to_vec()));
+    for name in ["face_indices", "face_sizes"] {
+        let key = format!("lod{i}.{name}");
+        let (v, shape) = arrays
+            .get::<u32>(&key)
+            .with_context(|| format!("the lod op returned no `{key}`"))?
+            .map_err(anyhow::Error::msg)?;
+        level.push(OwnedArray::new(name, shape.to_vec(), v.to_vec()));
+    }
+    Ok(level)
 }
 
 /// A fresh private folder for the demo's socket, so the demo never meets a user's daemon.

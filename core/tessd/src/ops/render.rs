@@ -268,7 +268,7 @@ fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
 /// What is drawn: a mesh's triangles (and their count), or a B-Rep part.
 enum Part {
     Mesh(tessd_render::GpuScene, usize),
-    Brep(tessd_render::GpuBrepScene),
+    Brep(Box<tessd_render::GpuBrepScene>),
 }
 
 /// The B-Rep frames' time per step of paper 001 table 1, summed over the frames, ms.
@@ -397,7 +397,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         let gpu = renderer.upload_brep(scene).map_err(render_error)?;
         result["trim_bytes"] = json!(gpu.trim_bytes());
         (
-            Part::Brep(gpu),
+            Part::Brep(Box::new(gpu)),
             cams,
             prepare_ms,
             device_ms,
