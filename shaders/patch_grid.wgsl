@@ -44,6 +44,33 @@ const WHOLE_UNDECIDED: u32 = 0u;
 const WHOLE_OFF: u32 = 1u;
 const WHOLE_ON: u32 = 2u;
 
+// The uniform block of the grid and classification passes (`TessParams` of
+// core/render/src/patch_tessellation.rs, 16 bytes).
+struct TessParams {
+    patch_count: u32,
+    vertex_count: u32,
+    cell_count: u32,
+    // Invocations per dispatch row (workgroups along x × 64).
+    row: u32,
+}
+
+// The last of the first `count` patches whose first cell (`by_cell`) or first grid vertex
+// (otherwise) is at or before `i`: a binary search, the bases increasing. Every shader that
+// includes this library declares the frame's `patches: array<PatchFrame>`.
+fn patch_of(i: u32, count: u32, by_cell: bool) -> u32 {
+    var lo = 0u;
+    var hi = count;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if select(patches[mid].vertex_base, patches[mid].cell_base, by_cell) <= i {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
 // The patch (s, t) of quadtree point `xy` of `face` (the inverse of `trim_to_tree`).
 fn tree_to_patch(face: u32, xy: vec2<f32>) -> vec2<f32> {
     let h = trim_headers[face];

@@ -3,32 +3,9 @@
 // vertex's quadtree point. Concatenated after brep_bindings, trim_quadtree, surface_eval and
 // patch_grid.
 
-struct TessParams {
-    patch_count: u32,
-    vertex_count: u32,
-    cell_count: u32,
-    // Invocations per dispatch row (workgroups along x × 64).
-    row: u32,
-}
-
 @group(0) @binding(0) var<uniform> tp: TessParams;
 @group(0) @binding(1) var<storage, read> patches: array<PatchFrame>;
 @group(0) @binding(2) var<storage, read_write> grid: array<GridVertex>;
-
-// The last patch whose first vertex is at or before `i`.
-fn patch_of_vertex(i: u32) -> u32 {
-    var lo = 0u;
-    var hi = tp.patch_count;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if patches[mid].vertex_base <= i {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -36,7 +13,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if i >= tp.vertex_count {
         return;
     }
-    let pf = patches[patch_of_vertex(i)];
+    let pf = patches[patch_of(i, tp.patch_count, false)];
     let local = i - pf.vertex_base;
     let a = local % (pf.nu + 1u);
     let b = local / (pf.nu + 1u);

@@ -8,31 +8,9 @@
 // region of §5.1 is not convex in general, so four corners on one side prove nothing.
 // Concatenated after brep_bindings, trim_quadtree, surface_eval and patch_grid.
 
-struct TessParams {
-    patch_count: u32,
-    vertex_count: u32,
-    cell_count: u32,
-    row: u32,
-}
-
 @group(0) @binding(0) var<uniform> tp: TessParams;
 @group(0) @binding(1) var<storage, read> patches: array<PatchFrame>;
 @group(0) @binding(2) var<storage, read_write> cells: array<CellRecord>;
-
-// The last patch whose first cell is at or before `i`.
-fn patch_of_cell(i: u32) -> u32 {
-    var lo = 0u;
-    var hi = tp.patch_count;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if patches[mid].cell_base <= i {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -40,7 +18,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if i >= tp.cell_count {
         return;
     }
-    let k = patch_of_cell(i);
+    let k = patch_of(i, tp.patch_count, true);
     let pf = patches[k];
     let local = i - pf.cell_base;
     let a = local % pf.nu;

@@ -2,70 +2,22 @@
 usd-core and checked against the bundled sample's known counts (Spot: 2930 vertices, 5856
 triangles, closed — MANIFEST.md), including its LOD chain (50 %, 20 %, 5 % of the vertices),
 and its pictures (the bottle with object-space crack filling, Spot's LOD chain) are decoded by a
-PNG reader written here (zlib and the five row filters, independent of tessd)."""
+PNG reader of the tests (tests/png_decode.py: zlib and the five row filters, independent of
+tessd)."""
 
 from __future__ import annotations
 
 import json
-import struct
 import subprocess
-import zlib
 from pathlib import Path
 
 import numpy as np
 from locate import tessd_bin
+from png_decode import read_png
 from pxr import Usd, UsdGeom
 from usd_checks import validate_stage
 
 BACKGROUND = (224, 224, 224)
-
-
-def read_png(path: Path) -> np.ndarray:
-    """An 8-bit RGBA, non-interlaced PNG as a uint8 array [H, W, 4]. Rows with the None, Sub
-    and Up filters are undone with numpy, Average and Paeth rows byte by byte (the
-    tests/render reader does every row byte by byte: too slow for the demo's 1280x720)."""
-    data = path.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, idat, header = 8, b"", None
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
-        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
-        pos += 12 + length
-        if kind == b"IHDR":
-            header = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat += body
-    w, h, depth, color, _, _, interlace = header
-    assert (depth, color, interlace) == (8, 6, 0), header
-    stride, bpp = 4 * w, 4
-    rows = np.frombuffer(zlib.decompress(idat), dtype=np.uint8).reshape(h, stride + 1)
-    out = np.zeros((h, stride), dtype=np.uint8)
-    prev = np.zeros(stride, dtype=np.int64)
-    for y in range(h):
-        f, line = rows[y, 0], rows[y, 1:].astype(np.int64)
-        if f == 0:
-            cur = line
-        elif f == 1:
-            cur = np.cumsum(line.reshape(w, bpp), axis=0).reshape(stride) & 0xFF
-        elif f == 2:
-            cur = (line + prev) & 0xFF
-        else:
-            assert f in (3, 4), f
-            raw, up, c = line.tolist(), prev.tolist(), [0] * stride
-            for x in range(stride):
-                a = c[x - bpp] if x >= bpp else 0
-                b = up[x]
-                if f == 3:
-                    p = (a + b) // 2
-                else:
-                    d = up[x - bpp] if x >= bpp else 0
-                    pa, pb, pc = abs(b - d), abs(a - d), abs(a + b - 2 * d)
-                    p = a if pa <= pb and pa <= pc else (b if pb <= pc else d)
-                c[x] = (raw[x] + p) & 0xFF
-            cur = np.array(c, dtype=np.int64)
-        out[y] = cur
-        prev = cur
-    return out.reshape(h, w, 4)
 
 
 def covered(rgba: np.ndarray) -> int:

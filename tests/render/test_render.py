@@ -1,67 +1,22 @@
 """The `render` op through the real daemon and the Python client: arrays (colour, depth, face
-ids, (u, v)) with the documented shapes and dtypes, PNG files that a PNG decoder written here
-(zlib and the five row filters, independent of tessd) reads back to the same pixels, mesh arrays
-in, B-Rep inline, progress frames, cancellation and refusals."""
+ids, (u, v)) with the documented shapes and dtypes, PNG files that the tests' PNG decoder
+(tests/png_decode.py: zlib and the five row filters, independent of tessd) reads back to the
+same pixels, mesh arrays in, B-Rep inline, progress frames, cancellation and refusals."""
 
 from __future__ import annotations
 
 import json
-import struct
-import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import tessd
+from png_decode import read_png
 from tessd.client import TessdError
 
 REPO = Path(__file__).resolve().parents[2]
 CRANK = REPO / "core/tessellate/tests/data/CrankArm.json"
-
-
-def read_png(path: Path) -> np.ndarray:
-    """An 8-bit RGBA, non-interlaced PNG as a uint8 array [H, W, 4]."""
-    data = path.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, idat, header = 8, b"", None
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
-        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
-        pos += 12 + length
-        if kind == b"IHDR":
-            header = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat += body
-    w, h, depth, color, _, _, interlace = header
-    assert (depth, color, interlace) == (8, 6, 0), header
-    raw = zlib.decompress(idat)
-    stride, bpp = 4 * w, 4
-    out = np.zeros((h, stride), dtype=np.uint8)
-    prev = np.zeros(stride, dtype=np.int32)
-    for y in range(h):
-        f = raw[y * (stride + 1)]
-        line = np.frombuffer(raw, dtype=np.uint8, count=stride, offset=y * (stride + 1) + 1).astype(np.int32)
-        cur = np.zeros(stride, dtype=np.int32)
-        for x in range(stride):
-            a = cur[x - bpp] if x >= bpp else 0
-            b = prev[x]
-            c = prev[x - bpp] if x >= bpp else 0
-            if f == 0:
-                p = 0
-            elif f == 1:
-                p = a
-            elif f == 2:
-                p = b
-            elif f == 3:
-                p = (a + b) // 2
-            else:
-                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
-                p = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-            cur[x] = (line[x] + p) & 0xFF
-        out[y] = cur
-        prev = cur
-    return out.reshape(h, w, 4)
 
 
 def test_arrays_of_the_bunny(daemon, shared_data):

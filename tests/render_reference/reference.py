@@ -30,8 +30,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import struct
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
@@ -51,6 +49,8 @@ from OCP.TopoDS import TopoDS
 from tessd.brep import ocp as brep_ocp
 from tessd.brep.ocp_compat import TopTools_IndexedMapOfShape
 from tessd.brep.ocp_compat import static as _s
+
+from png_decode import decode_png
 
 _map_shapes = _s(TopExp, "MapShapes")
 _as_face = _s(TopoDS, "Face")
@@ -282,54 +282,12 @@ def faces_along(ref: RefImage, pixels: np.ndarray) -> List[List[Tuple[float, int
 # tessd's face-id PNG
 
 
-def _decode_png(data: bytes) -> np.ndarray:
-    """An 8-bit RGBA non-interlaced PNG → uint8 [H, W, 4] (zlib and the five row filters)."""
-    assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
-    pos, idat, header = 8, b"", None
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
-        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
-        pos += 12 + length
-        if kind == b"IHDR":
-            header = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat += body
-    w, h, bitdepth, colour, _, _, interlace = header
-    assert (bitdepth, colour, interlace) == (8, 6, 0), header
-    raw = np.frombuffer(zlib.decompress(idat), dtype=np.uint8).reshape(h, 4 * w + 1)
-    out = np.zeros((h, 4 * w), dtype=np.int64)
-    prev = np.zeros(4 * w, dtype=np.int64)
-    for y in range(h):
-        f, line = raw[y, 0], raw[y, 1:].astype(np.int64)
-        if f == 0:
-            cur = line
-        elif f == 2:
-            cur = (line + prev) & 0xFF
-        else:
-            cur = np.zeros(4 * w, dtype=np.int64)
-            for x in range(4 * w):
-                a = cur[x - 4] if x >= 4 else 0
-                b = prev[x]
-                c = prev[x - 4] if x >= 4 else 0
-                if f == 1:
-                    p = a
-                elif f == 3:
-                    p = (a + b) // 2
-                else:
-                    pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
-                    p = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-                cur[x] = (line[x] + p) & 0xFF
-        out[y] = cur
-        prev = cur
-    return out.astype(np.uint8).reshape(h, w, 4)
-
-
 def read_rgba(path: Path) -> np.ndarray:
-    """A PNG as uint8 [H, W, 4] (PIL when installed, else the decoder above)."""
+    """A PNG as uint8 [H, W, 4] (PIL when installed, else tests/png_decode.py)."""
     try:
         from PIL import Image
     except ImportError:
-        return _decode_png(Path(path).read_bytes())
+        return decode_png(Path(path).read_bytes())
     with Image.open(path) as im:
         return np.asarray(im.convert("RGBA"), dtype=np.uint8)
 

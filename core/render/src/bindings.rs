@@ -1,6 +1,7 @@
 //! What every pass's pipeline setup shares: bind-group layout entries, the layout of a B-Rep
-//! part's buffers (bind group 1 of the B-Rep passes, `shaders/brep_bindings.wgsl`), uniform
-//! buffers, and one-dimensional dispatches larger than a dispatch row.
+//! part's buffers (bind group 1 of the B-Rep passes, `shaders/brep_bindings.wgsl`), bind
+//! groups, uniform buffers, shader modules, compute and render pipelines, compute passes,
+//! per-pixel dispatches and one-dimensional dispatches larger than a dispatch row.
 
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
@@ -37,6 +38,17 @@ pub fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupL
     }
 }
 
+/// `entry` (a buffer entry) with a minimum binding size of `bytes`.
+pub fn min_size(mut entry: wgpu::BindGroupLayoutEntry, bytes: u64) -> wgpu::BindGroupLayoutEntry {
+    if let wgpu::BindingType::Buffer {
+        min_binding_size, ..
+    } = &mut entry.ty
+    {
+        *min_binding_size = wgpu::BufferSize::new(bytes);
+    }
+    entry
+}
+
 /// The layout of bind group 1 of the B-Rep passes: the six read-only buffers of
 /// [`crate::brep_scene::GpuBrep`] (surface headers and words, trim headers, nodes, curves,
 /// lines).
@@ -55,12 +67,23 @@ pub fn bind_buffers(
     layout: &wgpu::BindGroupLayout,
     buffers: &[&wgpu::Buffer],
 ) -> wgpu::BindGroup {
-    let entries: Vec<_> = buffers
-        .iter()
+    let resources: Vec<_> = buffers.iter().map(|b| b.as_entire_binding()).collect();
+    bind_resources(device, label, layout, resources)
+}
+
+/// A bind group of `resources` at bindings 0, 1, ... of `layout`.
+pub fn bind_resources<'a>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: impl IntoIterator<Item = wgpu::BindingResource<'a>>,
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = resources
+        .into_iter()
         .enumerate()
-        .map(|(k, b)| wgpu::BindGroupEntry {
+        .map(|(k, resource)| wgpu::BindGroupEntry {
             binding: k as u32,
-            resource: b.as_entire_binding(),
+            resource,
         })
         .collect();
     device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -79,6 +102,28 @@ pub fn uniform_buffer<T: Pod>(device: &wgpu::Device, label: &str, value: &T) -> 
     })
 }
 
+/// A shader module of the WGSL `source`.
+pub fn shader_module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
+}
+
+/// A pipeline layout of bind groups `layouts` (group 0, 1, ...).
+pub fn pipeline_layout(
+    device: &wgpu::Device,
+    label: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+) -> wgpu::PipelineLayout {
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    })
+}
+
 /// A compute pipeline of `source`'s `main` with `layouts`.
 pub fn compute_pipeline(
     device: &wgpu::Device,
@@ -86,24 +131,114 @@ pub fn compute_pipeline(
     source: &str,
     layouts: &[&wgpu::BindGroupLayout],
 ) -> wgpu::ComputePipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &layouts,
-        immediate_size: 0,
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+    let [pipeline] = compute_pipelines(device, label, source, layouts, ["main"]);
+    pipeline
+}
+
+/// Compute pipelines of `source`'s entry points `entries` (each labelled with its entry
+/// point), sharing one module and the pipeline layout of `layouts`.
+pub fn compute_pipelines<const N: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    entries: [&str; N],
+) -> [wgpu::ComputePipeline; N] {
+    let module = shader_module(device, label, source);
+    let pipeline_layout = pipeline_layout(device, label, layouts);
+    entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(if N == 1 { label } else { entry }),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    })
+}
+
+/// The vertex and fragment stages, primitive topology, depth test and colour targets of a
+/// [`render_pipeline`].
+pub struct RenderStages<'a> {
+    /// The shader module of both stages.
+    pub module: &'a wgpu::ShaderModule,
+    /// The vertex entry point and the vertex buffers it reads.
+    pub vertex: (&'a str, &'a [Option<wgpu::VertexBufferLayout<'a>>]),
+    /// The fragment entry point.
+    pub fragment: &'a str,
+    /// What the vertices draw.
+    pub topology: wgpu::PrimitiveTopology,
+    /// The depth test.
+    pub depth: wgpu::DepthStencilState,
+    /// The colour targets.
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
+}
+
+/// A render pipeline of `stages` with bind groups `layouts`, without multisampling and
+/// without culling (a pass that draws the frame's grid or CAD and scanned meshes cannot rely
+/// on closed, consistently wound triangles).
+pub fn render_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    stages: RenderStages,
+) -> wgpu::RenderPipeline {
+    let pipeline_layout = pipeline_layout(device, label, layouts);
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
         layout: Some(&pipeline_layout),
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
+        vertex: wgpu::VertexState {
+            module: stages.module,
+            entry_point: Some(stages.vertex.0),
+            compilation_options: Default::default(),
+            buffers: stages.vertex.1,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: stages.topology,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(stages.depth),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: stages.module,
+            entry_point: Some(stages.fragment),
+            compilation_options: Default::default(),
+            targets: stages.targets,
+        }),
+        multiview_mask: None,
         cache: None,
     })
+}
+
+/// Records a compute pass of `pipeline` with `groups` bound at 0, 1, ... and one dispatch of
+/// `(x, y, z)` workgroups.
+pub fn compute_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    (x, y, z): (u32, u32, u32),
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    for (k, group) in groups.iter().enumerate() {
+        pass.set_bind_group(k as u32, *group, &[]);
+    }
+    pass.dispatch_workgroups(x, y, z);
+}
+
+/// Invocations per workgroup along x and y of the per-pixel passes (`@workgroup_size(8, 8)`).
+pub const PIXEL_TILE: u32 = 8;
+
+/// The dispatch `(x, y, 1)` in workgroups covering a `width × height` image with one
+/// invocation per pixel.
+pub fn dispatch_pixels(width: u32, height: u32) -> (u32, u32, u32) {
+    (width.div_ceil(PIXEL_TILE), height.div_ceil(PIXEL_TILE), 1)
 }
 
 /// Invocations per workgroup of the one-dimensional passes (`@workgroup_size(64)`).

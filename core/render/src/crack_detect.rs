@@ -20,9 +20,9 @@
 //!
 //! The pass only sets the [`CRACK`] bit; it neither clears flags nor touches other buffers.
 
+use crate::bindings::{self, storage, uniform};
 use crate::frame_buffers::{CRACK, FILLED, FrameBuffers};
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 /// The uniform block of the detection shader (`CrackDetect`, 16 bytes).
 #[repr(C)]
@@ -82,52 +82,18 @@ pub struct CrackDetectPass {
 impl CrackDetectPass {
     /// Compiles the shader.
     pub fn new(device: &wgpu::Device) -> CrackDetectPass {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("crack_detect.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(CRACK_DETECT_SHADER.into()),
-        });
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let entries = [
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            storage(1, true),
-            storage(2, true),
-            storage(3, false),
-        ];
+        let c = wgpu::ShaderStages::COMPUTE;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("crack_detect"),
-            entries: &entries,
+            entries: &[
+                uniform(0, c),
+                storage(1, true, c),
+                storage(2, true, c),
+                storage(3, false, c),
+            ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("crack_detect"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("crack_detect"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline =
+            bindings::compute_pipeline(device, "crack_detect", CRACK_DETECT_SHADER, &[&layout]);
         CrackDetectPass { layout, pipeline }
     }
 
@@ -146,36 +112,20 @@ impl CrackDetectPass {
             d_min,
             _pad: 0,
         };
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("crack_detect params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }];
-        for (k, b) in [&buffers.depth, &buffers.face, &buffers.flags]
-            .into_iter()
-            .enumerate()
-        {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 1 + k as u32,
-                resource: b.as_entire_binding(),
-            });
-        }
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("crack_detect"),
-            layout: &self.layout,
-            entries: &entries,
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("crack_detect"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(buffers.width.div_ceil(8), buffers.height.div_ceil(8), 1);
+        let uniform = bindings::uniform_buffer(device, "crack_detect params", &params);
+        let group = bindings::bind_buffers(
+            device,
+            "crack_detect",
+            &self.layout,
+            &[&uniform, &buffers.depth, &buffers.face, &buffers.flags],
+        );
+        bindings::compute_pass(
+            encoder,
+            "crack_detect",
+            &self.pipeline,
+            &[&group],
+            bindings::dispatch_pixels(buffers.width, buffers.height),
+        );
     }
 }
 

@@ -17,6 +17,7 @@
 //! rather than storage textures: WGSL atomics (object-space filling's atomic min, §3.4.2)
 //! exist only on buffers, and a buffer reads back without row padding.
 
+use crate::bindings;
 use crate::camera::Camera;
 use crate::targets::Targets;
 use crate::{Frame, RenderError};
@@ -225,13 +226,10 @@ pub struct GatherPass {
 impl GatherPass {
     /// Compiles the shader.
     pub fn new(device: &wgpu::Device) -> GatherPass {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("gather_targets.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(GATHER_SHADER.into()),
-        });
+        let c = wgpu::ShaderStages::COMPUTE;
         let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
+            visibility: c,
             ty: wgpu::BindingType::Texture {
                 sample_type,
                 view_dimension: wgpu::TextureViewDimension::D2,
@@ -241,48 +239,19 @@ impl GatherPass {
         };
         let unfiltered = wgpu::TextureSampleType::Float { filterable: false };
         let mut entries = vec![
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            bindings::uniform(0, c),
             texture(1, unfiltered),
             texture(2, wgpu::TextureSampleType::Depth),
             texture(3, wgpu::TextureSampleType::Uint),
             texture(4, unfiltered),
         ];
-        entries.extend((5..10).map(|binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }));
+        entries.extend((5..10).map(|binding| bindings::storage(binding, false, c)));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gather_targets"),
             entries: &entries,
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gather_targets"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("gather_targets"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline =
+            bindings::compute_pipeline(device, "gather_targets", GATHER_SHADER, &[&layout]);
         GatherPass { layout, pipeline }
     }
 
@@ -302,11 +271,7 @@ impl GatherPass {
             near: camera.near as f32,
             far: camera.far as f32,
         };
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("gather params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniform = bindings::uniform_buffer(device, "gather params", &params);
         let view = |t: &wgpu::Texture, aspect| {
             t.create_view(&wgpu::TextureViewDescriptor {
                 aspect,
@@ -319,37 +284,20 @@ impl GatherPass {
             view(&targets.face_id, wgpu::TextureAspect::All),
             view(&targets.uv, wgpu::TextureAspect::All),
         ];
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }];
-        for (k, v) in views.iter().enumerate() {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 1 + k as u32,
-                resource: wgpu::BindingResource::TextureView(v),
-            });
-        }
-        for (k, b) in [&out.color, &out.depth, &out.face, &out.uv, &out.flags]
-            .into_iter()
-            .enumerate()
-        {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 5 + k as u32,
-                resource: b.as_entire_binding(),
-            });
-        }
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("gather_targets"),
-            layout: &self.layout,
-            entries: &entries,
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("gather_targets"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(out.width.div_ceil(8), out.height.div_ceil(8), 1);
+        let resources = std::iter::once(uniform.as_entire_binding())
+            .chain(views.iter().map(wgpu::BindingResource::TextureView))
+            .chain(
+                [&out.color, &out.depth, &out.face, &out.uv, &out.flags]
+                    .map(|b| b.as_entire_binding()),
+            );
+        let group = bindings::bind_resources(device, "gather_targets", &self.layout, resources);
+        bindings::compute_pass(
+            encoder,
+            "gather_targets",
+            &self.pipeline,
+            &[&group],
+            bindings::dispatch_pixels(out.width, out.height),
+        );
     }
 }
 

@@ -17,9 +17,9 @@
 //! between invocations; in particular a crack pixel is never filled from another crack pixel
 //! filled in the same pass.
 
+use crate::bindings::{self, storage, uniform};
 use crate::frame_buffers::FrameBuffers;
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 /// The uniform block of the fill shader (`ImageFill`, 16 bytes).
 #[repr(C)]
@@ -43,47 +43,15 @@ pub struct ImageFillPass {
 impl ImageFillPass {
     /// Compiles the shader.
     pub fn new(device: &wgpu::Device) -> ImageFillPass {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("image_fill.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(IMAGE_FILL_SHADER.into()),
-        });
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }];
-        entries.extend((1..6).map(|binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }));
+        let c = wgpu::ShaderStages::COMPUTE;
+        let mut entries = vec![uniform(0, c)];
+        entries.extend((1..6).map(|binding| storage(binding, false, c)));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("image_fill"),
             entries: &entries,
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("image_fill"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("image_fill"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline =
+            bindings::compute_pipeline(device, "image_fill", IMAGE_FILL_SHADER, &[&layout]);
         ImageFillPass { layout, pipeline }
     }
 
@@ -101,42 +69,27 @@ impl ImageFillPass {
             _pad0: 0,
             _pad1: 0,
         };
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("image_fill params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }];
-        for (k, b) in [
-            &buffers.color,
-            &buffers.depth,
-            &buffers.face,
-            &buffers.uv,
-            &buffers.flags,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 1 + k as u32,
-                resource: b.as_entire_binding(),
-            });
-        }
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("image_fill"),
-            layout: &self.layout,
-            entries: &entries,
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("image_fill"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(buffers.width.div_ceil(8), buffers.height.div_ceil(8), 1);
+        let uniform = bindings::uniform_buffer(device, "image_fill params", &params);
+        let group = bindings::bind_buffers(
+            device,
+            "image_fill",
+            &self.layout,
+            &[
+                &uniform,
+                &buffers.color,
+                &buffers.depth,
+                &buffers.face,
+                &buffers.uv,
+                &buffers.flags,
+            ],
+        );
+        bindings::compute_pass(
+            encoder,
+            "image_fill",
+            &self.pipeline,
+            &[&group],
+            bindings::dispatch_pixels(buffers.width, buffers.height),
+        );
     }
 }
 

@@ -28,6 +28,20 @@
 
 #![warn(missing_docs)]
 
+/// The WGSL of a pass over the frame's grid: `shaders/brep_bindings.wgsl`, `trim_quadtree.wgsl`,
+/// `surface_eval.wgsl` and `patch_grid.wgsl`, then the named files of `shaders/`.
+macro_rules! patch_grid_shader {
+    ($($file:literal),+ $(,)?) => {
+        concat!(
+            include_str!("../../../shaders/brep_bindings.wgsl"),
+            include_str!("../../../shaders/trim_quadtree.wgsl"),
+            include_str!("../../../shaders/surface_eval.wgsl"),
+            include_str!("../../../shaders/patch_grid.wgsl"),
+            $(include_str!(concat!("../../../shaders/", $file)),)+
+        )
+    };
+}
+
 pub mod bindings;
 pub mod brep_render;
 pub mod brep_scene;

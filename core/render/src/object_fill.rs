@@ -21,15 +21,11 @@ use tessd_gpu::GpuContext;
 pub const MASK_SHADER: &str = include_str!("../../../shaders/object_fill_mask.wgsl");
 
 /// The WGSL of step 4.
-pub const FILL_SHADER: &str = concat!(
-    include_str!("../../../shaders/shading.wgsl"),
-    include_str!("../../../shaders/brep_bindings.wgsl"),
-    include_str!("../../../shaders/trim_quadtree.wgsl"),
-    include_str!("../../../shaders/surface_eval.wgsl"),
-    include_str!("../../../shaders/patch_grid.wgsl"),
-    include_str!("../../../shaders/grid_raster.wgsl"),
-    include_str!("../../../shaders/ray_newton.wgsl"),
-    include_str!("../../../shaders/object_fill.wgsl"),
+pub const FILL_SHADER: &str = patch_grid_shader!(
+    "shading.wgsl",
+    "grid_raster.wgsl",
+    "ray_newton.wgsl",
+    "object_fill.wgsl",
 );
 
 /// The WGSL of step 5.
@@ -87,55 +83,32 @@ fn depth_pipeline(
     topology: wgpu::PrimitiveTopology,
     depth: (bool, wgpu::CompareFunction),
 ) -> wgpu::RenderPipeline {
-    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &layouts,
-        immediate_size: 0,
-    });
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
+    bindings::render_pipeline(
+        device,
+        label,
+        layouts,
+        bindings::RenderStages {
             module,
-            entry_point: Some(vertex),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState {
+            vertex: (vertex, &[]),
+            fragment,
             topology,
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(depth.0),
-            depth_compare: Some(depth.1),
-            stencil: wgpu::StencilState::default(),
-            bias: wgpu::DepthBiasState::default(),
-        }),
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some(fragment),
-            compilation_options: Default::default(),
+            depth: wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(depth.0),
+                depth_compare: Some(depth.1),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            },
             targets: &[],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+        },
+    )
 }
 
 impl ObjectFillPass {
     /// Compiles the three steps; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> ObjectFillPass {
         let f = wgpu::ShaderStages::FRAGMENT;
-        let module = |label, source: &str| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            })
-        };
+        let module = |label, source: &str| bindings::shader_module(device, label, source);
         let mask_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("object_fill_mask"),
             entries: &[
@@ -397,13 +370,13 @@ impl ObjectFillPass {
             ],
         );
         step(gpu, &mut t.composite, |e| {
-            let mut pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("object_fill_composite"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.composite);
-            pass.set_bind_group(0, &composite_group, &[]);
-            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            bindings::compute_pass(
+                e,
+                "object_fill_composite",
+                &self.composite,
+                &[&composite_group],
+                bindings::dispatch_pixels(width, height),
+            );
         })?;
         Ok(())
     }

@@ -170,13 +170,7 @@ pub(crate) struct TessParams {
 }
 
 /// The WGSL of the grid pass.
-pub const SHADER: &str = concat!(
-    include_str!("../../../shaders/brep_bindings.wgsl"),
-    include_str!("../../../shaders/trim_quadtree.wgsl"),
-    include_str!("../../../shaders/surface_eval.wgsl"),
-    include_str!("../../../shaders/patch_grid.wgsl"),
-    include_str!("../../../shaders/patch_tessellate.wgsl"),
-);
+pub const SHADER: &str = patch_grid_shader!("patch_tessellate.wgsl");
 
 /// A frame's tessellation on the device.
 pub struct GpuTessellation {
@@ -192,6 +186,28 @@ pub struct GpuTessellation {
     pub vertex_count: u32,
 }
 
+/// The bind group 0 layout (the [`TessParams`] block, the patches read, one buffer written)
+/// and the pipeline of a one-dimensional pass over the frame's grid (`source`'s `main`),
+/// group 1 being `brep`: the grid and the classification passes.
+pub(crate) fn grid_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    brep: &wgpu::BindGroupLayout,
+) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
+    let c = wgpu::ShaderStages::COMPUTE;
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[
+            bindings::uniform(0, c),
+            bindings::storage(1, true, c),
+            bindings::storage(2, false, c),
+        ],
+    });
+    let pipeline = bindings::compute_pipeline(device, label, source, &[&layout, brep]);
+    (layout, pipeline)
+}
+
 /// The compiled grid pass.
 pub struct TessellationPass {
     layout: wgpu::BindGroupLayout,
@@ -201,17 +217,7 @@ pub struct TessellationPass {
 impl TessellationPass {
     /// Compiles the shader; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> TessellationPass {
-        let c = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("patch_tessellate"),
-            entries: &[
-                bindings::uniform(0, c),
-                bindings::storage(1, true, c),
-                bindings::storage(2, false, c),
-            ],
-        });
-        let pipeline =
-            bindings::compute_pipeline(device, "patch_tessellate", SHADER, &[&layout, brep]);
+        let (layout, pipeline) = grid_pipeline(device, "patch_tessellate", SHADER, brep);
         TessellationPass { layout, pipeline }
     }
 
@@ -260,14 +266,13 @@ impl TessellationPass {
             &[&uniform, &patches, &grid],
         );
         if frame.vertices > 0 {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("patch_tessellate"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.set_bind_group(1, brep_group, &[]);
-            pass.dispatch_workgroups(x, y, 1);
+            bindings::compute_pass(
+                encoder,
+                "patch_tessellate",
+                &self.pipeline,
+                &[&group, brep_group],
+                (x, y, 1),
+            );
         }
         GpuTessellation {
             patches,

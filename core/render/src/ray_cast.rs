@@ -40,9 +40,6 @@ pub const SHADER: &str = concat!(
     include_str!("../../../shaders/ray_cast.wgsl")
 );
 
-/// Invocations per workgroup along x and y (`@workgroup_size(8, 8)`).
-const WORKGROUP: u32 = 8;
-
 /// Seed cells along a patch direction: at least this many…
 const MIN_CELLS: usize = 8;
 /// … at most this many…
@@ -240,29 +237,17 @@ impl RayCastPass {
                 },
             ],
         });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("ray_cast.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ray_cast"),
-            bind_group_layouts: &[Some(&layout), Some(brep_layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let [cast, resolve] = bindings::compute_pipelines(
+            device,
+            "ray_cast",
+            SHADER,
+            &[&layout, brep_layout],
+            ["cast_rays", "resolve_hits"],
+        );
         RayCastPass {
-            cast: pipeline("cast_rays"),
-            resolve: pipeline("resolve_hits"),
             layout,
+            cast,
+            resolve,
         }
     }
 
@@ -362,7 +347,13 @@ impl RayCastPass {
             contents: &records,
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let mut entries: Vec<wgpu::BindGroupEntry> = [
+        // Bindings 0–6, then the batch (7, one record at a dynamic offset) and the order (8).
+        let batch = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &batch_buffer,
+            offset: 0,
+            size: wgpu::BufferSize::new(size_of::<Batch>() as u64),
+        });
+        let resources = [
             &uniform,
             &brep.seeds,
             &hits,
@@ -371,31 +362,11 @@ impl RayCastPass {
             &out.face,
             &out.uv,
         ]
-        .iter()
-        .enumerate()
-        .map(|(k, b)| wgpu::BindGroupEntry {
-            binding: k as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-        entries.push(wgpu::BindGroupEntry {
-            binding: 8,
-            resource: order_buffer.as_entire_binding(),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: 7,
-            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &batch_buffer,
-                offset: 0,
-                size: wgpu::BufferSize::new(size_of::<Batch>() as u64),
-            }),
-        });
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ray_cast"),
-            layout: &self.layout,
-            entries: &entries,
-        });
-        let groups = (width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP));
+        .map(|b| b.as_entire_binding())
+        .into_iter()
+        .chain([batch, order_buffer.as_entire_binding()]);
+        let group = bindings::bind_resources(device, "ray_cast", &self.layout, resources);
+        let groups = bindings::dispatch_pixels(width, height);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ray_cast"),
             timestamp_writes: None,

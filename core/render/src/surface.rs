@@ -6,9 +6,8 @@
 use crate::camera::Camera;
 use crate::scene::Vertex;
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FACE_ID_FORMAT, Targets, UV_FORMAT};
-use crate::{RenderSettings, Shading};
+use crate::{RenderSettings, Shading, bindings};
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 /// The WGSL of the pass.
 pub const SHADER: &str = concat!(
@@ -69,27 +68,13 @@ pub struct SurfacePass {
 impl SurfacePass {
     /// Compiles the shader and builds the pipeline.
     pub fn new(device: &wgpu::Device) -> SurfacePass {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("render_surface.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
+        let module = bindings::shader_module(device, "render_surface.wgsl", SHADER);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("render_surface"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
-                },
-                count: None,
-            }],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("render_surface"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
+            entries: &[bindings::min_size(
+                bindings::uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                size_of::<Params>() as u64,
+            )],
         });
         let attributes = wgpu::vertex_attr_array![
             0 => Float32x3,
@@ -98,36 +83,27 @@ impl SurfacePass {
             3 => Float32x2,
             4 => Float32x2,
         ];
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("render_surface"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
+        // CAD and scanned meshes are not reliably closed or consistently wound: no culling.
+        let pipeline = bindings::render_pipeline(
+            device,
+            "render_surface",
+            &[&layout],
+            bindings::RenderStages {
                 module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<Vertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
+                vertex: (
+                    "vs_main",
+                    &[Some(wgpu::VertexBufferLayout {
+                        array_stride: size_of::<Vertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &attributes,
+                    })],
+                ),
+                fragment: "fs_main",
                 topology: wgpu::PrimitiveTopology::TriangleList,
-                // CAD and scanned meshes are not reliably closed or consistently wound.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(depth_state()),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
+                depth: depth_state(),
                 targets: &color_targets(),
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            },
+        );
         SurfacePass { layout, pipeline }
     }
 
@@ -146,19 +122,8 @@ impl SurfacePass {
         settings: &RenderSettings,
     ) {
         let params = Params::new(camera, origin, targets.width, targets.height, settings);
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("render_surface params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("render_surface"),
-            layout: &self.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            }],
-        });
+        let uniform = bindings::uniform_buffer(device, "render_surface params", &params);
+        let bind = bindings::bind_buffers(device, "render_surface", &self.layout, &[&uniform]);
         let views = TargetViews::new(targets);
         let mut pass = views.clear_pass(encoder, "render_surface");
         if vertex_count > 0 {

@@ -8,16 +8,10 @@
 //! domain decided.
 
 use crate::bindings::{self, dispatch_1d};
-use crate::patch_tessellation::{FrameTessellation, GpuTessellation, TessParams};
+use crate::patch_tessellation::{FrameTessellation, GpuTessellation, TessParams, grid_pipeline};
 
 /// The WGSL of the pass.
-pub const SHADER: &str = concat!(
-    include_str!("../../../shaders/brep_bindings.wgsl"),
-    include_str!("../../../shaders/trim_quadtree.wgsl"),
-    include_str!("../../../shaders/surface_eval.wgsl"),
-    include_str!("../../../shaders/patch_grid.wgsl"),
-    include_str!("../../../shaders/triangle_classify.wgsl"),
-);
+pub const SHADER: &str = patch_grid_shader!("triangle_classify.wgsl");
 
 /// The compiled pass.
 pub struct ClassificationPass {
@@ -28,17 +22,7 @@ pub struct ClassificationPass {
 impl ClassificationPass {
     /// Compiles the shader; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> ClassificationPass {
-        let c = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("triangle_classify"),
-            entries: &[
-                bindings::uniform(0, c),
-                bindings::storage(1, true, c),
-                bindings::storage(2, false, c),
-            ],
-        });
-        let pipeline =
-            bindings::compute_pipeline(device, "triangle_classify", SHADER, &[&layout, brep]);
+        let (layout, pipeline) = grid_pipeline(device, "triangle_classify", SHADER, brep);
         ClassificationPass { layout, pipeline }
     }
 
@@ -68,14 +52,13 @@ impl ClassificationPass {
             &self.layout,
             &[&uniform, &tess.patches, &tess.cells],
         );
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("triangle_classify"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.set_bind_group(1, brep_group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        bindings::compute_pass(
+            encoder,
+            "triangle_classify",
+            &self.pipeline,
+            &[&group, brep_group],
+            (x, y, 1),
+        );
     }
 }
 

@@ -16,6 +16,7 @@ use tessd_trim::multi_pack::MultiPack;
 use wgpu::util::DeviceExt;
 
 use crate::RenderError;
+use crate::bindings::{self, GROUPS_X, dispatch_1d, min_size};
 
 /// The WGSL of the pass.
 pub const SHADER: &str = concat!(
@@ -24,10 +25,7 @@ pub const SHADER: &str = concat!(
 );
 
 /// Invocations per workgroup (`@workgroup_size` in the shader).
-pub const WORKGROUP: u32 = 64;
-
-/// Workgroups along x per dispatch row; larger batches use more rows (y).
-const GROUPS_X: u32 = 32768;
+pub const WORKGROUP: u32 = bindings::WORKGROUP;
 
 /// One query as the shader reads it (`Query`, 12 bytes).
 #[repr(C)]
@@ -57,18 +55,12 @@ pub struct TrimWalk {
     pipeline: wgpu::ComputePipeline,
 }
 
-/// A bind group layout entry for storage buffer `binding`.
+/// A bind group layout entry for storage buffer `binding` of at least `min` bytes.
 fn storage(binding: u32, read_only: bool, min: u64) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: wgpu::BufferSize::new(min),
-        },
-        count: None,
-    }
+    min_size(
+        bindings::storage(binding, read_only, wgpu::ShaderStages::COMPUTE),
+        min,
+    )
 }
 
 fn gpu_error(e: impl std::fmt::Display) -> RenderError {
@@ -83,10 +75,6 @@ impl TrimWalk {
     pub fn new(gpu: &GpuContext) -> Result<TrimWalk, RenderError> {
         let device = &gpu.device;
         let scopes = ErrorScopes::push(device);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("trim_walk.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("trim_walk"),
             entries: &[
@@ -98,19 +86,7 @@ impl TrimWalk {
                 storage(5, false, 4),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("trim_walk"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("trim_walk"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = bindings::compute_pipeline(device, "trim_walk", SHADER, &[&layout]);
         scopes.pop_blocking()?;
         Ok(TrimWalk {
             device: device.clone(),
@@ -150,7 +126,9 @@ impl TrimWalk {
         let n = queries.len();
         let rows = (n as u64).div_ceil(u64::from(WORKGROUP) * u64::from(GROUPS_X));
         let limits = device.limits();
-        if rows > u64::from(limits.max_compute_workgroups_per_dimension) {
+        if rows > u64::from(limits.max_compute_workgroups_per_dimension)
+            || u32::try_from(n).is_err()
+        {
             return Err(RenderError::Size(format!(
                 "{n} trim-walk queries are more than one dispatch takes"
             )));
@@ -203,40 +181,27 @@ impl TrimWalk {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let mut entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        entries.push(wgpu::BindGroupEntry {
-            binding: 5,
-            resource: results.as_entire_binding(),
-        });
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("trim_walk"),
-            layout: &self.layout,
-            entries: &entries,
-        });
+        let [headers, nodes, curves, lines, query_buffer] = &buffers;
+        let bind = bindings::bind_buffers(
+            device,
+            "trim_walk",
+            &self.layout,
+            &[headers, nodes, curves, lines, query_buffer, &results],
+        );
         let upload = start.elapsed();
 
         let start = Instant::now();
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("trim_walk"),
         });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("trim_walk"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            let groups = (n as u64).div_ceil(u64::from(WORKGROUP));
-            let x = groups.min(u64::from(GROUPS_X)) as u32;
-            pass.dispatch_workgroups(x, rows as u32, 1);
-        }
+        let (x, y, _) = dispatch_1d(n as u32);
+        bindings::compute_pass(
+            &mut encoder,
+            "trim_walk",
+            &self.pipeline,
+            &[&bind],
+            (x, y, 1),
+        );
         let index = self.queue.submit([encoder.finish()]);
         device
             .poll(wgpu::PollType::Wait {

@@ -16,15 +16,8 @@ use crate::targets::Targets;
 use crate::{RenderSettings, bindings};
 
 /// The WGSL of the pass.
-pub const SHADER: &str = concat!(
-    include_str!("../../../shaders/shading.wgsl"),
-    include_str!("../../../shaders/brep_bindings.wgsl"),
-    include_str!("../../../shaders/trim_quadtree.wgsl"),
-    include_str!("../../../shaders/surface_eval.wgsl"),
-    include_str!("../../../shaders/patch_grid.wgsl"),
-    include_str!("../../../shaders/grid_raster.wgsl"),
-    include_str!("../../../shaders/trimmed_surface.wgsl"),
-);
+pub const SHADER: &str =
+    patch_grid_shader!("shading.wgsl", "grid_raster.wgsl", "trimmed_surface.wgsl");
 
 /// The compiled pass.
 pub struct TrimmedSurfacePass {
@@ -50,41 +43,21 @@ pub(crate) fn grid_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroup
 impl TrimmedSurfacePass {
     /// Compiles the shader; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> TrimmedSurfacePass {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("trimmed_surface.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
+        let module = bindings::shader_module(device, "trimmed_surface.wgsl", SHADER);
         let layout = grid_layout(device, "trimmed_surface");
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("trimmed_surface"),
-            bind_group_layouts: &[Some(&layout), Some(brep)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("trimmed_surface"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
+        let pipeline = bindings::render_pipeline(
+            device,
+            "trimmed_surface",
+            &[&layout, brep],
+            bindings::RenderStages {
                 module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
+                vertex: ("vs_main", &[]),
+                fragment: "fs_main",
                 topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(depth_state()),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
+                depth: depth_state(),
                 targets: &color_targets(),
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            },
+        );
         TrimmedSurfacePass { layout, pipeline }
     }
 

@@ -255,6 +255,10 @@ enum Command {
         /// (fast), `none` leaves them (and counts them). Ignored for meshes.
         #[arg(long, default_value = "object", value_parser = ["none", "image", "object"])]
         cracks: String,
+        /// B-Rep parts: the world tolerance of the trim approximation, a length with units or
+        /// a percentage of the part's box diagonal (default 0.01 %).
+        #[arg(long)]
+        tolerance: Option<String>,
         /// B-Rep parts: ray cast every pixel against the trimmed surfaces instead of
         /// rasterising their per-frame tessellation (the reference of paper 001 §4.1.2).
         #[arg(long)]
@@ -543,6 +547,7 @@ fn run(cli: Cli) -> Result<()> {
             up,
             fov,
             cracks,
+            tolerance,
             raycast,
             shading,
             edges,
@@ -560,6 +565,7 @@ fn run(cli: Cli) -> Result<()> {
                 "up": up.as_deref().map(vec3_arg),
                 "fov": fov,
                 "cracks": cracks,
+                "tolerance": tolerance,
                 "raycast": raycast,
                 "shading": shading,
                 "edges": edges,
