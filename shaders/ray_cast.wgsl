@@ -62,7 +62,7 @@ struct CastHit {
     uv: vec2<f32>,
 }
 
-// The seed cells one search dispatch covers, [begin, end) in `order`; `first` is 1 for the
+// The work items one search dispatch covers, [begin, end) in `items`; `first` is 1 for the
 // first batch (the pixel's search starts from no hit).
 struct Batch {
     begin: u32,
@@ -73,10 +73,11 @@ struct Batch {
 
 @group(0) @binding(0) var<uniform> params: RayParams;
 @group(0) @binding(7) var<uniform> batch: Batch;
-// The seed cells nearest first (by their boxes' nearest depth along the view, sorted on the
-// CPU per frame): once a hit is found, farther cells fail the box test at `best.t` and
-// cost no Newton iteration.
-@group(0) @binding(8) var<storage, read> order: array<u32>;
+// The work items, faces nearest first (by their boxes' nearest depth along the view, sorted
+// on the CPU per frame; once a hit is found, farther faces fail the box test at `best.t`):
+// (face, first cell, cells, 0), a face's cells split over several items when they would
+// not fit one dispatch's loop budget.
+@group(0) @binding(8) var<storage, read> items: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read> seed_boxes: array<SeedBox>;
 @group(0) @binding(2) var<storage, read_write> hits: array<CastHit>;
 @group(0) @binding(3) var<storage, read_write> frame_color: array<u32>;
@@ -122,19 +123,25 @@ fn cast_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
         best = hits[i];
     }
     for (var k = batch.begin; k < batch.end; k += 1u) {
-        let cell = seed_boxes[order[k]];
-        let f = cell.a;
+        let item = items[k];
+        let f = item.x;
         let fb = seed_boxes[f];
-        if !ray_box(o, inv, cell, best.t) || !ray_box(o, inv, fb, best.t) {
+        if !ray_box(o, inv, fb, best.t) {
             continue;
         }
-        let ns = fb.b & 0xffffu;
-        let nt = fb.b >> 16u;
-        let ij = vec2<f32>(f32(cell.b & 0xffffu), f32(cell.b >> 16u));
-        let st = (ij + vec2<f32>(0.5)) / vec2<f32>(f32(ns), f32(nt));
-        let h = ray_newton(f, o, dir, patch_to_uv(f, st), params.tol, 1.0 / vec2<f32>(f32(ns), f32(nt)));
-        if h.hit && h.t < best.t && trim_walk(f, uv_to_patch(f, h.uv)) {
-            best = CastHit(h.t, f + 1u, h.uv);
+        let n = vec2<u32>(fb.b & 0xffffu, fb.b >> 16u);
+        let cells = vec2<f32>(n);
+        for (var c = item.y; c < item.y + item.z; c += 1u) {
+            let cell = seed_boxes[c];
+            if !ray_box(o, inv, cell, best.t) {
+                continue;
+            }
+            let ij = vec2<f32>(f32(cell.b & 0xffffu), f32(cell.b >> 16u));
+            let st = (ij + vec2<f32>(0.5)) / cells;
+            let h = ray_newton(f, o, dir, patch_to_uv(f, st), params.tol, 1.0 / cells);
+            if h.hit && h.t < best.t && trim_walk(f, uv_to_patch(f, h.uv)) {
+                best = CastHit(h.t, f + 1u, h.uv);
+            }
         }
     }
     hits[i] = best;

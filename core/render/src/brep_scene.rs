@@ -12,7 +12,7 @@
 
 use crate::RenderError;
 use crate::camera::Bounds;
-use crate::ray_cast::{SeedBox, face_seeds};
+use crate::ray_cast::{SeedBox, cell_cost, face_seeds};
 use crate::surface_pack::SurfacePack;
 use tessd_brep::{Document, Face};
 use tessd_gpu::{ErrorScopes, GpuError};
@@ -69,6 +69,9 @@ pub struct BrepScene {
     /// The ray caster's seed boxes ([`crate::ray_cast`]): one box per face first (document
     /// order; a skipped face's is empty, no cells), then every face's seed cells.
     pub seeds: Vec<SeedBox>,
+    /// Per face, the ray caster's worst-case loop iterations for one of its seed cells
+    /// ([`crate::ray_cast::cell_cost`]), by which it batches its work.
+    pub cell_costs: Vec<u32>,
 }
 
 impl BrepScene {
@@ -97,6 +100,7 @@ impl BrepScene {
             skipped: Vec::new(),
             trim_tolerance: eps,
             seeds: Vec::with_capacity(doc.faces.len()),
+            cell_costs: doc.faces.iter().map(|f| cell_cost(&f.surface)).collect(),
         };
         // Seed boxes are inflated by Newton's tolerance (that of object filling) and a hair.
         let seed_margin =

@@ -20,7 +20,7 @@
 //! `shaders/brep_bindings.wgsl`). Run by [`crate::brep_render::BrepPasses::ray_cast`].
 
 use bytemuck::{Pod, Zeroable};
-use tessd_brep::Face;
+use tessd_brep::{Curve, Curve3, Face, Surface};
 use wgpu::util::DeviceExt;
 
 use crate::RenderSettings;
@@ -43,7 +43,7 @@ pub const SHADER: &str = concat!(
 /// Seed cells along a patch direction: at least this many…
 const MIN_CELLS: usize = 8;
 /// … at most this many…
-const MAX_CELLS: usize = 32;
+const MAX_CELLS: usize = 96;
 /// … and one per this much turning of the normal (radians) along the direction.
 const TURN_PER_CELL: f64 = std::f64::consts::PI / 8.0;
 /// Surface samples per seed cell side when building the cell boxes.
@@ -85,11 +85,49 @@ struct Params {
     pad: [u32; 2],
 }
 
-/// Seed cells per search dispatch. lavapipe bounds the loop iterations of one invocation
-/// (see `shaders/ray_cast.wgsl`); a cell costs at most 12 Newton steps of some 300 loop
-/// iterations each (a degree-13 B-spline's basis), and Newton leaves a cell after a few
-/// steps when its root lies elsewhere, so 16 cells stay under its 65 535.
-pub const CELLS_PER_BATCH: u32 = 16;
+/// The loop iterations one search dispatch may spend per invocation: lavapipe ends an
+/// invocation's loop nest after 65 535 (see `shaders/ray_cast.wgsl`); a margin is kept.
+pub const LOOP_BUDGET: u32 = 60_000;
+
+/// Newton's most steps (`RAY_NEWTON_ITERATIONS` in `shaders/ray_newton.wgsl`).
+const NEWTON_STEPS: u32 = 12;
+
+/// The most loop iterations one evaluation of `surface` costs in `shaders/surface_eval.wgsl`:
+/// none for the analytic surfaces; for a B-spline the knot search, the Cox–de Boor triangle
+/// and derivative loop of each basis, and the pole loops.
+fn eval_loops(surface: &Surface) -> u32 {
+    fn basis(p: usize, knots: usize) -> u32 {
+        let p = p as u32;
+        // Bisection, the triangle j = 1..=p with r < j, the derivatives and copies.
+        (usize::BITS - knots.leading_zeros()) + p * (p + 1) / 2 + 3 * (p + 1) + 2
+    }
+    fn curve(c: &Curve3) -> u32 {
+        match c {
+            Curve::Bspline(b) => {
+                let flat = b.mults.iter().map(|&m| m as usize).sum();
+                basis(b.degree, flat) + b.degree as u32 + 1
+            }
+            _ => 0,
+        }
+    }
+    match surface {
+        Surface::Revolution { curve: c, .. } | Surface::Extrusion { curve: c, .. } => curve(c),
+        Surface::Bspline(b) => {
+            let sum = |m: &[u32]| m.iter().map(|&x| x as usize).sum::<usize>();
+            let (fu, fv) = (sum(&b.mults_u), sum(&b.mults_v));
+            basis(b.degree_u, fu)
+                + basis(b.degree_v, fv)
+                + (b.degree_u as u32 + 1) * (b.degree_v as u32 + 1)
+        }
+        _ => 0,
+    }
+}
+
+/// The most loop iterations one seed cell of a face with basis surface `surface` costs in
+/// the search: Newton's steps, each an evaluation, and the trim walk of the hit.
+pub fn cell_cost(surface: &Surface) -> u32 {
+    NEWTON_STEPS * (1 + eval_loops(surface)) + 32
+}
 
 /// Bytes between two batch records in the batch uniform buffer (wgpu's dynamic-offset
 /// alignment).
@@ -114,7 +152,7 @@ pub fn face_seeds(face: &Face, origin: [f64; 3], margin: f64) -> (usize, usize, 
     let [u0, u1, v0, v1] = face.bounds;
     let uv = |s: f64, t: f64| (u0 + s * (u1 - u0), v0 + t * (v1 - v0));
     // How far the normal turns along s and along t (the most over a few lines).
-    const PROBE: usize = 32;
+    const PROBE: usize = 64;
     let normal = |s: f64, t: f64| {
         let (u, v) = uv(s, t);
         face.surface.eval(u, v).normal()
@@ -297,7 +335,9 @@ impl RayCastPass {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        // The cells (after the face boxes) nearest first, in batches; at least one batch,
+        // Work items: the faces nearest first, each face's cells in chunks whose worst-case
+        // loop cost fits the budget; then batches of consecutive items within the budget
+        // (analytic faces go by the dozen, a thread's cells by the ten). At least one batch,
         // which starts every pixel from no hit.
         let eye = [0, 1, 2].map(|k| camera.eye[k] - scene.origin[k]);
         let nearest = |b: &SeedBox| {
@@ -312,31 +352,58 @@ impl RayCastPass {
                 })
                 .fold(f64::INFINITY, f64::min)
         };
-        let mut order: Vec<(f64, u32)> = (scene.faces.len()..scene.seeds.len())
-            .map(|c| (nearest(&scene.seeds[c]), c as u32))
+        let faces = scene.faces.len();
+        let mut by_depth: Vec<(f64, usize)> = (0..faces)
+            .filter(|&f| scene.seeds[f].b != 0)
+            .map(|f| (nearest(&scene.seeds[f]), f))
             .collect();
-        order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let order: Vec<u32> = order.into_iter().map(|(_, c)| c).collect();
-        let order_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("ray_cast cell order"),
-            contents: bytemuck::cast_slice(if order.is_empty() {
-                &[0u32][..]
+        by_depth.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut items: Vec<[u32; 4]> = Vec::new();
+        let mut costs: Vec<u32> = Vec::new();
+        for &(_, f) in &by_depth {
+            let fb = &scene.seeds[f];
+            let count = (fb.b & 0xffff) * (fb.b >> 16);
+            let per_cell = scene.cell_costs[f].saturating_add(1);
+            let chunk = (LOOP_BUDGET / per_cell).max(1);
+            let mut first = 0;
+            while first < count {
+                let n = chunk.min(count - first);
+                items.push([f as u32, fb.a + first, n, 0]);
+                costs.push(1 + n * per_cell);
+                first += n;
+            }
+        }
+        let mut batches = vec![Batch {
+            begin: 0,
+            end: 0,
+            first: 1,
+            pad: 0,
+        }];
+        let mut spent = 0u32;
+        for (k, &cost) in costs.iter().enumerate() {
+            let last = batches.last_mut().expect("one batch at least");
+            if last.end > last.begin && spent.saturating_add(cost) > LOOP_BUDGET {
+                batches.push(Batch {
+                    begin: k as u32,
+                    end: k as u32 + 1,
+                    first: 0,
+                    pad: 0,
+                });
+                spent = cost;
             } else {
-                &order
+                last.end = k as u32 + 1;
+                spent = spent.saturating_add(cost);
+            }
+        }
+        let items_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ray_cast items"),
+            contents: bytemuck::cast_slice(if items.is_empty() {
+                &[[0u32; 4]][..]
+            } else {
+                &items
             }),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let end = order.len() as u32;
-        let batches: Vec<Batch> = (0..end.max(1))
-            .step_by(CELLS_PER_BATCH as usize)
-            .enumerate()
-            .map(|(k, b)| Batch {
-                begin: b,
-                end: (b + CELLS_PER_BATCH).min(end),
-                first: u32::from(k == 0),
-                pad: 0,
-            })
-            .collect();
         let mut records = vec![0u8; batches.len() * BATCH_STRIDE as usize];
         for (k, b) in batches.iter().enumerate() {
             let at = k * BATCH_STRIDE as usize;
@@ -347,7 +414,7 @@ impl RayCastPass {
             contents: &records,
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        // Bindings 0–6, then the batch (7, one record at a dynamic offset) and the order (8).
+        // Bindings 0–6, then the batch (7, one record at a dynamic offset) and the items (8).
         let batch = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &batch_buffer,
             offset: 0,
@@ -364,7 +431,7 @@ impl RayCastPass {
         ]
         .map(|b| b.as_entire_binding())
         .into_iter()
-        .chain([batch, order_buffer.as_entire_binding()]);
+        .chain([batch, items_buffer.as_entire_binding()]);
         let group = bindings::bind_resources(device, "ray_cast", &self.layout, resources);
         let groups = bindings::dispatch_pixels(width, height);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
