@@ -104,6 +104,7 @@ def export_parts(data, work):
     do (reference.document_faces), and the bottle."""
     sys.path.insert(0, str(REPO / "python"))
     sys.path.insert(0, str(REPO / "tests/render_reference"))
+    sys.path.insert(0, str(REPO / "tests"))  # png_decode, shared by the render tests
     import reference as R  # noqa: F401
     from tessd.brep import ocp as brep_ocp
 
