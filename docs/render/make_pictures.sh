@@ -6,8 +6,10 @@
 # Every picture is 960x540 (`tessd render ... --json`); the script prints one line per picture
 # with the figures the README's captions quote (cracks detected / filled, covered pixels, time).
 # Runs without a GPU (lavapipe): about three minutes on 2 cores, most of it the two --raycast
-# pictures; the first run on a machine takes longer while the shaders compile. The parts are tessd-brep documents of core/tessellate/tests/data/: OCCT's
-# bottle (71 faces) and the CrankArm part (CrankArm.brep, 53 faces).
+# pictures; the first run on a machine takes longer while the shaders compile. The parts are
+# shared parts: the tessd-brep documents of core/tessellate/tests/data/ (OCCT's bottle, 71
+# faces, and CrankArm.brep, 53 faces), and the M6 countersunk screw's STEP file
+# (shared/data/brep), exported on the fly with `python -m tessd.brep export` in .venv-cad.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 TESSD="${TESSD_BIN:-${CARGO_TARGET_DIR:-target}/release/tessd}"
@@ -29,8 +31,17 @@ print("%s.png: %s, %s, %d of %d pixels covered, %d grid cells, %.0f ms" % (sys.a
       cracks, r["covered"], r["pixels"], r["grid"]["cells"], r["timings_ms"]["total"]))' "$name"
 }
 
-for part in bottle CrankArm; do
-    name=$(echo "$part" | tr '[:upper:]' '[:lower:]')
+# The STEP part, exported as the render tests do.
+SHARED="${TESSD_SHARED_DATA:-../shared/data}"
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+PYTHONPATH=python .venv-cad/bin/python -m tessd.brep export \
+    "$SHARED/brep/M6-1x12-countersunk-screw.step" "$TMP/M6_screw.json" 2>/dev/null
+ln -sf "$TMP/M6_screw.json" "$DATA/.M6_screw.json"
+trap 'rm -rf "$TMP" "$DATA/.M6_screw.json"' EXIT
+
+for part in bottle CrankArm .M6_screw; do
+    name=$(echo "${part#.}" | tr '[:upper:]' '[:lower:]')
     render "${name}_none" "$part" --cracks none
     render "${name}_image" "$part" --cracks image
     render "${name}_object" "$part" --cracks object
