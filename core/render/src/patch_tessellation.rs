@@ -186,39 +186,86 @@ pub struct GpuTessellation {
     pub vertex_count: u32,
 }
 
-/// The bind group 0 layout (the [`TessParams`] block, the patches read, one buffer written)
-/// and the pipeline of a one-dimensional pass over the frame's grid (`source`'s `main`),
-/// group 1 being `brep`: the grid and the classification passes.
-pub(crate) fn grid_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    source: &str,
-    brep: &wgpu::BindGroupLayout,
-) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
-    let c = wgpu::ShaderStages::COMPUTE;
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &[
-            bindings::uniform(0, c),
-            bindings::storage(1, true, c),
-            bindings::storage(2, false, c),
-        ],
-    });
-    let pipeline = bindings::compute_pipeline(device, label, source, &[&layout, brep]);
-    (layout, pipeline)
+/// A one-dimensional pass over the frame's grid (`source`'s `main`): bind group 0 holds the
+/// [`TessParams`] block, the patches (read) and one buffer it writes, group 1 the part's
+/// buffers. The grid and the classification passes are two of these.
+pub(crate) struct GridPass {
+    label: &'static str,
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl GridPass {
+    /// Compiles `source` with `brep` as the layout of bind group 1.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        label: &'static str,
+        source: &str,
+        brep: &wgpu::BindGroupLayout,
+    ) -> GridPass {
+        let c = wgpu::ShaderStages::COMPUTE;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &[
+                bindings::uniform(0, c),
+                bindings::storage(1, true, c),
+                bindings::storage(2, false, c),
+            ],
+        });
+        let pipeline = bindings::compute_pipeline(device, label, source, &[&layout, brep]);
+        GridPass {
+            label,
+            layout,
+            pipeline,
+        }
+    }
+
+    /// Records one invocation per element of `count` (grid vertices or cells) of `frame`,
+    /// reading the patch records and writing the output of `[patches, out]`; nothing when
+    /// `count` is 0.
+    pub(crate) fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        brep_group: &wgpu::BindGroup,
+        frame: &FrameTessellation,
+        count: u32,
+        [patches, out]: [&wgpu::Buffer; 2],
+    ) {
+        if count == 0 {
+            return;
+        }
+        let (x, y, row) = dispatch_1d(count);
+        let params = TessParams {
+            patch_count: frame.patches.len() as u32,
+            vertex_count: frame.vertices,
+            cell_count: frame.cells,
+            row,
+        };
+        let uniform = bindings::uniform_buffer(device, self.label, &params);
+        let group =
+            bindings::bind_buffers(device, self.label, &self.layout, &[&uniform, patches, out]);
+        bindings::compute_pass(
+            encoder,
+            self.label,
+            &self.pipeline,
+            &[&group, brep_group],
+            (x, y, 1),
+        );
+    }
 }
 
 /// The compiled grid pass.
 pub struct TessellationPass {
-    layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::ComputePipeline,
+    pass: GridPass,
 }
 
 impl TessellationPass {
     /// Compiles the shader; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> TessellationPass {
-        let (layout, pipeline) = grid_pipeline(device, "patch_tessellate", SHADER, brep);
-        TessellationPass { layout, pipeline }
+        TessellationPass {
+            pass: GridPass::new(device, "patch_tessellate", SHADER, brep),
+        }
     }
 
     /// Creates the frame's buffers and records the grid evaluation.
@@ -251,29 +298,14 @@ impl TessellationPass {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let (x, y, row) = dispatch_1d(frame.vertices);
-        let params = TessParams {
-            patch_count: frame.patches.len() as u32,
-            vertex_count: frame.vertices,
-            cell_count: frame.cells,
-            row,
-        };
-        let uniform = bindings::uniform_buffer(device, "tess params", &params);
-        let group = bindings::bind_buffers(
+        self.pass.encode(
             device,
-            "patch_tessellate",
-            &self.layout,
-            &[&uniform, &patches, &grid],
+            encoder,
+            brep_group,
+            frame,
+            frame.vertices,
+            [&patches, &grid],
         );
-        if frame.vertices > 0 {
-            bindings::compute_pass(
-                encoder,
-                "patch_tessellate",
-                &self.pipeline,
-                &[&group, brep_group],
-                (x, y, 1),
-            );
-        }
         GpuTessellation {
             patches,
             grid,

@@ -7,23 +7,22 @@
 //! [`crate::patch_tessellation`]), the level at which section 6 finds at least 40 % of the
 //! domain decided.
 
-use crate::bindings::{self, dispatch_1d};
-use crate::patch_tessellation::{FrameTessellation, GpuTessellation, TessParams, grid_pipeline};
+use crate::patch_tessellation::{FrameTessellation, GpuTessellation, GridPass};
 
 /// The WGSL of the pass.
 pub const SHADER: &str = patch_grid_shader!("triangle_classify.wgsl");
 
 /// The compiled pass.
 pub struct ClassificationPass {
-    layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::ComputePipeline,
+    pass: GridPass,
 }
 
 impl ClassificationPass {
     /// Compiles the shader; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> ClassificationPass {
-        let (layout, pipeline) = grid_pipeline(device, "triangle_classify", SHADER, brep);
-        ClassificationPass { layout, pipeline }
+        ClassificationPass {
+            pass: GridPass::new(device, "triangle_classify", SHADER, brep),
+        }
     }
 
     /// Records the classification of every cell of `tess` into its cell records.
@@ -35,29 +34,13 @@ impl ClassificationPass {
         frame: &FrameTessellation,
         tess: &GpuTessellation,
     ) {
-        if frame.cells == 0 {
-            return;
-        }
-        let (x, y, row) = dispatch_1d(frame.cells);
-        let params = TessParams {
-            patch_count: frame.patches.len() as u32,
-            vertex_count: frame.vertices,
-            cell_count: frame.cells,
-            row,
-        };
-        let uniform = bindings::uniform_buffer(device, "classify params", &params);
-        let group = bindings::bind_buffers(
+        self.pass.encode(
             device,
-            "triangle_classify",
-            &self.layout,
-            &[&uniform, &tess.patches, &tess.cells],
-        );
-        bindings::compute_pass(
             encoder,
-            "triangle_classify",
-            &self.pipeline,
-            &[&group, brep_group],
-            (x, y, 1),
+            brep_group,
+            frame,
+            frame.cells,
+            [&tess.patches, &tess.cells],
         );
     }
 }
