@@ -53,4 +53,14 @@ done
 CLOSEUP=(--eye=11.07,-7.52,57.17 --target=6.39,-2.83,49.68)
 render closeup_none bottle --cracks none "${CLOSEUP[@]}"
 render closeup_object bottle --cracks object "${CLOSEUP[@]}"
+# Meshes side by side: the Stanford bunny's LOD chain from the USD stage `tessd lod` writes,
+# one 320x320 panel per LOD variant, one camera (Gooch shading).
+"$TESSD" lod "$SHARED/mesh/stanford_bunny.obj" --levels 10%,2%,0.5% --out "$TMP/bunny_lods.usda" \
+    >/dev/null
+"$TESSD" render "$TMP/bunny_lods.usda" "$OUT/bunny_lods.png" --size 320x320 --shading gooch \
+    --eye=-0.1,0.25,0.35 --target=-0.02,0.1,0 --up=0,1,0 --json 2>/dev/null | python3 -c '
+import json, sys
+r = json.load(sys.stdin)
+print("bunny_lods.png: %s, %dx%d, %.0f ms" % (", ".join("%s %d triangles" % (p["label"], p["triangles"])
+      for p in r["panels"]), r["width"], r["height"], r["timings_ms"]["total"]))'
 ls -l "$OUT"/*.png

@@ -136,10 +136,21 @@ def test_demo_writes_stats_and_valid_usd(tmp_path):
     assert lod_covered[0] > 0.05 * 640 * 480, lod_covered
     for c in lod_covered[1:]:
         assert abs(c - lod_covered[0]) <= 0.2 * lod_covered[0], lod_covered
+    # The chain side by side, read back from the USD stage the lod op wrote: four 320x320
+    # panels in one row, each covering about the same share as its 640x480 picture.
+    chain = read_png(out / "spot_lods.png")
+    assert chain.shape == (320, 4 * 320, 4)
+    panel_covered = [covered(chain[:, 320 * i:320 * (i + 1)]) for i in range(4)]
+    for i in range(4):
+        share, alone = panel_covered[i] / 320**2, lod_covered[i] / (640 * 480)
+        assert share > 0.02 and abs(share - alone) <= 0.5 * alone, (panel_covered, lod_covered)
+    assert "render: Spot's LOD chain side by side" in run.stdout
+    assert "LOD0 " in run.stdout and "LOD3 " in run.stdout
 
     # The socket is gone after the demo's daemon shut down: nothing left in the output folder
     # but the results.
     assert sorted(p.name for p in out.iterdir()) == [
         "bottle.png", "bottle.usda", "bottle_face_ids.png", "spot.usda", "spot_cage.usda",
-        "spot_lod0.png", "spot_lod1.png", "spot_lod2.png", "spot_lod3.png", "spot_lods.usda",
+        "spot_lod0.png", "spot_lod1.png", "spot_lod2.png", "spot_lod3.png", "spot_lods.png",
+        "spot_lods.usda",
         "spot_stats.json", "spot_subdiv.usda", "spot_subdiv_anim.usda"]

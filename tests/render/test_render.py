@@ -103,3 +103,76 @@ def test_cancel_and_refusals_write_nothing(daemon, tmp_path, shared_data):
                 c.call("render", {"input": bunny, "output": str(tmp_path / "y.png"), **params})
             assert e.value.code == code and text in str(e.value), (params, e.value)
     assert list(tmp_path.iterdir()) == []
+
+
+def _tessd_json(*args):
+    """`tessd ARGS --json` through the CLI, its report parsed."""
+    import subprocess
+
+    import locate
+    out = subprocess.run([str(locate.tessd_bin()), *map(str, args), "--json"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout)
+
+
+def _ids(path):
+    rgba = np.asarray(read_png(path)).astype(np.int64)
+    return rgba[..., 0] + 256 * rgba[..., 1] + 65536 * rgba[..., 2]
+
+
+def test_several_meshes_side_by_side(tmp_path, shared_data):
+    """A LOD chain as panels: `tessd render A B C OUT.png` draws each mesh in its own panel
+    from one camera, so each panel is exactly the picture of that mesh alone from that camera
+    (colour and face ids), panels left to right in the given order; `--columns` stacks them."""
+    spot = shared_data / "mesh/spot_triangulated.obj"
+    lods = tmp_path / "lods"
+    _tessd_json("lod", spot, "--levels", "20%,2%", "--out", tmp_path / "spot.usda",
+                "--per-level-dir", lods)
+    files = [lods / f"spot_LOD{i}.obj" for i in range(3)]
+    cam = ["--eye", "-2.6,1.2,-3.6", "--target", "0,0.1,0.2", "--up", "0,1,0"]
+    grid = _tessd_json("render", *files, tmp_path / "row.png", "--size", "96x80", *cam,
+                       "--face-ids", tmp_path / "row_ids.png")
+    assert (grid["width"], grid["height"], grid["columns"], grid["rows"]) == (288, 80, 3, 1)
+    assert [p["label"] for p in grid["panels"]] == [f"spot_LOD{i}" for i in range(3)]
+    assert [p["x"] for p in grid["panels"]] == [0, 96, 192]
+    tris = [p["triangles"] for p in grid["panels"]]
+    assert tris[0] > tris[1] > tris[2] > 0 and grid["triangles"] == sum(tris)
+    row = np.asarray(read_png(tmp_path / "row.png"))
+    row_ids = _ids(tmp_path / "row_ids.png")
+    assert row.shape == (80, 288, 4)
+    covered = 0
+    for i, f in enumerate(files):
+        one = _tessd_json("render", f, tmp_path / f"one{i}.png", "--size", "96x80", *cam,
+                          "--face-ids", tmp_path / f"one{i}_ids.png")
+        assert one["triangles"] == tris[i]
+        panel = slice(96 * i, 96 * (i + 1))
+        assert np.array_equal(row[:, panel], np.asarray(read_png(tmp_path / f"one{i}.png")))
+        assert np.array_equal(row_ids[:, panel], _ids(tmp_path / f"one{i}_ids.png"))
+        covered += one["covered"]
+    assert grid["covered"] == covered > 3 * 500
+    # One column: the panels stacked top to bottom.
+    col = _tessd_json("render", *files, tmp_path / "col.png", "--size", "96x80", *cam,
+                      "--columns", "1")
+    assert (col["width"], col["height"]) == (96, 240)
+    assert [p["y"] for p in col["panels"]] == [0, 80, 160]
+    assert np.array_equal(np.asarray(read_png(tmp_path / "col.png"))[80:160], row[:, 96:192])
+
+
+def test_panels_refuse_brep_and_name_the_bad_input(daemon, tmp_path, shared_data):
+    spot = str(shared_data / "mesh/spot_triangulated.obj")
+    with tessd.Client(daemon.socket) as c:
+        for inputs, code, words in [
+            ([spot, str(CRANK)], "unsupported", "`input[1]`"),
+            ([spot, str(tmp_path / "missing.obj")], "io", "`input[1]`"),
+            ([], "invalid_request", "1 to 64"),
+            ([spot, 7], "invalid_request", "`input[1]`"),
+        ]:
+            out = tmp_path / "never.png"
+            with pytest.raises(TessdError) as e:
+                c.call("render", {"input": inputs, "size": "32x32", "output": str(out)})
+            assert e.value.code == code and words in e.value.message, e.value
+            assert not out.exists()
+        with pytest.raises(TessdError) as e:
+            c.call("render", {"input": [spot, spot], "columns": 0, "size": "32x32"})
+        assert e.value.code == "invalid_request" and "`columns`" in e.value.message

@@ -1,30 +1,19 @@
-//! Comparisons on the shared test meshes (skipped when the data folder is missing):
-//! `$TESSD_SHARED_DATA`, else `/work/shared/data`.
+//! Comparisons on the shared test meshes (`tessd_testdata::shared`: a missing file fails).
 
-use std::path::PathBuf;
 use tessd_compare::{CompareOptions, compare};
 use tessd_mesh::Mesh;
 use tessd_mesh::io::{ReadOptions, read_path};
 
-fn shared(name: &str) -> Option<Mesh> {
-    let root = std::env::var_os("TESSD_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/data"));
-    let path = root.join("mesh").join(name);
-    if !path.exists() {
-        eprintln!("skipped: {} is missing", path.display());
-        return None;
-    }
-    Some(read_path(&path, &ReadOptions::default()).unwrap())
+fn shared(name: &str) -> Mesh {
+    let path = tessd_testdata::shared(&format!("mesh/{name}"));
+    read_path(&path, &ReadOptions::default()).unwrap()
 }
 
 #[test]
 fn bunny_ply_and_obj_are_the_same_surface_up_to_obj_rounding() {
     // stanford_bunny.obj is bun_zipper.ply written with 6 decimals: every vertex moved by at
     // most 5e-7 per axis, so the surfaces are within √3 · 5e-7 ≈ 8.7e-7 of each other.
-    let (Some(ply), Some(obj)) = (shared("bun_zipper.ply"), shared("stanford_bunny.obj")) else {
-        return;
-    };
+    let (ply, obj) = (shared("bun_zipper.ply"), shared("stanford_bunny.obj"));
     let c = compare(&ply, &obj, &CompareOptions::default().with_samples(50_000)).unwrap();
     assert!(c.hausdorff > 0.0 && c.hausdorff <= 8.7e-7, "{c:?}");
     assert!(
@@ -39,9 +28,7 @@ fn bunny_ply_and_obj_are_the_same_surface_up_to_obj_rounding() {
 #[test]
 fn polygon_mesh_against_itself() {
     // n-gon faces (fan-triangulated on both sides).
-    let Some(m) = shared("mpi_polygons.off") else {
-        return;
-    };
+    let m = shared("mpi_polygons.off");
     assert!(m.faces().any(|f| f.len() > 4));
     let c = compare(&m, &m, &CompareOptions::default().with_samples(20_000)).unwrap();
     assert!(c.hausdorff < 1e-9 * c.bbox_diagonal, "{c:?}");

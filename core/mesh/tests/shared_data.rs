@@ -11,16 +11,8 @@ use tessd_mesh::io::{self, Format, ReadOptions};
 use tessd_mesh::{Mesh, stats};
 
 fn data_dir() -> PathBuf {
-    let dir = match std::env::var_os("TESSD_SHARED_DATA") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-    };
-    assert!(
-        dir.join("MANIFEST.md").is_file(),
-        "shared test data not found at {}; set TESSD_SHARED_DATA",
-        dir.display()
-    );
-    dir
+    tessd_testdata::shared("MANIFEST.md");
+    tessd_testdata::shared_dir()
 }
 
 /// One MANIFEST entry. `None` where the manifest says nothing.

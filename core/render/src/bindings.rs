@@ -1,9 +1,12 @@
 //! What every pass's pipeline setup shares: bind-group layout entries, the layout of a B-Rep
 //! part's buffers (bind group 1 of the B-Rep passes, `shaders/brep_bindings.wgsl`), bind
 //! groups, uniform buffers, shader modules, compute and render pipelines, compute passes,
-//! per-pixel dispatches and one-dimensional dispatches larger than a dispatch row.
+//! per-pixel dispatches and one-dimensional dispatches larger than a dispatch row, and the
+//! read-back of a buffer.
 
+use crate::RenderError;
 use bytemuck::Pod;
+use tessd_gpu::GpuError;
 use wgpu::util::DeviceExt;
 
 /// A storage-buffer entry at `binding`.
@@ -253,4 +256,76 @@ pub fn dispatch_1d(n: u32) -> (u32, u32, u32) {
     let groups = n.div_ceil(WORKGROUP).max(1);
     let x = groups.min(GROUPS_X);
     (x, groups.div_ceil(x), x * WORKGROUP)
+}
+
+/// Copies `buffer` (made with `COPY_SRC`) to a mappable buffer once the work submitted so far
+/// is done, and returns its contents as 32-bit words.
+///
+/// # Errors
+/// [`RenderError::Gpu`] when the device fails or the mapping does.
+pub fn read_words(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u32>, RenderError> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("read back"),
+    });
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    let failed = |e: String| RenderError::Gpu(GpuError::Wgpu(format!("reading back: {e}")));
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| failed(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| failed(e.to_string()))?
+        .map_err(|e| failed(e.to_string()))?;
+    let words = {
+        let view = staging
+            .get_mapped_range(..)
+            .map_err(|e| failed(e.to_string()))?;
+        bytemuck::cast_slice::<u8, u32>(&view).to_vec()
+    };
+    staging.unmap();
+    Ok(words)
+}
+
+/// A storage buffer holding `bytes`, refused when over the device's binding limit; an empty
+/// array still gets 64 bytes, as a binding needs at least one element.
+///
+/// # Errors
+/// [`RenderError::Gpu`] ([`GpuError::BufferTooLarge`]) naming `label`.
+pub fn storage_init(
+    device: &wgpu::Device,
+    label: &'static str,
+    bytes: &[u8],
+) -> Result<wgpu::Buffer, RenderError> {
+    let limit = device.limits().max_storage_buffer_binding_size;
+    if bytes.len() as u64 > limit {
+        return Err(GpuError::BufferTooLarge {
+            what: label,
+            size: bytes.len() as u64,
+            limit,
+            limit_name: "max_storage_buffer_binding_size",
+        }
+        .into());
+    }
+    let pad = [0u8; 64];
+    Ok(
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: if bytes.is_empty() { &pad } else { bytes },
+            usage: wgpu::BufferUsages::STORAGE,
+        }),
+    )
 }

@@ -15,6 +15,7 @@
 //! Each step is submitted on its own and waited for, so that its time is its own (a few
 //! hundred microseconds of submission overhead per step, against milliseconds of work).
 
+use crate::bindings::read_words;
 use crate::brep_scene::{BrepScene, GpuBrep};
 use crate::crack_detect::{CrackDetectPass, count_flags, default_d_min};
 use crate::frame_buffers::{FrameBuffers, GatherPass};
@@ -22,10 +23,12 @@ use crate::image_fill::ImageFillPass;
 use crate::object_fill::ObjectFillPass;
 use crate::patch_tessellation::{FrameTessellation, PIXEL_ACCURACY, TessellationPass, brep_group};
 use crate::ray_cast::RayCastPass;
+use crate::ray_cast::RaySeeds;
 use crate::targets::Targets;
-use crate::triangle_classification::ClassificationPass;
+use crate::triangle_classification::{CellDecision, ClassificationPass};
 use crate::trimmed_surface::TrimmedSurfacePass;
 use crate::{Camera, Frame, RenderError, RenderSettings, bindings, check_size};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 use tessd_gpu::{ErrorScopes, GpuContext, GpuError};
 
@@ -133,9 +136,29 @@ pub struct GpuBrepScene {
     pub scene: BrepScene,
     buffers: GpuBrep,
     group: wgpu::BindGroup,
+    /// The ray caster's seed boxes and their buffer, made on the first ray cast.
+    seeds: OnceLock<(RaySeeds, wgpu::Buffer)>,
 }
 
 impl GpuBrepScene {
+    /// The ray caster's seeds ([`BrepScene::ray_seeds`]) and their storage buffer, built and
+    /// uploaded on the first call.
+    ///
+    /// # Errors
+    /// [`RenderError::Gpu`] when the buffer is over the device's limits.
+    pub fn ray_seeds(
+        &self,
+        device: &wgpu::Device,
+    ) -> Result<&(RaySeeds, wgpu::Buffer), RenderError> {
+        if let Some(s) = self.seeds.get() {
+            return Ok(s);
+        }
+        let seeds = self.scene.ray_seeds();
+        let buffer =
+            bindings::storage_init(device, "seed boxes", bytemuck::cast_slice(&seeds.boxes))?;
+        Ok(self.seeds.get_or_init(|| (seeds, buffer)))
+    }
+
     /// Bytes of the trim structure on the device (paper 000 table 3).
     pub fn trim_bytes(&self) -> usize {
         self.buffers.trim_bytes
@@ -171,7 +194,37 @@ impl BrepPasses {
             scene,
             buffers,
             group,
+            seeds: OnceLock::new(),
         })
+    }
+
+    /// Runs the grid and triangle-classification passes of `frame` over `part` and reads
+    /// back what classification decided per cell (tests and diagnostics of paper 000 §6).
+    ///
+    /// # Errors
+    /// [`RenderError::Gpu`] when wgpu fails.
+    pub fn classify_cells(
+        &self,
+        gpu: &GpuContext,
+        part: &GpuBrepScene,
+        frame: &FrameTessellation,
+    ) -> Result<Vec<CellDecision>, RenderError> {
+        let device = &gpu.device;
+        let scopes = ErrorScopes::push(device);
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("classify cells"),
+        });
+        let tess = self
+            .tessellate
+            .encode(device, &mut encoder, &part.group, frame);
+        self.classify
+            .encode(device, &mut encoder, &part.group, frame, &tess);
+        gpu.queue.submit([encoder.finish()]);
+        let words = read_words(device, &gpu.queue, &tess.cells)?;
+        scopes.pop_blocking()?;
+        let mut cells = CellDecision::decode(&words);
+        cells.truncate(frame.cells as usize);
+        Ok(cells)
     }
 
     /// Renders `part` from `camera`: tessellation, steps 1–2, then the filling `cracks` asks
@@ -276,12 +329,13 @@ impl BrepPasses {
         let mut report = BrepReport::default();
         let scopes = ErrorScopes::push(device);
         let buffers = FrameBuffers::new(device, width, height);
+        let (seeds, seed_buffer) = part.ray_seeds(device)?;
         step(gpu, &mut report.timings.ray_cast, |e| {
             self.ray_cast.encode(
                 device,
                 e,
                 &part.group,
-                &part.buffers,
+                (seeds, seed_buffer),
                 &part.scene,
                 camera,
                 settings,

@@ -11,19 +11,27 @@
 //! (see [`tessd_trim::multi_pack`]).
 
 use crate::RenderError;
+use crate::bindings;
 use crate::camera::Bounds;
-use crate::ray_cast::{SeedBox, cell_cost, face_seeds};
+use crate::ray_cast::RaySeeds;
 use crate::surface_pack::SurfacePack;
+use crate::triangle_classification::classification_level;
 use tessd_brep::{Document, Face};
-use tessd_gpu::{ErrorScopes, GpuError};
+use tessd_gpu::ErrorScopes;
 use tessd_trim::TrimStructure;
 use tessd_trim::multi_pack::{MultiPack, NO_LEVEL};
-use wgpu::util::DeviceExt;
 
 /// The finest tessellation level per axis: 2^9 = 512 grid cells along each side of a face's
 /// domain (the hardware tessellators of paper 000 §7 stop at 64; a compute pass has no such
 /// limit, but a face finer than 512 × 512 cells at 0.5 pixel would be larger than a 4K screen).
 pub const MAX_LEVEL: u32 = 9;
+
+/// The finest level k_i may force on a face whatever its size on screen: 2^6 = 64 cells a
+/// side, the hardware tessellators' limit in paper 000 §7. A face whose classification
+/// decides 40 % only at a finer level gets no minimum (`k_i = None`): forcing 256 × 256
+/// cells on it costs more than the fragment walks it would save (the M6 screw's thread at
+/// k_i = 8: 129 k cells a 640 × 480 frame, 2.3 × the frame time).
+pub const MAX_CLASSIFICATION_LEVEL: u32 = 6;
 
 /// Samples per side of the grid on which a face's second derivatives are estimated.
 const CURVATURE_SAMPLES: usize = 16;
@@ -45,8 +53,10 @@ pub struct FaceInfo {
     /// world units per (normalised quadtree unit)²: the chordal error of a grid of steps
     /// (h_x, h_y) is at most (M_xx h_x² + 2 M_xy h_x h_y + M_yy h_y²) / 8.
     pub curvature: [f64; 3],
-    /// The triangle-classification level k_i of paper 000 §6, capped at [`MAX_LEVEL`]
-    /// (`None` without one).
+    /// The triangle-classification level k_i of paper 000 §6 as the classification pass
+    /// decides cells, at most [`MAX_CLASSIFICATION_LEVEL`] (`None` when no level up to it
+    /// decides 40 %;
+    /// see [`classification_level`]).
     pub k_i: Option<u32>,
 }
 
@@ -66,12 +76,23 @@ pub struct BrepScene {
     pub skipped: Vec<String>,
     /// The world tolerance the trims were approximated with.
     pub trim_tolerance: f64,
-    /// The ray caster's seed boxes ([`crate::ray_cast`]): one box per face first (document
-    /// order; a skipped face's is empty, no cells), then every face's seed cells.
-    pub seeds: Vec<SeedBox>,
-    /// Per face, the ray caster's worst-case loop iterations for one of its seed cells
-    /// ([`crate::ray_cast::cell_cost`]), by which it batches its work.
-    pub cell_costs: Vec<u32>,
+    /// The faces as the document gave them, kept for the ray caster's seed boxes
+    /// ([`RaySeeds`]), built on its first use: a raster render never pays for them.
+    pub source: Vec<Face>,
+    /// Per face, whether its trim structure was built (skipped faces are not drawn).
+    pub built: Vec<bool>,
+}
+
+impl BrepScene {
+    /// The ray caster's seed boxes of the part (see [`RaySeeds::new`]).
+    pub fn ray_seeds(&self) -> RaySeeds {
+        RaySeeds::new(
+            &self.source,
+            &self.built,
+            self.origin,
+            2.0 * self.bounds.radius(),
+        )
+    }
 }
 
 impl BrepScene {
@@ -99,14 +120,9 @@ impl BrepScene {
             trims: MultiPack::new(),
             skipped: Vec::new(),
             trim_tolerance: eps,
-            seeds: Vec::with_capacity(doc.faces.len()),
-            cell_costs: doc.faces.iter().map(|f| cell_cost(&f.surface)).collect(),
+            source: doc.faces.clone(),
+            built: Vec::with_capacity(doc.faces.len()),
         };
-        // Seed boxes are inflated by Newton's tolerance (that of object filling) and a hair.
-        let seed_margin =
-            (crate::object_fill::NEWTON_TOLERANCE + 1e-6) * diagonal.max(f64::MIN_POSITIVE);
-        let first_cell = doc.faces.len() as u32;
-        let mut cells = Vec::new();
         for face in &doc.faces {
             scene.surfaces.push(face);
             let trim = match TrimStructure::build(face, eps) {
@@ -123,46 +139,19 @@ impl BrepScene {
                         curvature: [0.0; 3],
                         k_i: None,
                     });
-                    scene
-                        .seeds
-                        .push(face_box(&[], first_cell + cells.len() as u32, 0, 0));
+                    scene.built.push(false);
                     continue;
                 }
             };
-            let info = face_info(face, &trim, &bounds);
-            scene.trims.push(&trim, face.bounds);
-            scene.faces.push(info);
-            let (ns, nt, mut face_cells) = face_seeds(face, origin, seed_margin);
-            let first = first_cell + cells.len() as u32;
-            // A cell knows its face and its (column, row): the search visits cells alone.
-            let face_index = scene.faces.len() as u32 - 1;
-            for (k, c) in face_cells.iter_mut().enumerate() {
-                c.a = face_index;
-                c.b = (k % ns.max(1)) as u32 | ((k / ns.max(1)) as u32) << 16;
-            }
-            scene.seeds.push(face_box(&face_cells, first, ns, nt));
-            cells.extend(face_cells);
+            let index = scene.trims.push(&trim, face.bounds);
+            // k_i as the classification pass decides cells (paper 000 §6 on the triangles
+            // really drawn), not the quadtree's own diagonal-split estimate.
+            let k_i = classification_level(&scene.trims, index, MAX_CLASSIFICATION_LEVEL);
+            scene.trims.headers[index].k_i = k_i.unwrap_or(NO_LEVEL);
+            scene.faces.push(face_info(face, &trim, &bounds, k_i));
+            scene.built.push(true);
         }
-        scene.seeds.extend(cells);
         Ok(scene)
-    }
-}
-
-/// The face box of a face's seed `cells` (`ns × nt` of them, the first at index `first` of
-/// the seed array): their union, empty (and never crossed) without cells.
-fn face_box(cells: &[SeedBox], first: u32, ns: usize, nt: usize) -> SeedBox {
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for c in cells {
-        for k in 0..3 {
-            lo[k] = lo[k].min(c.lo[k]);
-            hi[k] = hi[k].max(c.hi[k]);
-        }
-    }
-    SeedBox {
-        lo,
-        a: first,
-        hi,
-        b: ns as u32 | (nt as u32) << 16,
     }
 }
 
@@ -178,8 +167,9 @@ fn empty_trim(face: &Face, eps: f64) -> TrimStructure {
     TrimStructure::build(&bare, eps).expect("a bare unit rectangle always builds")
 }
 
-/// The face's world box, second-derivative bounds over its quadtree's root square, and k_i.
-fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds) -> FaceInfo {
+/// The face's world box and second-derivative bounds over its quadtree's root square, with
+/// its level `k_i`.
+fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds, k_i: Option<u32>) -> FaceInfo {
     let d = trim.packed.domain;
     let (w, h) = (d[1] - d[0], d[3] - d[2]);
     let n = CURVATURE_SAMPLES;
@@ -240,11 +230,6 @@ fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds) -> FaceInfo {
         }
         None => *part,
     };
-    let k_i = trim
-        .stats
-        .k_i
-        .filter(|&k| k != NO_LEVEL)
-        .map(|k| k.min(MAX_LEVEL));
     FaceInfo {
         bounds,
         curvature,
@@ -267,8 +252,6 @@ pub struct GpuBrep {
     pub trim_curves: wgpu::Buffer,
     /// Two-curve records.
     pub trim_lines: wgpu::Buffer,
-    /// The ray caster's seed boxes ([`BrepScene::seeds`]); not part of bind group 1.
-    pub seeds: wgpu::Buffer,
     /// Bytes of the trim buffers (table 3 of paper 000).
     pub trim_bytes: usize,
 }
@@ -279,28 +262,8 @@ impl GpuBrep {
     /// # Errors
     /// [`RenderError::Gpu`] when a buffer is over the device's limits.
     pub fn upload(device: &wgpu::Device, scene: &BrepScene) -> Result<GpuBrep, RenderError> {
-        let limit = device.limits().max_storage_buffer_binding_size;
         let scopes = ErrorScopes::push(device);
-        let make = |label: &'static str, bytes: &[u8]| -> Result<wgpu::Buffer, RenderError> {
-            if bytes.len() as u64 > limit {
-                return Err(GpuError::BufferTooLarge {
-                    what: label,
-                    size: bytes.len() as u64,
-                    limit,
-                    limit_name: "max_storage_buffer_binding_size",
-                }
-                .into());
-            }
-            // An empty array still binds at least one element (a seed box is 32 bytes).
-            let pad = [0u8; 64];
-            Ok(
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: if bytes.is_empty() { &pad } else { bytes },
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-            )
-        };
+        let make = |label, bytes: &[u8]| bindings::storage_init(device, label, bytes);
         let t = &scene.trims;
         let out = GpuBrep {
             surf_headers: make("surface headers", scene.surfaces.header_bytes())?,
@@ -309,7 +272,6 @@ impl GpuBrep {
             trim_nodes: make("trim nodes", bytemuck::cast_slice(&t.nodes))?,
             trim_curves: make("trim curves", bytemuck::cast_slice(&t.curves))?,
             trim_lines: make("trim lines", bytemuck::cast_slice(&t.lines))?,
-            seeds: make("seed boxes", bytemuck::cast_slice(&scene.seeds))?,
             trim_bytes: t.bytes(),
         };
         scopes.pop_blocking()?;

@@ -51,6 +51,7 @@ pub mod frame_buffers;
 pub mod image;
 pub mod image_fill;
 pub mod object_fill;
+pub mod panels;
 pub mod patch_tessellation;
 pub mod ray_cast;
 pub mod scene;
@@ -326,6 +327,19 @@ impl Renderer {
     ) -> Result<(Frame, BrepReport), RenderError> {
         self.brep_passes()?
             .render(&self.gpu, part, camera, settings, cracks)
+    }
+
+    /// Triangle classification's decision per grid cell of `frame` over `part` (see
+    /// [`brep_render::BrepPasses::classify_cells`]).
+    ///
+    /// # Errors
+    /// As [`brep_render::BrepPasses::classify_cells`].
+    pub fn classify_cells(
+        &self,
+        part: &GpuBrepScene,
+        frame: &patch_tessellation::FrameTessellation,
+    ) -> Result<Vec<triangle_classification::CellDecision>, RenderError> {
+        self.brep_passes()?.classify_cells(&self.gpu, part, frame)
     }
 
     /// Ray casts a B-Rep part (the full-scene reference of paper 001 §4.1.2).

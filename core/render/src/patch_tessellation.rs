@@ -159,6 +159,29 @@ impl FrameTessellation {
     }
 }
 
+impl FrameTessellation {
+    /// Every face of `scene` at 2^k × 2^k cells, whatever the view (for tests and
+    /// diagnostics of triangle classification at a given level).
+    pub fn uniform(scene: &BrepScene, k: u32) -> FrameTessellation {
+        let n = 1u32 << k.min(MAX_LEVEL);
+        let mut out = FrameTessellation::default();
+        for face in 0..scene.faces.len() as u32 {
+            out.patches.push(PatchFrame {
+                face,
+                nu: n,
+                nv: n,
+                level: k.min(MAX_LEVEL),
+                vertex_base: out.vertices,
+                cell_base: out.cells,
+                pad: [0; 2],
+            });
+            out.vertices += (n + 1) * (n + 1);
+            out.cells += n * n;
+        }
+        out
+    }
+}
+
 /// The uniform block of the grid and classification passes (`TessParams`, 16 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -295,7 +318,7 @@ impl TessellationPass {
         let cells = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("patch cells"),
             size: (frame.cells as u64 * 24).max(24),
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         self.pass.encode(

@@ -25,7 +25,7 @@ use wgpu::util::DeviceExt;
 
 use crate::RenderSettings;
 use crate::bindings::{self, storage, uniform};
-use crate::brep_scene::{BrepScene, GpuBrep};
+use crate::brep_scene::BrepScene;
 use crate::camera::Camera;
 use crate::frame_buffers::FrameBuffers;
 use crate::object_fill::NEWTON_TOLERANCE;
@@ -145,6 +145,72 @@ struct Batch {
 
 /// The nearest hit of a pixel (`CastHit`, 16 bytes).
 const HIT_BYTES: u64 = 16;
+
+/// The ray caster's seed boxes of a part: one box per face first (document order; a skipped
+/// face's is empty, no cells), then every face's seed cells; and per face the worst-case loop
+/// iterations of one of its cells ([`cell_cost`]), by which the work is batched.
+pub struct RaySeeds {
+    /// The boxes.
+    pub boxes: Vec<SeedBox>,
+    /// Per face, the loop cost of one seed cell.
+    pub cell_costs: Vec<u32>,
+}
+
+impl RaySeeds {
+    /// The seeds of `faces` (the part's, in document order) relative to `origin`, `built[f]`
+    /// saying whether face `f` is drawn at all; boxes are inflated by Newton's tolerance (that
+    /// of object filling, relative to the box `diagonal`) and a hair.
+    pub fn new(faces: &[Face], built: &[bool], origin: [f64; 3], diagonal: f64) -> RaySeeds {
+        let margin =
+            (crate::object_fill::NEWTON_TOLERANCE + 1e-6) * diagonal.max(f64::MIN_POSITIVE);
+        let first_cell = faces.len() as u32;
+        let mut boxes = Vec::with_capacity(faces.len());
+        let mut cells = Vec::new();
+        for (f, face) in faces.iter().enumerate() {
+            let (ns, nt, mut face_cells) = if built.get(f).copied().unwrap_or(false) {
+                face_seeds(face, origin, margin)
+            } else {
+                (0, 0, Vec::new())
+            };
+            let first = first_cell + cells.len() as u32;
+            // A cell knows its face and its (column, row): the search visits cells alone.
+            for (k, c) in face_cells.iter_mut().enumerate() {
+                c.a = f as u32;
+                c.b = (k % ns.max(1)) as u32 | ((k / ns.max(1)) as u32) << 16;
+            }
+            boxes.push(face_box(&face_cells, first, ns, nt));
+            cells.extend(face_cells);
+        }
+        boxes.extend(cells);
+        RaySeeds {
+            boxes,
+            cell_costs: faces.iter().map(|f| cell_cost(&f.surface)).collect(),
+        }
+    }
+
+    /// Seed cells in all (the boxes past the per-face ones).
+    pub fn cells(&self) -> usize {
+        self.boxes.len() - self.cell_costs.len()
+    }
+}
+
+/// The face box of a face's seed `cells` (`ns × nt` of them, the first at index `first` of
+/// the seed array): their union, empty (and never crossed) without cells.
+fn face_box(cells: &[SeedBox], first: u32, ns: usize, nt: usize) -> SeedBox {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for c in cells {
+        for k in 0..3 {
+            lo[k] = lo[k].min(c.lo[k]);
+            hi[k] = hi[k].max(c.hi[k]);
+        }
+    }
+    SeedBox {
+        lo,
+        a: first,
+        hi,
+        b: ns as u32 | (nt as u32) << 16,
+    }
+}
 
 /// The seed cells of one face: cells along s and t and their boxes (relative to `origin`);
 /// no cells when the surface does not evaluate to finite points.
@@ -302,7 +368,7 @@ impl RayCastPass {
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         brep_group: &wgpu::BindGroup,
-        brep: &GpuBrep,
+        (seeds, seed_buffer): (&RaySeeds, &wgpu::Buffer),
         scene: &BrepScene,
         camera: &Camera,
         settings: &RenderSettings,
@@ -354,16 +420,16 @@ impl RayCastPass {
         };
         let faces = scene.faces.len();
         let mut by_depth: Vec<(f64, usize)> = (0..faces)
-            .filter(|&f| scene.seeds[f].b != 0)
-            .map(|f| (nearest(&scene.seeds[f]), f))
+            .filter(|&f| seeds.boxes[f].b != 0)
+            .map(|f| (nearest(&seeds.boxes[f]), f))
             .collect();
         by_depth.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut items: Vec<[u32; 4]> = Vec::new();
         let mut costs: Vec<u32> = Vec::new();
         for &(_, f) in &by_depth {
-            let fb = &scene.seeds[f];
+            let fb = &seeds.boxes[f];
             let count = (fb.b & 0xffff) * (fb.b >> 16);
-            let per_cell = scene.cell_costs[f].saturating_add(1);
+            let per_cell = seeds.cell_costs[f].saturating_add(1);
             let chunk = (LOOP_BUDGET / per_cell).max(1);
             let mut first = 0;
             while first < count {
@@ -422,7 +488,7 @@ impl RayCastPass {
         });
         let resources = [
             &uniform,
-            &brep.seeds,
+            seed_buffer,
             &hits,
             &out.color,
             &out.depth,

@@ -5,23 +5,10 @@
 //! silhouettes, and the GPU-trimmed (u, v) of every covered pixel must classify on its face
 //! with the CPU classifier.
 
-use std::path::PathBuf;
-use std::sync::OnceLock;
+mod common;
 
-use tessd_render::{BrepScene, Camera, Cracks, Frame, RenderSettings, Renderer, Scene, View};
-
-fn renderer() -> &'static Renderer {
-    static R: OnceLock<Renderer> = OnceLock::new();
-    R.get_or_init(|| Renderer::new().unwrap_or_else(|e| panic!("no GPU for the render tests: {e}")))
-}
-
-fn doc(name: &str) -> tessd_brep::Document {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tessellate/tests/data")
-        .join(name);
-    let text = std::fs::read_to_string(&path).unwrap();
-    tessd_brep::Document::from_json(&text).unwrap()
-}
+use common::{PARTS, doc, renderer};
+use tessd_render::{BrepScene, Camera, Cracks, Frame, RenderSettings, Scene, View};
 
 /// Pixels whose 3 × 3 neighbourhood in `f` holds more than one face id (background included).
 fn border(f: &Frame) -> Vec<bool> {
@@ -82,11 +69,7 @@ fn compare(truth: &Frame, f: &Frame) -> (usize, usize, usize) {
 fn parts_match_the_cpu_tessellation_in_every_crack_mode() {
     let r = renderer();
     let settings = RenderSettings::new(200, 150);
-    for name in [
-        "bottle.json",
-        "CrankArm.json",
-        "freecad_drilling1_body.json",
-    ] {
+    for name in PARTS {
         let d = doc(name);
         let scene = BrepScene::new(&d, None).unwrap();
         assert!(scene.skipped.is_empty(), "{name}: {:?}", scene.skipped);

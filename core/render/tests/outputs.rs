@@ -2,16 +2,12 @@
 //! face-id array; a B-Rep face tessellated at the pixel footprint shows its surface's (u, v),
 //! checked against the analytic plane hit of each pixel's ray (an independent path).
 
-use std::sync::OnceLock;
+mod common;
+
+use common::renderer;
 
 use tessd_render::camera::{add, scale};
-use tessd_render::{Bounds, Camera, RenderSettings, Renderer, Scene, Shading, View};
-
-fn renderer() -> &'static Renderer {
-    static R: OnceLock<Renderer> = OnceLock::new();
-    R.get_or_init(|| Renderer::new().unwrap_or_else(|e| panic!("no GPU for the render tests: {e}")))
-}
-
+use tessd_render::{Bounds, Camera, RenderSettings, Scene, Shading, View};
 /// A plate of three faces side by side: x in [0, 10], [10, 20], [20, 30], y in [0, 8], z = 0.
 fn plate_doc() -> tessd_brep::Document {
     let face = |id: u64, x0: f64| {

@@ -10,24 +10,17 @@
 //!
 //! Runs on whatever adapter wgpu finds; in CI that is lavapipe. No adapter is a failure.
 
-use std::sync::OnceLock;
+mod common;
+
+use common::renderer;
 
 use tessd_brep::Document;
 use tessd_render::camera::{add, dot, scale, sub};
-use tessd_render::{Bounds, BrepScene, Camera, Frame, RenderSettings, Renderer, View};
+use tessd_render::{Bounds, BrepScene, Camera, Frame, RenderSettings, View};
 use tessd_trim::TrimStructure;
 
 const W: u32 = 96;
 const H: u32 = 64;
-
-fn renderer() -> &'static Renderer {
-    static R: OnceLock<Renderer> = OnceLock::new();
-    R.get_or_init(|| {
-        let r = Renderer::new().unwrap_or_else(|e| panic!("no GPU for the ray-cast tests: {e}"));
-        println!("adapter: {}", r.adapter_info());
-        r
-    })
-}
 
 fn bounds(doc: &Document) -> Bounds {
     let b = doc.bounding_box().unwrap();
@@ -52,7 +45,7 @@ fn cast(doc: &Document, camera: &Camera) -> (Frame, Part) {
     let scene = BrepScene::new(doc, None).unwrap();
     let built = start.elapsed();
     assert!(scene.skipped.is_empty(), "{:?}", scene.skipped);
-    let (faces, cells) = (scene.faces.len(), scene.seeds.len() - scene.faces.len());
+    let (faces, cells) = (scene.faces.len(), scene.ray_seeds().cells());
     let info = Part {
         diagonal: 2.0 * scene.bounds.radius(),
         trim_tolerance: scene.trim_tolerance,

@@ -8,32 +8,15 @@
 //! Runs on whatever adapter wgpu finds; in CI that is lavapipe. No adapter is a failure, not a
 //! skip.
 
-use std::path::PathBuf;
-use std::sync::OnceLock;
+mod common;
 
+use common::renderer;
 use tessd_mesh::Mesh;
 use tessd_render::camera::{Vec3, add, cross, dot, scale, sub};
-use tessd_render::{Camera, Frame, RenderSettings, Renderer, Scene, Shading, View};
-
-fn renderer() -> &'static Renderer {
-    static R: OnceLock<Renderer> = OnceLock::new();
-    R.get_or_init(|| match Renderer::new() {
-        Ok(r) => {
-            println!("adapter: {}", r.adapter_info());
-            r
-        }
-        Err(e) => panic!("no GPU for the render tests: {e}"),
-    })
-}
-
-fn shared_data() -> PathBuf {
-    std::env::var_os("TESSD_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
-}
+use tessd_render::{Camera, Frame, RenderSettings, Scene, Shading, View};
 
 fn bunny() -> Mesh {
-    let path = shared_data().join("mesh/stanford_bunny.obj");
+    let path = tessd_testdata::shared("mesh/stanford_bunny.obj");
     tessd_mesh::io::read_path(&path, &Default::default())
         .unwrap_or_else(|e| panic!("reading {}: {e} (set TESSD_SHARED_DATA)", path.display()))
 }

@@ -13,7 +13,6 @@
 //! for the fan triangulation), skipped when the data folder is missing.
 
 use std::collections::HashSet;
-use std::path::PathBuf;
 use tessd_mesh::io::{ReadOptions, read_path};
 use tessd_mesh::{Attribute, Crease, Domain, Mesh};
 use tessd_simplify::{
@@ -23,16 +22,11 @@ use tessd_simplify::{
 /// A mesh of the shared test data (`$TESSD_SHARED_DATA`, else `../shared/data` beside the
 /// repository), asserted to exist: a missing file fails the test rather than skipping it.
 fn shared(name: &str) -> Mesh {
-    let root = std::env::var_os("TESSD_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    let path = root.join("mesh").join(name);
-    assert!(
-        path.exists(),
-        "shared test data not found at {}; set TESSD_SHARED_DATA",
-        path.display()
-    );
-    read_path(&path, &ReadOptions::default()).unwrap()
+    read_path(
+        &tessd_testdata::shared(&format!("mesh/{name}")),
+        &ReadOptions::default(),
+    )
+    .unwrap()
 }
 
 /// A bumpy open grid of quads (n × n), some faces split into triangles.

@@ -165,7 +165,7 @@ pub fn run(out: &Path) -> Result<()> {
     for i in 1..=counts.len() {
         levels.push(level_arrays(&lod_arrays, i)?);
     }
-    render_lods(&mut client, &out, &levels)?;
+    render_lods(&mut client, &out, &levels, &lods_path)?;
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);
     println!("tessd demo: done, results in {}", out.display());
@@ -297,8 +297,14 @@ const SPOT_EYE: [f64; 3] = [-2.6, 1.2, -3.6];
 const SPOT_TARGET: [f64; 3] = [0.0, 0.1, 0.2];
 
 /// Each level of Spot's LOD chain (`levels[0]` the input), from one camera, so the pictures
-/// compare directly.
-fn render_lods(client: &mut Client, out: &Path, levels: &[Vec<OwnedArray>]) -> Result<()> {
+/// compare directly; then the whole chain side by side from the USD stage the `lod` op wrote
+/// (`stage`: one panel per LOD variant).
+fn render_lods(
+    client: &mut Client,
+    out: &Path,
+    levels: &[Vec<OwnedArray>],
+    stage: &Path,
+) -> Result<()> {
     for (i, arrays) in levels.iter().enumerate() {
         let png = out.join(format!("spot_lod{i}.png"));
         let (r, _) = client.call(
@@ -318,6 +324,30 @@ fn render_lods(client: &mut Client, out: &Path, levels: &[Vec<OwnedArray>]) -> R
             png.display()
         );
     }
+    let png = out.join("spot_lods.png");
+    let (r, _) = client.call(
+        "render",
+        json!({
+            "input": stage, "size": "320x320", "eye": SPOT_EYE, "target": SPOT_TARGET,
+            "up": [0.0, 1.0, 0.0], "output": png,
+        }),
+        &[],
+        |_| {},
+    )?;
+    let panels: Vec<String> = r["panels"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|p| format!("{} {}", p["label"].as_str().unwrap_or(""), p["triangles"]))
+        .collect();
+    println!(
+        "  render: Spot's LOD chain side by side from {} ({}), {}x{} -> {}",
+        stage.display(),
+        panels.join(" / "),
+        r["width"],
+        r["height"],
+        png.display()
+    );
     Ok(())
 }
 

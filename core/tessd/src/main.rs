@@ -42,7 +42,7 @@ enum Command {
     },
     /// Print a mesh's counts, bounds and topology.
     Stats {
-        /// Mesh file (OBJ, PLY, STL, OFF).
+        /// Mesh file (OBJ, PLY, STL, OFF, or a USD stage .usda).
         file: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -50,14 +50,14 @@ enum Command {
     },
     /// Convert a mesh between formats (from the extensions).
     Convert {
-        /// Input mesh.
+        /// Input mesh (OBJ, PLY, STL, OFF, or a USD stage .usda).
         input: PathBuf,
         /// Output mesh.
         output: PathBuf,
     },
     /// Simplify a mesh by vertex clustering (regular grid, quality goal or complexity goal).
     Simplify {
-        /// Input mesh (OBJ, PLY, STL, OFF).
+        /// Input mesh (OBJ, PLY, STL, OFF, or a USD stage .usda).
         input: PathBuf,
         /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
         output: PathBuf,
@@ -90,7 +90,7 @@ enum Command {
     /// Subdivide a cage (uniform refinement; Catmull-Clark matches OpenSubdiv / Blender's
     /// Subdivision Surface modifier with "limit surface" off).
     Subdivide {
-        /// Cage mesh (OBJ, PLY, STL, OFF).
+        /// Cage mesh (OBJ, PLY, STL, OFF, or a USD stage .usda).
         input: PathBuf,
         /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
         output: PathBuf,
@@ -127,7 +127,7 @@ enum Command {
     /// Build a chain of levels of detail and write them as one USD stage (and optionally one
     /// mesh file per level).
     Lod {
-        /// Input mesh (OBJ, PLY, STL, OFF): LOD0.
+        /// Input mesh (OBJ, PLY, STL, OFF, or a USD stage .usda): LOD0.
         input: PathBuf,
         /// Goals of LOD1, LOD2..., comma-separated: vertex counts or percentages for
         /// complexity ("50%,20%,5%"), tolerances for quality ("0.5%,2%"), cells per axis for
@@ -170,7 +170,7 @@ enum Command {
     /// Measure the surface distance between two meshes: both one-sided distances, the
     /// symmetric Hausdorff distance and RMS (Metro-style sampling).
     Compare {
-        /// First mesh.
+        /// First mesh (OBJ, PLY, STL, OFF, or a USD stage .usda).
         a: PathBuf,
         /// Second mesh.
         b: PathBuf,
@@ -215,16 +215,23 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Render a mesh (OBJ, PLY, STL, OFF) or a B-Rep document (.json) to a PNG, headless on the
-    /// GPU (lavapipe without one).
+    /// Render a mesh (OBJ, PLY, STL, OFF, USD .usda: a LOD stage's levels side by side) or a
+    /// B-Rep document (.json) to a PNG, headless on the GPU (lavapipe without one).
     Render {
-        /// Mesh file or `tessd-brep` JSON document.
-        input: PathBuf,
+        /// Mesh file or `tessd-brep` JSON document; several mesh files are drawn side by side
+        /// (one panel each, one camera fitted to them all: LOD chains, cage and result), as are
+        /// the LOD variants of one USD stage.
+        #[arg(required = true, num_args = 1..)]
+        input: Vec<PathBuf>,
         /// The colour image (.png); with --turntable N, OUT_000.png ... OUT_<N-1>.png.
         output: PathBuf,
-        /// Image size, WIDTHxHEIGHT.
+        /// Image size, WIDTHxHEIGHT (of each panel when several inputs are drawn).
         #[arg(long, default_value = "1280x720")]
         size: String,
+        /// Panels per row when several inputs are drawn (default: one row up to four, else a
+        /// square-ish grid).
+        #[arg(long, value_name = "N")]
+        columns: Option<u64>,
         /// A standard view fitted to the part's bounding box (Z up; front looks along +Y).
         #[arg(long, value_parser = ["iso", "front", "back", "left", "right", "top", "bottom"], conflicts_with = "eye")]
         view: Option<String>,
@@ -541,6 +548,7 @@ fn run(cli: Cli) -> Result<()> {
             input,
             output,
             size,
+            columns,
             view,
             eye,
             target,
@@ -555,10 +563,16 @@ fn run(cli: Cli) -> Result<()> {
             turntable,
             json,
         } => {
+            // One input as a path, several as a list (panels side by side).
+            let input = match input.as_slice() {
+                [one] => serde_json::json!(one),
+                many => serde_json::json!(many),
+            };
             let params = serde_json::json!({
                 "input": input,
                 "output": output,
                 "size": size,
+                "columns": columns,
                 "view": view,
                 "eye": eye.as_deref().map(vec3_arg),
                 "target": target.as_deref().map(vec3_arg),
@@ -696,8 +710,8 @@ fn read_frames(paths: &[PathBuf]) -> Result<OwnedArray> {
     let mut flat: Vec<f32> = Vec::new();
     let mut count = None;
     for p in paths {
-        let m = tessd_mesh::io::read_path(p, &Default::default())
-            .with_context(|| format!("reading frame {}", p.display()))?;
+        let m = tessd::ops::mesh_arrays::read_mesh_file(p, &Default::default())
+            .map_err(|e| anyhow::anyhow!("reading frame {}: {}", p.display(), e.message))?;
         if *count.get_or_insert(m.positions.len()) != m.positions.len() {
             bail!(
                 "frame {} has {} vertices; the first frame has {}",

@@ -7,6 +7,8 @@
 //!   uniform quadratic B-spline, thinned by knot removal to the tolerance and split into
 //!   connected quadratic Béziers, flat ones made lines (section 3.1), using [`bezier`];
 //! - [`implicit`]: the Loop–Blinn implicit form and the one-curve point test (3.2, 5.1);
+//! - [`patch_boundary`]: an outer loop that is the patch's own rectangle, left out of the
+//!   quadtree (beyond the paper: the tessellated patch already stops there);
 //! - [`quadtree`], [`separate`], [`winding`]: the quadtree with ≤ 2 curves per leaf,
 //!   separating lines, coverage bits, the depth-13 failures and the level k_i (4, 5.2,
 //!   5.3, 6, table 4);
@@ -37,6 +39,7 @@ pub mod implicit;
 pub mod knot_removal;
 pub mod multi_pack;
 pub mod pack;
+pub mod patch_boundary;
 pub mod quadratic_fit;
 pub mod quadtree;
 pub mod separate;
@@ -152,9 +155,16 @@ impl TrimStructure {
                 trim,
             }
         })?;
-        // The root: the bounds, grown to hold every piece, plus a small margin.
+        // An outer loop along the patch's rectangle is left to the root's rectangle.
+        let skip =
+            usize::from(loops.first().is_some_and(|l| {
+                patch_boundary::is_patch_boundary(l, face.bounds, tolerance.eps_uv)
+            }));
+        let kept = &loops[skip..];
+        // The root: the bounds, grown to hold every piece, plus a small margin (no larger than
+        // ε_uv: with the outer loop left out, the margin is on the face).
         let mut d = [u0, u1, v0, v1];
-        for q in loops.iter().flatten() {
+        for q in kept.iter().flatten() {
             let b = q.control_box();
             d = [
                 d[0].min(b[0]),
@@ -163,16 +173,17 @@ impl TrimStructure {
                 d[3].max(b[3]),
             ];
         }
-        let (mu, mv) = (1e-6 * (d[1] - d[0]), 1e-6 * (d[3] - d[2]));
+        let margin = |size: f64| (1e-6 * size).min(0.5 * tolerance.eps_uv);
+        let (mu, mv) = (margin(d[1] - d[0]), margin(d[3] - d[2]));
         let domain = [d[0] - mu, d[1] + mu, d[2] - mv, d[3] + mv];
         let (w, h) = (domain[1] - domain[0], domain[3] - domain[2]);
-        let normalised: Vec<Quadratic> = loops
+        let normalised: Vec<Quadratic> = kept
             .iter()
             .flatten()
             .map(|q| q.map(|p| [(p[0] - domain[0]) / w, (p[1] - domain[2]) / h]))
             .collect();
         let lines = normalised.iter().filter(|q| q.line).count();
-        let tree = Quadtree::build(domain, normalised);
+        let tree = Quadtree::build(domain, normalised, skip as i32);
         let packed = PackedTrim::pack(&tree);
         let stats = TrimStats {
             quadratics: tree.curves.len(),

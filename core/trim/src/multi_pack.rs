@@ -232,8 +232,10 @@ impl MultiPack {
         word & 8 != 0
     }
 
-    /// Section 5.1 in f32: curve `c` of kind `kind` (0 line, 1 convex, 2 concave) at (x, y).
-    fn curve(&self, c: u32, kind: u32, x: f32, y: f32) -> bool {
+    /// Section 5.1 in f32: whether quadtree point (x, y) is on the face's side of curve `c`
+    /// (an index into [`MultiPack::curves`] in curves) of kind `kind` (0 line, 1 convex,
+    /// 2 concave), as the shaders' `trim_curve` decides it.
+    pub fn curve(&self, c: u32, kind: u32, x: f32, y: f32) -> bool {
         let m = &self.curves[c as usize * CURVE_FLOATS..][..CURVE_FLOATS];
         let px = m[0] * x + m[1] * y + m[2];
         let py = m[3] * x + m[4] * y + m[5];

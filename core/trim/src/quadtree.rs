@@ -121,6 +121,11 @@ pub struct Quadtree {
     /// The share of the domain classifiable by triangles at each level 0 ..= k_i (or all
     /// levels tried).
     pub classifiable: Vec<f64>,
+    /// The winding number of the root's rectangle before any curve counts: 1 when the
+    /// face's outer loop was the rectangle itself and left out
+    /// ([`crate::patch_boundary`]), else 0. A point is on the face where this plus its
+    /// winding number about the curves is positive.
+    pub base_winding: i32,
 }
 
 impl TrimSource for Quadtree {
@@ -161,8 +166,9 @@ impl TrimSource for Quadtree {
 
 impl Quadtree {
     /// Builds the tree over `curves` (closed loops in normalised coordinates, material on
-    /// their left), the root covering `domain` in (u, v).
-    pub fn build(domain: [f64; 4], curves: Vec<Quadratic>) -> Quadtree {
+    /// their left), the root covering `domain` in (u, v); `base_winding` is
+    /// [`Quadtree::base_winding`].
+    pub fn build(domain: [f64; 4], curves: Vec<Quadratic>, base_winding: i32) -> Quadtree {
         let implicits = curves.iter().map(Implicit::of).collect();
         let mut tree = Quadtree {
             domain,
@@ -174,6 +180,7 @@ impl Quadtree {
             leaves_per_depth: vec![0; MAX_DEPTH as usize + 1],
             k_i: None,
             classifiable: Vec::new(),
+            base_winding,
         };
         tree.subdivide();
         tree.coverage();
@@ -210,7 +217,7 @@ impl Quadtree {
             match crossing.len() {
                 0 => {
                     let c = [node.origin[0] + h / 2.0, node.origin[1] + h / 2.0];
-                    self.nodes[i].kind = if index.winding(c[0], c[1]) > 0 {
+                    self.nodes[i].kind = if self.base_winding + index.winding(c[0], c[1]) > 0 {
                         NodeKind::On
                     } else {
                         NodeKind::Off
@@ -325,7 +332,7 @@ impl Quadtree {
                             let s = node.origin[0] + h * (a as f64 + 0.5) / g as f64;
                             let t = node.origin[1] + h * (b as f64 + 0.5) / g as f64;
                             let inside = if node.kind == NodeKind::Failed {
-                                index.winding(s, t) > 0
+                                self.base_winding + index.winding(s, t) > 0
                             } else {
                                 leaf_point(self, &rec, s, t)
                             };

@@ -526,13 +526,15 @@ fn footprint_stops_early_with_coverage() {
 }
 
 /// The unit square with a circular hole touching its bottom edge at (0.5, 0), where the
-/// hole's two end pieces meet: three curves share every cell around that point.
+/// hole's two end pieces meet: three curves share every cell around that point. The patch
+/// (bounds) is larger than the square, so the square is a trim of its own and not left to
+/// the root's rectangle (`tessd_trim::patch_boundary`).
 fn tangent_face() -> Face {
     Face {
         id: 2,
         reversed: false,
         surface: plane(),
-        bounds: [0.0, 1.0, 0.0, 1.0],
+        bounds: [-0.25, 1.0, -0.25, 1.0],
         loops: vec![
             square(),
             Loop {
@@ -588,14 +590,18 @@ fn faces_without_loops_are_their_bounds() {
     };
     let t = TrimStructure::build(&face, 0.01).unwrap();
     assert!(t.classify(0.0, 10.5));
-    assert!(!t.classify(3.5, 10.5));
-    assert!(t.tree.nodes.len() > 1);
+    assert!(t.classify(-2.0, 10.0) && t.classify(3.0, 11.0));
+    assert!(!t.classify(3.5, 10.5) && !t.classify(0.0, 11.001));
+    // The whole patch is on: one "on" root, nothing to walk (patch_boundary).
+    assert_eq!(t.tree.nodes.len(), 1);
+    assert_eq!(t.tree.nodes[0].kind, NodeKind::On);
+    assert_eq!(t.stats.k_i, Some(0));
     assert!(TrimStructure::build(&face, 0.0).is_err());
     assert!(TrimStructure::build(&face, f64::NAN).is_err());
 }
 
-/// A rectangle bounded by four lines makes a shallow tree (four depth-1 leaves); its level k_i
-/// lies below the deepest leaf, where the triangles still subdivide the leaves (section 6).
+/// A rectangle bounded by four lines inside a larger patch makes a shallow tree; its level
+/// k_i lies below the deepest leaf, where the triangles still subdivide the leaves (section 6).
 #[test]
 fn a_shallow_tree_finds_its_triangle_level() {
     let (a, b, c, d) = ([0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]);
@@ -603,7 +609,7 @@ fn a_shallow_tree_finds_its_triangle_level() {
         id: 4,
         reversed: false,
         surface: plane(),
-        bounds: [0.0, 4.0, 0.0, 3.0],
+        bounds: [-1.0, 4.0, -1.0, 3.0],
         loops: vec![Loop {
             trims: vec![line(a, b), line(b, c), line(c, d), line(d, a)],
         }],
@@ -847,4 +853,70 @@ fn many_holes_classify_within_eps() {
         t.stats
     );
     assert!(worst <= eps);
+}
+
+/// A face whose outer loop is its patch rectangle (a slab's side with two round holes, the
+/// rectangle split at a vertex as exporters do): the quadtree leaves the rectangle to its
+/// root (`tessd_trim::patch_boundary`) and keeps the holes — fewer nodes and bytes than the
+/// same face in a larger patch, where the rectangle must be walked — and both classify as
+/// the exact loops do.
+#[test]
+fn an_outer_loop_along_the_patch_is_left_to_the_root() {
+    let c = [[0.0, 0.0], [1.5, 0.0], [3.0, 0.0], [3.0, 1.0], [0.0, 1.0]];
+    let outer = Loop {
+        trims: (0..5).map(|i| line(c[i], c[(i + 1) % 5])).collect(),
+    };
+    let face = |bounds: [f64; 4]| Face {
+        id: 9,
+        reversed: false,
+        surface: plane(),
+        bounds,
+        loops: vec![
+            outer.clone(),
+            circle([0.75, 0.5], 0.3, true),
+            circle([2.25, 0.5], 0.3, true),
+        ],
+    };
+    let own = face([0.0, 3.0, 0.0, 1.0]);
+    let wider = face([-0.5, 3.0, 0.0, 1.0]);
+    let (a, b) = (
+        TrimStructure::build(&own, 1e-4).unwrap(),
+        TrimStructure::build(&wider, 1e-4).unwrap(),
+    );
+    assert_eq!(a.tree.base_winding, 1);
+    assert_eq!(b.tree.base_winding, 0);
+    assert!(
+        a.stats.quadratics + 5 <= b.stats.quadratics,
+        "{:?} {:?}",
+        a.stats,
+        b.stats
+    );
+    assert!(
+        a.stats.bytes < b.stats.bytes,
+        "{} {}",
+        a.stats.bytes,
+        b.stats.bytes
+    );
+    for (f, t) in [(&own, &a), (&wider, &b)] {
+        let (n, wrong) = compare_with_polygons(f, t);
+        assert_eq!(
+            wrong, 0,
+            "face bounds {:?}: {wrong} of {n} points",
+            f.bounds
+        );
+    }
+    // Corners and sides of the patch are on; beyond them, off; the holes' centres off.
+    assert!(a.classify(0.0, 0.0) && a.classify(3.0, 1.0) && a.classify(1.5, 0.0));
+    assert!(!a.classify(-1e-3, 0.5) && !a.classify(1.5, 1.001));
+    assert!(!a.classify(0.75, 0.5) && !a.classify(2.25, 0.5));
+    // The packed form (what the GPU walks) answers the same.
+    let mut rng = Rng(3);
+    for _ in 0..2000 {
+        let (u, v) = (3.0 * rng.next(), rng.next());
+        assert_eq!(
+            classify(&a.packed, u, v, [0.0, 0.0]).on,
+            a.classify(u, v),
+            "({u}, {v})"
+        );
+    }
 }

@@ -1,9 +1,14 @@
-//! # tessd-usd — USD ASCII (`.usda`) output for tessd meshes
+//! # tessd-usd — USD ASCII (`.usda`) output and input for tessd meshes
 //!
 //! The export stage of the pipeline: it turns [`tessd_mesh::Mesh`]es into a USD stage that
 //! Blender, usdview, Omniverse and any other USD consumer open as is. It is a pure writer (no
 //! USD library needed): the text is streamed in chunks, so a 10 M-triangle mesh never becomes
 //! one giant string, and files are written atomically with [`write_usda_file`].
+//!
+//! It also reads `.usda` stages back as meshes ([`reader`]: [`read_usda`], [`parse_usda`]):
+//! every `Mesh` prim with its transforms applied, the variant sets (a LOD chain's levels as
+//! [`UsdStage::variant_panels`]) and what a viewer shows by default ([`UsdStage::composed`]).
+//! Binary crate files (`.usdc`) and `.usdz` packages are refused with a clear error.
 //!
 //! Each stage has one root `Xform` (kind `component`, the layer's `defaultPrim`) with:
 //!
@@ -53,7 +58,12 @@ mod file;
 mod names;
 mod options;
 mod primvars;
+pub mod reader;
+mod usda_mesh;
+mod usda_parse;
+mod usda_tokens;
 mod writer;
+mod xform_ops;
 
 pub use error::UsdError;
 pub use file::write_usda_file;
@@ -62,6 +72,7 @@ pub use options::{
     LodSchemaOptions, MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme, UpAxis,
 };
 pub use primvars::dropped_by_usd;
+pub use reader::{UsdMesh, UsdStage, UsdVariantSet, parse_usda, read_usda};
 pub use writer::{write_lod_schema, write_lod_variants, write_mesh_stage, write_stage};
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 #![allow(dead_code)]
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use tessd_mesh::{Crease, Mesh};
 use tessd_subdiv::{
@@ -429,17 +429,7 @@ pub fn data(name: &str) -> PathBuf {
 /// A file of the shared test data (`TESSD_SHARED_DATA`, else `../shared/data` beside the repo),
 /// by its path under that folder.
 pub fn shared(rel: &str) -> PathBuf {
-    let dir = match std::env::var_os("TESSD_SHARED_DATA") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-    };
-    let p = dir.join(rel);
-    assert!(
-        p.exists(),
-        "shared test data not found at {}; set TESSD_SHARED_DATA",
-        p.display()
-    );
-    p
+    tessd_testdata::shared(rel)
 }
 
 /// A mesh of the shared test data, by its path under that folder (`mesh/suzanne.obj`).

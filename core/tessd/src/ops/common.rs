@@ -1,7 +1,7 @@
 //! Helpers several operations share: typed parameters, USD stage options, writing a mesh to
 //! the format its path names, and the USD writer's errors.
 
-use super::mesh_arrays::mesh_error;
+use super::mesh_arrays::{mesh_error, read_mesh_file};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use tessd_ipc::error::{ErrorCode, OpError};
@@ -11,12 +11,14 @@ use tessd_mesh::Mesh;
 use tessd_mesh::io::ReadOptions;
 use tessd_usd::{MeshPrimOptions, StageOptions, UpAxis};
 
-/// Maps a USD-writer error onto the protocol's codes.
+/// Maps a USD writer or reader error onto the protocol's codes (a stage that cannot be read
+/// is `invalid_mesh`, a binary crate file `unsupported`).
 pub fn usd_error(e: tessd_usd::UsdError) -> OpError {
     let code = match e.code() {
         "invalid_mesh" => ErrorCode::InvalidMesh,
         "too_large" => ErrorCode::TooLarge,
         "io" => ErrorCode::Io,
+        "unsupported" => ErrorCode::Unsupported,
         _ => ErrorCode::InvalidRequest,
     };
     OpError::new(code, e.to_string())
@@ -119,7 +121,8 @@ pub fn merge_names(mut a: Vec<String>, b: Vec<String>) -> Vec<String> {
 }
 
 /// Reads the mesh file named by the string parameter `key` (resolved against the request's
-/// folder), stopping early when the job is cancelled.
+/// folder; a `.usda` stage as [`read_mesh_file`] reads it), stopping early when the job is
+/// cancelled.
 ///
 /// # Errors
 /// `invalid_request` when the parameter is missing; as the reader says otherwise.
@@ -133,7 +136,7 @@ pub fn read_mesh_param(
         .map(|p| request.resolve(p))
         .ok_or_else(|| OpError::request(format!("`{key}` (a mesh file path) is required")))?;
     let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
-    let mesh = tessd_mesh::io::read_path(&path, &options).map_err(mesh_error)?;
+    let mesh = read_mesh_file(&path, &options)?;
     Ok((mesh, path))
 }
 

@@ -1,8 +1,10 @@
-//! Meshes in and out of requests: a file path (`params.input`) or the protocol's mesh arrays
+//! Meshes in and out of requests: a file path (`params.input`: OBJ, PLY, STL, OFF or a `.usda`
+//! stage) or the protocol's mesh arrays
 //! (docs/protocol.md, "Mesh arrays": also the generic `point:` / `corner:` / `face:`
 //! attributes and `sharp_edges`), and results as arrays or a written file.
 
-use std::path::PathBuf;
+use super::common::usd_error;
+use std::path::{Path, PathBuf};
 use tessd_ipc::arrays::{Arrays, Element, OwnedArray, TypedView};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
@@ -38,7 +40,7 @@ pub fn input_mesh(request: &Request, ctx: &JobContext) -> Result<Mesh, OpError> 
     match request.str_param("input")? {
         Some(path) => {
             let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
-            tessd_mesh::io::read_path(&request.resolve(path), &options).map_err(mesh_error)
+            read_mesh_file(&request.resolve(path), &options)
         }
         None if request.arrays.desc("positions").is_some() => {
             let group_names = match request.params.get("group_names") {
@@ -54,6 +56,34 @@ pub fn input_mesh(request: &Request, ctx: &JobContext) -> Result<Mesh, OpError> 
             "no input mesh: give `params.input` (a file path) or the `positions` and `face_indices` arrays",
         )),
     }
+}
+
+/// Reads a mesh file, format from the extension: a USD stage (`.usda`; also `.usd`, `.usdc`
+/// and `.usdz`, for the reader to say which it cannot read) becomes the meshes it shows by
+/// default ([`tessd_usd::UsdStage::composed`]: one face group per mesh prim), anything else
+/// goes to [`tessd_mesh::io::read_path`]. The mesh returned is valid.
+///
+/// # Errors
+/// `invalid_mesh` (syntax or a broken mesh prim, naming file, line, prim and attribute; a
+/// stage without a visible mesh), `unsupported` (binary crate files, `.usdz`, unknown
+/// extensions), `io`, `too_large`, `cancelled` (mesh formats only).
+pub fn read_mesh_file(path: &Path, options: &ReadOptions) -> Result<Mesh, OpError> {
+    if is_usd_input(path) {
+        tessd_usd::read_usda(path)
+            .and_then(|stage| stage.composed())
+            .map_err(usd_error)
+    } else {
+        tessd_mesh::io::read_path(path, options).map_err(mesh_error)
+    }
+}
+
+/// Whether a mesh input goes to the USD reader: `.usda`, `.usd`, `.usdc`, `.usdz`, any case.
+pub fn is_usd_input(path: &Path) -> bool {
+    path.extension().is_some_and(|e| {
+        ["usda", "usd", "usdc", "usdz"]
+            .iter()
+            .any(|u| e.eq_ignore_ascii_case(u))
+    })
 }
 
 /// Typed view of a required or optional array, with a message naming it on a dtype mismatch.

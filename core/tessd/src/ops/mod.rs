@@ -42,6 +42,7 @@ pub fn registry() -> Registry {
         "mesh.write.ply",
         "mesh.write.stl",
         "mesh.write.off",
+        "usd.read.usda",
         "usd.write.usda",
         "usd.lod.variants",
         "usd.lod.usdlod",

@@ -8,8 +8,8 @@
 //! Parameters are described in docs/protocol.md ("render").
 
 use super::brep_load::{brep_error, request_document};
-use super::common::{bool_param, u64_param};
-use super::mesh_arrays::{input_mesh, output_path};
+use super::common::{bool_param, stem, u64_param, usd_error};
+use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file};
 use super::tessellate::parse_tolerance;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -20,10 +20,12 @@ use tessd_ipc::arrays::OwnedArray;
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
+use tessd_mesh::Mesh;
+use tessd_mesh::io::ReadOptions;
 use tessd_render::camera::DEFAULT_FOV;
 use tessd_render::{
     Bounds, BrepReport, BrepScene, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
-    Scene, Shading, StepTimings, View,
+    Scene, Shading, StepTimings, View, panels,
 };
 
 /// The default image size.
@@ -31,6 +33,9 @@ pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
 
 /// The most turntable frames.
 pub const MAX_FRAMES: u64 = 3600;
+
+/// The most panels side by side.
+pub const MAX_PANELS: usize = 64;
 
 /// The process's renderer: opening a device and compiling the shaders costs ~100 ms on a GPU
 /// and far more on lavapipe, so the daemon does it once, on the first render. A failure is
@@ -131,6 +136,8 @@ struct Params {
     fov: f64,
     settings: RenderSettings,
     frames: u32,
+    /// Columns of the panel grid (several meshes); `None`: [`panels::default_columns`].
+    columns: Option<usize>,
     output: Option<PathBuf>,
     face_ids: Option<PathBuf>,
 }
@@ -220,9 +227,19 @@ fn parse(request: &Request) -> Result<Params, OpError> {
             "`turntable` writes files OUT_000.png, ...: it needs `output`",
         ));
     }
+    let columns = match u64_param(request, "columns")? {
+        None => None,
+        Some(n) if (1..=MAX_PANELS as u64).contains(&n) => Some(n as usize),
+        Some(n) => {
+            return Err(OpError::request(format!(
+                "`columns` must be from 1 to {MAX_PANELS}, got {n}"
+            )));
+        }
+    };
     Ok(Params {
         width,
         height,
+        columns,
         cracks,
         raycast,
         spec,
@@ -265,10 +282,92 @@ fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
         .collect())
 }
 
-/// What is drawn: a mesh's triangles (and their count), or a B-Rep part.
+/// One mesh panel: its label (file stem, or LOD variant), triangles on the device and count.
+struct MeshPanel {
+    label: String,
+    gpu: tessd_render::GpuScene,
+    triangles: usize,
+}
+
+/// What is drawn: meshes (one panel each, tiled side by side when several), or a B-Rep part.
 enum Part {
-    Mesh(tessd_render::GpuScene, usize),
+    Meshes(Vec<MeshPanel>),
     Brep(Box<tessd_render::GpuBrepScene>),
+}
+
+/// The meshes of a mesh render, labelled: `input` as a list of files gives one panel per file
+/// (a LOD chain, a cage beside its subdivided surface); one USD stage one panel per variant of
+/// its first variant set that holds meshes (the LOD chain `tessd lod` writes), else one; any
+/// other file or the mesh arrays one panel.
+fn mesh_panels(request: &Request, ctx: &JobContext) -> Result<Vec<(String, Mesh)>, OpError> {
+    let label = |path: &Path| stem(Some(path), "mesh");
+    match request.params.get("input") {
+        Some(Value::Array(items)) => {
+            if items.is_empty() || items.len() > MAX_PANELS {
+                return Err(OpError::request(format!(
+                    "`input` as a list names 1 to {MAX_PANELS} mesh files, got {}",
+                    items.len()
+                )));
+            }
+            let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
+            let mut out = Vec::with_capacity(items.len());
+            for (i, item) in items.iter().enumerate() {
+                let path = item.as_str().map(|p| request.resolve(p)).ok_or_else(|| {
+                    OpError::request(format!("`input[{i}]` must be a file path, got {item}"))
+                })?;
+                if is_brep_path(&path) {
+                    return Err(OpError::new(
+                        ErrorCode::Unsupported,
+                        format!(
+                            "`input[{i}]` ({}) is a B-Rep document: panels side by side are                              meshes; render a B-Rep part on its own",
+                            path.display()
+                        ),
+                    ));
+                }
+                ctx.checkpoint()?;
+                let mesh = read_mesh_file(&path, &options)
+                    .map_err(|e| prefixed(&format!("`input[{i}]`"), e))?;
+                out.push((label(&path), mesh));
+            }
+            Ok(out)
+        }
+        Some(Value::String(p)) if is_usd_input(Path::new(p)) => {
+            let path = request.resolve(p);
+            let panels = tessd_usd::read_usda(&path)
+                .and_then(|stage| stage.variant_panels())
+                .map_err(usd_error)?;
+            if panels.len() > MAX_PANELS {
+                return Err(OpError::request(format!(
+                    "{}: {} variants, more than the {MAX_PANELS} panels a render draws",
+                    path.display(),
+                    panels.len()
+                )));
+            }
+            for (label, mesh) in &panels {
+                mesh.validate()
+                    .map_err(|e| OpError::new(ErrorCode::InvalidMesh, format!("{label}: {e}")))?;
+            }
+            Ok(panels)
+        }
+        _ => {
+            let name = request
+                .str_param("input")?
+                .map_or_else(|| "arrays".to_string(), |p| label(Path::new(p)));
+            Ok(vec![(name, input_mesh(request, ctx)?)])
+        }
+    }
+}
+
+/// `error` with its message prefixed by `what`.
+fn prefixed(what: &str, mut error: OpError) -> OpError {
+    error.message = format!("{what}: {}", error.message);
+    error
+}
+
+/// Whether `path` names a `tessd-brep` document (`.json`).
+fn is_brep_path(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
 }
 
 /// The B-Rep frames' time per step of paper 001 table 1, summed over the frames, ms.
@@ -345,11 +444,11 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     // The input: a B-Rep document (`brep`, or an `input` ending in .json) or a mesh.
     let t = Instant::now();
     let is_brep = request.params.get("brep").is_some_and(|v| !v.is_null())
-        || request.str_param("input")?.is_some_and(|s| {
-            Path::new(s)
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-        });
+        || request
+            .params
+            .get("input")
+            .and_then(Value::as_str)
+            .is_some_and(|s| is_brep_path(Path::new(s)));
     let asked_tolerance = request
         .params
         .get("tolerance")
@@ -411,29 +510,41 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
                  rasterised as it is",
             ));
         }
-        let mesh = input_mesh(&request, ctx)?;
+        let meshes = mesh_panels(&request, ctx)?;
         ctx.checkpoint()?;
-        let scene = Scene::from_mesh(&mesh);
-        let bounds = scene.bounds.ok_or_else(|| {
-            OpError::new(ErrorCode::InvalidMesh, "the mesh has no faces to render")
-        })?;
+        // One camera for every panel, fitted to them all: the panels compare at one scale.
+        let mut scenes = Vec::with_capacity(meshes.len());
+        let mut bounds: Option<Bounds> = None;
+        for (label, mesh) in &meshes {
+            let scene = Scene::from_mesh(mesh);
+            let b = scene.bounds.ok_or_else(|| {
+                OpError::new(
+                    ErrorCode::InvalidMesh,
+                    format!("the mesh {label:?} has no faces to render"),
+                )
+            })?;
+            bounds = Some(bounds.map_or(b, |a| a.union(&b)));
+            scenes.push((label.clone(), scene));
+        }
+        drop(meshes);
+        let bounds = bounds.ok_or_else(|| OpError::request("no mesh to render"))?;
         let cams = cameras(&p, &bounds)?;
-        result["faces"] = json!(scene.max_id);
+        result["faces"] = json!(scenes.iter().map(|(_, s)| s.max_id).max().unwrap_or(0));
         result["timings_ms"] = json!({"read": ms(t.elapsed())});
         ctx.progress(0.4, "upload", "")?;
         let t = Instant::now();
         let renderer = renderer()?;
         let device_ms = ms(t.elapsed());
         let t = Instant::now();
-        let gpu = renderer.upload(&scene).map_err(render_error)?;
-        let triangles = scene.triangles();
-        (
-            Part::Mesh(gpu, triangles),
-            cams,
-            0.0,
-            device_ms,
-            ms(t.elapsed()),
-        )
+        let mut panels = Vec::with_capacity(scenes.len());
+        for (label, scene) in scenes {
+            panels.push(MeshPanel {
+                label,
+                gpu: renderer.upload(&scene).map_err(render_error)?,
+                triangles: scene.triangles(),
+            });
+        }
+        (Part::Meshes(panels), cams, 0.0, device_ms, ms(t.elapsed()))
     };
     let renderer = renderer()?;
 
@@ -442,16 +553,33 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     let mut covered = Vec::with_capacity(cams.len());
     let mut steps = Vec::with_capacity(cams.len());
     let mut last: Option<Frame> = None;
+    let panel_count = match &part {
+        Part::Meshes(m) => m.len(),
+        Part::Brep(_) => 1,
+    };
+    let columns = p
+        .columns
+        .unwrap_or_else(|| panels::default_columns(panel_count))
+        .min(panel_count);
     for (i, camera) in cams.iter().enumerate() {
         ctx.checkpoint()?;
         let frame = match &part {
-            Part::Mesh(gpu, _) => {
-                let (frame, timings) = renderer
-                    .render(gpu, camera, &p.settings)
-                    .map_err(render_error)?;
-                draw += timings.draw;
-                readback += timings.readback;
-                frame
+            Part::Meshes(meshes) => {
+                let mut frames = Vec::with_capacity(meshes.len());
+                for m in meshes {
+                    ctx.checkpoint()?;
+                    let (frame, timings) = renderer
+                        .render(&m.gpu, camera, &p.settings)
+                        .map_err(render_error)?;
+                    draw += timings.draw;
+                    readback += timings.readback;
+                    frames.push(frame);
+                }
+                if frames.len() == 1 {
+                    frames.swap_remove(0)
+                } else {
+                    panels::tile(&frames, columns)
+                }
             }
             Part::Brep(gpu) => {
                 let (frame, report) = if p.raycast {
@@ -496,8 +624,9 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     let first = &cams[0];
     let a = renderer.adapter();
     let read_ms = result["timings_ms"]["read"].as_f64().unwrap_or(0.0);
-    result["width"] = json!(p.width);
-    result["height"] = json!(p.height);
+    let rows = panel_count.div_ceil(columns) as u32;
+    result["width"] = json!(p.width * columns as u32);
+    result["height"] = json!(p.height * rows);
     result["frames"] = json!(p.frames);
     result["adapter"] = json!({
         "name": a.name, "backend": a.backend, "device_type": a.device_type, "driver": a.driver,
@@ -513,7 +642,24 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     result["shading"] = json!(p.settings.shading.name());
     result["edges"] = json!(p.settings.edges);
     match &part {
-        Part::Mesh(_, triangles) => result["triangles"] = json!(triangles),
+        Part::Meshes(meshes) => {
+            result["triangles"] = json!(meshes.iter().map(|m| m.triangles).sum::<usize>());
+            if meshes.len() > 1 {
+                result["panels"] = json!(
+                    meshes
+                        .iter()
+                        .enumerate()
+                        .map(|(i, m)| {
+                            let (x, y) = panels::panel_origin(i, columns, p.width, p.height);
+                            json!({"label": m.label, "triangles": m.triangles,
+                                   "x": x, "y": y, "width": p.width, "height": p.height})
+                        })
+                        .collect::<Vec<_>>()
+                );
+                result["columns"] = json!(columns);
+                result["rows"] = json!(rows);
+            }
+        }
         Part::Brep(_) => {
             let first = steps.first().copied().unwrap_or_default();
             // The frame's own tessellation: two triangles per grid cell.
@@ -539,7 +685,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             }
         }
     }
-    result["pixels"] = json!(p.width as u64 * p.height as u64);
+    result["pixels"] = json!(p.width as u64 * columns as u64 * p.height as u64 * rows as u64);
     result["covered"] = json!(covered[0]);
     if p.frames > 1 {
         result["covered_per_frame"] = json!(covered);

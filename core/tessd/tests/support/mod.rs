@@ -14,10 +14,7 @@ pub fn tessd() -> Command {
 
 /// A mesh of the shared test data (`$TESSD_SHARED_DATA`, else `../shared/data`).
 pub fn shared_mesh(name: &str) -> PathBuf {
-    let root = std::env::var_os("TESSD_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    root.join("mesh").join(name)
+    tessd_testdata::shared(&format!("mesh/{name}"))
 }
 
 /// Runs `cmd`, which must succeed.
