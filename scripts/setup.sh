@@ -51,10 +51,11 @@ if [ "${1:-}" != "--demo" ]; then
   make_venv .venv-bench bench/requirements-bench.txt
   make_venv .venv-cad python/requirements-cad.txt
   make_venv .venv-b123d python/requirements-build123d.txt
-  # FreeCAD 0.20's Python modules (FreeCAD.so, Part.so in /usr/lib/freecad-python3/lib; not the
-  # GUI) for the FreeCAD exporter's tests (tests/brep_freecad), which the system python3 they
-  # are built for runs, with its pytest and numpy.
-  FREECAD_APT_PACKAGES=(libfreecad-python3-0.20 python3-pytest python3-numpy)
+  # FreeCAD 0.20's Python modules (FreeCAD.so, Part.so in /usr/lib/freecad-python3/lib) for the
+  # FreeCAD exporter's tests (tests/brep_freecad), which the system python3 they are built for
+  # runs, with its pytest and numpy; and FreeCAD itself (freecad-python3: freecadcmd, the GUI,
+  # PySide2) for the workbench's tests (tests/freecad_plugin/run.sh).
+  FREECAD_APT_PACKAGES=(libfreecad-python3-0.20 freecad-python3 python3-pytest python3-numpy)
   apt_install "${FREECAD_APT_PACKAGES[@]}"
 fi
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine (scripts/setup.sh) and runs every test: Rust (cargo test) and Python
-# (pytest against the real daemon, real usd-core; the B-Rep exporters against real OCP and FreeCAD).
+# (pytest against the real daemon, real usd-core; the B-Rep exporters against real OCP and FreeCAD;
+# the FreeCAD workbench inside real FreeCAD).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -10,7 +11,8 @@ echo "== cargo test"
 cargo test --workspace --release
 echo "== pytest (daemon, USD, demo, simplification)"
 .venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
-  --ignore=tests/brep_build123d --ignore=tests/brep_freecad --ignore=tests/render_reference
+  --ignore=tests/brep_build123d --ignore=tests/brep_freecad --ignore=tests/render_reference \
+  --ignore=tests/freecad_plugin
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
 # tests/brep (the exporter, the daemon's B-Rep ops against OCP, the real-file fixtures) needs
@@ -23,3 +25,5 @@ echo "== pytest (B-Rep export and tessellation on real OpenCASCADE: OCP 8.0, bui
 .venv-b123d/bin/python -m pytest tests/brep tests/brep_build123d -q -p no:cacheprovider
 echo "== pytest (B-Rep export from FreeCAD 0.20, system python)"
 PYTHONPATH=python:tests /usr/bin/python3 -m pytest tests/brep_freecad -q -p no:cacheprovider
+echo "== FreeCAD workbench (console and GUI, real FreeCAD 0.20)"
+bash tests/freecad_plugin/run.sh

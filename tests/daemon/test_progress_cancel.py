@@ -9,6 +9,7 @@ import stat
 import subprocess
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
@@ -292,3 +293,31 @@ def test_shutdown_finishes_running_requests(tessd_bin, tmpdir_short):
         assert d.proc.returncode == 0, d.log_tail()
     finally:
         d.stop()
+
+
+def test_cancel_stops_a_tessellation_between_faces(daemon, tmp_path):
+    """A cancelled `tessellate` stops starting faces (the faces in progress finish): OCCT's bottle
+    at 0.1 um (~1.9 M triangles, a few seconds) cancelled at its first face ends `cancelled` in
+    well under the time the whole job takes, and writes no file."""
+    bottle = Path(__file__).resolve().parents[2] / "core/tessellate/tests/data/bottle.json"
+    params = {"input": str(bottle), "tolerance": "0.0001mm"}
+    with tessd.Client(daemon.socket, timeout=120) as c:
+        t = time.monotonic()
+        whole = c.call("tessellate", {**params, "output": str(tmp_path / "whole.ply")})[0]
+        full = time.monotonic() - t
+        assert whole["triangles"] > 1_000_000
+        out = tmp_path / "never.ply"
+        job = c.submit("tessellate", {**params, "output": str(out)})
+        deadline = time.monotonic() + 30
+        while job.progress is None or job.progress.stage != "faces":
+            assert time.monotonic() < deadline, "no per-face progress"
+            time.sleep(0.005)
+        t = time.monotonic()
+        assert job.cancel() is True
+        with pytest.raises(TessdError) as info:
+            job.result(timeout=60)
+        stopped = time.monotonic() - t
+        assert info.value.code == "cancelled", info.value
+        assert stopped < 0.5 * full, (stopped, full)
+        assert not out.exists()
+        print(f"tessellate: whole {full:.2f} s, stopped {stopped:.2f} s after the cancel")

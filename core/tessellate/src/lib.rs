@@ -70,6 +70,8 @@ pub enum TessellateError {
     Invalid(ValidationError),
     /// A tolerance or angle that is not a positive finite number.
     Options(String),
+    /// The progress callback asked to stop (a cancelled job).
+    Cancelled,
 }
 
 impl std::fmt::Display for TessellateError {
@@ -77,6 +79,7 @@ impl std::fmt::Display for TessellateError {
         match self {
             TessellateError::Invalid(e) => write!(f, "{e}"),
             TessellateError::Options(m) => write!(f, "{m}"),
+            TessellateError::Cancelled => write!(f, "cancelled"),
         }
     }
 }
@@ -147,17 +150,19 @@ fn map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync + Send) -> Vec<
 /// [`TessellateError::Options`] for a tolerance or angle that is not positive and finite,
 /// [`TessellateError::Invalid`] for a document that does not validate.
 pub fn tessellate(doc: &Document, options: &Options) -> Result<Tessellation, TessellateError> {
-    tessellate_with_progress(doc, options, &|_, _| {})
+    tessellate_with_progress(doc, options, &|_, _| true)
 }
 
-/// [`tessellate`], calling `progress(done, total)` as faces complete (from any thread).
+/// [`tessellate`], calling `progress(done, total)` as faces complete (from any thread); once
+/// it returns `false` (a cancelled job) the faces not yet started are skipped and the call
+/// ends with [`TessellateError::Cancelled`].
 ///
 /// # Errors
-/// As [`tessellate`].
+/// As [`tessellate`], and [`TessellateError::Cancelled`].
 pub fn tessellate_with_progress(
     doc: &Document,
     options: &Options,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Tessellation, TessellateError> {
     if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
         return Err(TessellateError::Options(format!(
@@ -178,15 +183,24 @@ pub fn tessellate_with_progress(
     let done = std::sync::atomic::AtomicUsize::new(0);
     let total = doc.faces.len();
     let indices: Vec<usize> = (0..total).collect();
+    let stop = std::sync::atomic::AtomicBool::new(false);
     let faces: Vec<cdt::FaceTriangles> = map(&indices, |&f| {
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            return cdt::FaceTriangles::default();
+        }
         let (face, loops) = (&doc.faces[f], &loops[f]);
         let plan = interior::plan(face, loops, options);
         let points = interior::grid(loops, &plan);
         let t = cdt::triangulate(face, loops, &points, &plan, options);
         let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        progress(n, total);
+        if !progress(n, total) {
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
         t
     });
+    if stop.into_inner() {
+        return Err(TessellateError::Cancelled);
+    }
 
     let points: Vec<[f64; 3]> = faces
         .iter()

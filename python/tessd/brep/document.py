@@ -151,14 +151,16 @@ def bridge_gaps(loop: List[Trim], size: float) -> List[Trim]:
 def face_bounds(uv_bounds: Sequence[float], mirror: bool, loops: List[List[Trim]],
                 where: str) -> List[float]:
     """The kernel's UVBounds (u → 2π - u where mirrored), widened (if at all) to hold sampled
-    points of every exported trim."""
+    points of every exported trim (a straight trim's two ends: exact, and most trims of a CAD
+    part are straight)."""
     u0, u1, v0, v1 = uv_bounds
     if mirror:
         u0, u1 = TWO_PI - u1, TWO_PI - u0
     for loop in loops:
         for tr in loop:
-            for k in range(BOUNDS_SAMPLES + 1):
-                u, v = tr.curve.uv(tr.t0 + (tr.t1 - tr.t0) * k / BOUNDS_SAMPLES)
+            n = 1 if tr.curve.json().get("type") == "line" else BOUNDS_SAMPLES
+            for k in range(n + 1):
+                u, v = tr.curve.uv(tr.t0 + (tr.t1 - tr.t0) * k / n)
                 u0, u1, v0, v1 = min(u0, u), max(u1, u), min(v0, v), max(v1, v)
     b = [u0, u1, v0, v1]
     if not all(math.isfinite(x) for x in b):

@@ -18,7 +18,7 @@ use serde_json::{Value, json};
 use std::path::Path;
 use tessd_brep::{Document, Units};
 use tessd_ipc::arrays::OwnedArray;
-use tessd_ipc::error::OpError;
+use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_tessellate::origin::SPACING_FRACTION;
@@ -270,12 +270,14 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     let (tolerance, diagonal) = absolute_tolerance(asked, &doc)?;
     ctx.progress(0.05, "validate", "")?;
     let total = doc.faces.len();
+    // A cancelled job's progress call fails: the remaining faces are skipped.
     let progress = |done: usize, total: usize| {
-        let _ = ctx.progress(
+        ctx.progress(
             0.05 + 0.85 * done as f64 / total.max(1) as f64,
             "faces",
             &format!("face {done} of {total}"),
-        );
+        )
+        .is_ok()
     };
     let options = Options {
         tolerance,
@@ -287,6 +289,10 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             |e| match e {
                 TessellateError::Invalid(e) => brep_error(e),
                 TessellateError::Options(m) => OpError::request(m),
+                TessellateError::Cancelled => match ctx.checkpoint() {
+                    Err(e) => e,
+                    Ok(()) => OpError::new(ErrorCode::Cancelled, "cancelled"),
+                },
             },
         )?;
     ctx.checkpoint()?;

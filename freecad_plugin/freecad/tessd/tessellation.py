@@ -1,0 +1,127 @@
+"""Part inputs to triangle meshes: the B-Rep export and the daemon's `tessellate`, welded.
+
+Every operation that needs a Part object as triangles (Tessellate, and Simplify, Generate LODs
+and Export USD on Part objects) goes through :func:`tessellate_part`: the shape is exported to
+a `tessd-brep` document (tessd.brep.freecad, FreeCAD's own Part API), tessellated by the daemon
+(trimmed faces, shared edges discretised once) and welded (meshes.weld) into a shared-vertex
+mesh whose face groups are the B-Rep faces in `shape.Faces` order. Positions come back as f64
+(absolute), so welding compares exact values and nothing is rounded before FreeCAD's own f32.
+
+The last few tessellations are kept (keyed by the shape, its placement, the tolerance and the
+angle): the Simplify dialog's live preview asks for the same part again at every change of a
+parameter, and should pay for the tessellation once.
+"""
+
+import collections
+import threading
+from dataclasses import dataclass, field
+from typing import Any, Dict, List
+
+import numpy as np
+from tessd.brep.freecad import export_shape
+
+from . import meshes
+from .params import length
+from .shapes import PartInput
+
+#: Tessellations kept for reuse.
+CACHE_SIZE = 4
+#: Tessellate requests in flight at once while the next parts are exported.
+IN_FLIGHT = 2
+
+_cache: "collections.OrderedDict[tuple, Tessellation]" = collections.OrderedDict()
+_cache_lock = threading.Lock()
+
+
+@dataclass
+class Tessellation:
+    """A Part's watertight mesh: welded positions, triangles, the B-Rep face of each triangle."""
+
+    positions: np.ndarray  # f64 [V, 3]
+    triangles: np.ndarray  # int64 [F, 3]
+    groups: np.ndarray  # int64 [F]: index of the B-Rep face (0-based, `shape.Faces` order)
+    face_count: int  # B-Rep faces (so groups run 0..face_count-1)
+    #: The daemon's `tessellate` report (tolerance used, counts, time, warnings).
+    result: Dict[str, Any] = field(default_factory=dict)
+
+    def warnings(self, label: str) -> List[str]:
+        """What the user should hear about this tessellation."""
+        out = ["%s: %s" % (label, w) for w in self.result.get("warnings") or ()]
+        empty = self.result.get("empty_faces") or []
+        if empty:
+            out.append("%s: %d face(s) gave no triangle (face ids %s)"
+                       % (label, len(empty), ", ".join(str(i) for i in empty[:10])))
+        return out
+
+
+def tessellate_part(task: Any, client: Any, part: PartInput, tolerance: Any = "0.1mm",
+                    angle: float = 0.5, span=(0.0, 1.0)) -> Tessellation:
+    """The tessellation of ``part`` at ``tolerance`` (a length with units, a number of mm or a
+    percentage of the part's diagonal) and ``angle`` (radians), through ``task``'s client
+    (progress on ``span``, cancellable). Daemon errors raise ``TessdError``."""
+    return tessellate_parts(task, client, [part], tolerance, angle, span)[0]
+
+
+def tessellate_parts(task: Any, client: Any, parts: List[PartInput], tolerance: Any = "0.1mm",
+                     angle: float = 0.5, span=(0.0, 1.0)) -> List[Tessellation]:
+    """:func:`tessellate_part` of every part, pipelined: while the daemon tessellates a part,
+    this thread exports the next one's B-Rep (Python, the longest step of a round trip), up to
+    :data:`IN_FLIGHT` requests at once; the results are collected and welded in order. A
+    cancel or an error cancels the requests still running."""
+    tol = length(tolerance, "tolerance", percent=True)
+    n = len(parts)
+    lo, hi = span
+    out: List[Any] = [None] * n
+    pending: "collections.deque[tuple]" = collections.deque()
+
+    def part_span(i: int) -> tuple:
+        return (lo + (hi - lo) * i / n, lo + (hi - lo) * (i + 1) / n)
+
+    def finish() -> None:
+        i, key, faces, job = pending.popleft()
+        result, arrays = task.wait(job, "tessellate", part_span(i), parts[i].label)
+        positions, triangles = meshes.weld(arrays["positions"], meshes.triangles_of(arrays))
+        groups = np.asarray(arrays["face_groups"], dtype=np.int64).reshape(-1)
+        out[i] = Tessellation(positions, triangles, groups, faces, result)
+        if key:
+            with _cache_lock:
+                _cache[key] = out[i]
+                while len(_cache) > CACHE_SIZE:
+                    _cache.popitem(last=False)
+
+    try:
+        for i, part in enumerate(parts):
+            key = part.key + (tol, float(angle)) if part.key else None
+            with _cache_lock:
+                hit = _cache.get(key) if key else None
+                if hit is not None:
+                    _cache.move_to_end(key)
+            if hit is not None:
+                out[i] = hit
+                continue
+            task.report(part_span(i)[0], "%s: exporting the B-Rep" % part.label)
+            document = export_shape(part.shape, units="mm", source=part.label)
+            task.check_cancel()
+            params = {"brep": document, "tolerance": tol, "angle": float(angle),
+                      "positions": "f64"}
+            job = task.submit(client, "tessellate", params, span=part_span(i), label=part.label)
+            pending.append((i, key, len(document["faces"]), job))
+            del document
+            while len(pending) >= IN_FLIGHT:
+                finish()
+        while pending:
+            finish()
+    except BaseException:
+        for *_, job in pending:
+            job.cancel()
+        raise
+    return out
+
+
+def clear_cache() -> None:
+    """Forgets the kept tessellations."""
+    with _cache_lock:
+        _cache.clear()
+
+
+__all__ = ["Tessellation", "clear_cache", "tessellate_part", "tessellate_parts"]
