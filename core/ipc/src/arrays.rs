@@ -1,8 +1,9 @@
 //! Typed binary arrays carried in a frame's payload (docs/protocol.md, "Arrays").
 //!
-//! Received arrays stay in the frame's payload buffer and are viewed in place; arrays to send
-//! own their `Vec` and are written from it directly, so large meshes are never copied into an
-//! intermediate frame buffer.
+//! Each received array is read from the socket straight into its own buffer, a `Vec` of its
+//! element size: it is viewed in place ([`Arrays::get`]) or moved out whole ([`Arrays::take`],
+//! e.g. into a mesh) without a copy. Arrays to send own their `Vec` and are written from it
+//! directly, so large meshes are never copied into an intermediate frame buffer.
 
 use crate::frame::FrameError;
 use bytemuck::Pod;
@@ -216,54 +217,141 @@ impl ArrayDesc {
 /// A received array viewed in place: its elements and its shape.
 pub type TypedView<'a, T> = (&'a [T], &'a [u64]);
 
-/// Arrays received in a frame: the payload buffer and its table.
+/// A received array taken out of its frame: its elements and its shape.
+pub type TakenArray<T> = (Vec<T>, Vec<u64>);
+
+/// The storage of one received array, typed by element size: any array is aligned for its
+/// dtype, and [`Arrays::take`] can hand it over as a `Vec` of its elements without a copy.
+#[derive(Debug)]
+enum Buffer {
+    B1(Vec<u8>),
+    B2(Vec<u16>),
+    B4(Vec<u32>),
+    B8(Vec<u64>),
+}
+
+impl Buffer {
+    /// A zeroed buffer of `len` bytes for elements of `dtype` (`len` a multiple of its size).
+    /// A zeroed allocation is lazily committed by the OS, so memory follows the bytes received.
+    fn zeroed(dtype: DType, len: usize) -> Buffer {
+        match dtype.size() {
+            1 => Buffer::B1(vec![0; len]),
+            2 => Buffer::B2(vec![0; len / 2]),
+            4 => Buffer::B4(vec![0; len / 4]),
+            _ => Buffer::B8(vec![0; len / 8]),
+        }
+    }
+
+    fn bytes(&self) -> &[u8] {
+        match self {
+            Buffer::B1(v) => v,
+            Buffer::B2(v) => bytemuck::cast_slice(v),
+            Buffer::B4(v) => bytemuck::cast_slice(v),
+            Buffer::B8(v) => bytemuck::cast_slice(v),
+        }
+    }
+
+    fn bytes_mut(&mut self) -> &mut [u8] {
+        match self {
+            Buffer::B1(v) => v,
+            Buffer::B2(v) => bytemuck::cast_slice_mut(v),
+            Buffer::B4(v) => bytemuck::cast_slice_mut(v),
+            Buffer::B8(v) => bytemuck::cast_slice_mut(v),
+        }
+    }
+
+    /// The buffer as a `Vec<T>` (`T` of the buffer's element size), moved, not copied.
+    fn into_vec<T: Element>(self) -> Vec<T> {
+        fn cast<A: Pod, T: Pod>(v: Vec<A>) -> Vec<T> {
+            // Same size and alignment (checked by the caller's dtype match), so this moves.
+            bytemuck::allocation::try_cast_vec(v)
+                .unwrap_or_else(|(_, v)| bytemuck::cast_slice(&v).to_vec())
+        }
+        match self {
+            Buffer::B1(v) => cast(v),
+            Buffer::B2(v) => cast(v),
+            Buffer::B4(v) => cast(v),
+            Buffer::B8(v) => cast(v),
+        }
+    }
+}
+
+/// Arrays received in a frame: their table and one buffer per array.
 #[derive(Debug, Default)]
 pub struct Arrays {
-    words: Vec<u64>,
+    bufs: Vec<Buffer>,
     len: usize,
     descs: Vec<ArrayDesc>,
 }
 
 impl Arrays {
-    /// A zeroed payload of `len` bytes (8-aligned storage).
+    /// Reads a payload of `len` bytes laid out as `descs` say (a checked table: in bounds, no
+    /// overlap), each array straight into its own buffer; gaps and trailing bytes are read and
+    /// dropped.
     ///
     /// # Errors
-    /// When the length does not fit in memory addressing.
-    pub(crate) fn zeroed(len: u64) -> Result<Arrays, FrameError> {
-        let len = usize::try_from(len).map_err(|_| FrameError::PayloadTooLarge {
+    /// [`FrameError::Truncated`] when the stream ends early (with the payload bytes received),
+    /// [`FrameError::Io`].
+    pub(crate) fn read(
+        r: &mut impl std::io::Read,
+        descs: Vec<ArrayDesc>,
+        len: u64,
+    ) -> Result<Arrays, FrameError> {
+        let size = usize::try_from(len).map_err(|_| FrameError::PayloadTooLarge {
             len,
             max: usize::MAX as u64,
         })?;
-        let words = vec![0u64; len.div_ceil(8)];
+        let mut bufs: Vec<Buffer> = descs
+            .iter()
+            .map(|d| Buffer::zeroed(d.dtype, d.length as usize))
+            .collect();
+        let mut order: Vec<usize> = (0..descs.len()).collect();
+        order.sort_unstable_by_key(|&i| descs[i].offset);
+        let mut pos = 0u64;
+        let truncated = |got: u64| FrameError::Truncated {
+            part: "payload",
+            expected: len,
+            got,
+        };
+        for i in order {
+            let skipped = skip(r, descs[i].offset - pos)?;
+            if skipped < descs[i].offset - pos {
+                return Err(truncated(pos + skipped));
+            }
+            let got = crate::frame::read_full(r, bufs[i].bytes_mut())? as u64;
+            if got < descs[i].length {
+                return Err(truncated(descs[i].offset + got));
+            }
+            pos = descs[i].offset + descs[i].length;
+        }
+        let skipped = skip(r, len - pos)?;
+        if skipped < len - pos {
+            return Err(truncated(pos + skipped));
+        }
         Ok(Arrays {
-            words,
-            len,
-            descs: Vec::new(),
+            bufs,
+            len: size,
+            descs,
         })
-    }
-
-    pub(crate) fn bytes_mut(&mut self) -> &mut [u8] {
-        &mut bytemuck::cast_slice_mut::<u64, u8>(&mut self.words)[..self.len]
-    }
-
-    pub(crate) fn set_descs(&mut self, descs: Vec<ArrayDesc>) {
-        self.descs = descs;
     }
 
     /// Builds received-style arrays from owned ones (used by in-process job runs, so that a job
     /// file goes through exactly the code path of a socket request).
     pub fn from_owned(arrays: &[OwnedArray]) -> Arrays {
         let (descs, len) = layout(arrays);
-        let mut out = Arrays {
-            words: vec![0u64; len as usize / 8],
+        let bufs = arrays
+            .iter()
+            .map(|a| {
+                let mut b = Buffer::zeroed(a.dtype, a.bytes().len());
+                b.bytes_mut().copy_from_slice(a.bytes());
+                b
+            })
+            .collect();
+        Arrays {
+            bufs,
             len: len as usize,
             descs,
-        };
-        for (a, d) in arrays.iter().zip(out.descs.clone()) {
-            out.bytes_mut()[d.offset as usize..(d.offset + d.length) as usize]
-                .copy_from_slice(a.bytes());
         }
-        out
     }
 
     /// The table of arrays.
@@ -276,21 +364,23 @@ impl Arrays {
         self.descs.is_empty()
     }
 
-    /// Payload size in bytes.
+    /// Payload size in bytes (as received, arrays taken out included).
     pub fn payload_len(&self) -> usize {
         self.len
     }
 
+    fn index(&self, name: &str) -> Option<usize> {
+        self.descs.iter().position(|d| d.name == name)
+    }
+
     /// The entry named `name`.
     pub fn desc(&self, name: &str) -> Option<&ArrayDesc> {
-        self.descs.iter().find(|d| d.name == name)
+        self.index(name).map(|i| &self.descs[i])
     }
 
     /// The raw bytes of array `name`.
     pub fn bytes(&self, name: &str) -> Option<&[u8]> {
-        let d = self.desc(name)?;
-        let all = &bytemuck::cast_slice::<u64, u8>(&self.words)[..self.len];
-        Some(&all[d.offset as usize..(d.offset + d.length) as usize])
+        self.index(name).map(|i| self.bufs[i].bytes())
     }
 
     /// Array `name` viewed as `T` in place, with its shape.
@@ -298,17 +388,42 @@ impl Arrays {
     /// # Errors
     /// When the array's dtype is not `T`'s (the message names the array and both dtypes).
     pub fn get<T: Element>(&self, name: &str) -> Option<Result<TypedView<'_, T>, String>> {
-        let d = self.desc(name)?;
+        let i = self.index(name)?;
+        let d = &self.descs[i];
         if d.dtype != T::DTYPE {
-            return Some(Err(format!(
-                "array {name:?} has dtype {}; expected {}",
-                d.dtype.name(),
-                T::DTYPE.name()
-            )));
+            return Some(Err(dtype_mismatch::<T>(d)));
         }
-        // Offsets are multiples of 8 in 8-aligned storage, so the cast cannot fail.
-        Some(Ok((bytemuck::cast_slice(self.bytes(name)?), &d.shape)))
+        // Each buffer is a Vec of elements of the dtype's size, so the cast cannot fail.
+        Some(Ok((bytemuck::cast_slice(self.bufs[i].bytes()), &d.shape)))
     }
+
+    /// Takes array `name` out as a `Vec<T>` with its shape, moving its buffer (no copy); it is
+    /// then gone from the table. A wrong dtype leaves it in place.
+    ///
+    /// # Errors
+    /// When the array's dtype is not `T`'s (the message names the array and both dtypes).
+    pub fn take<T: Element>(&mut self, name: &str) -> Option<Result<TakenArray<T>, String>> {
+        let i = self.index(name)?;
+        if self.descs[i].dtype != T::DTYPE {
+            return Some(Err(dtype_mismatch::<T>(&self.descs[i])));
+        }
+        let d = self.descs.remove(i);
+        Some(Ok((self.bufs.remove(i).into_vec(), d.shape)))
+    }
+}
+
+fn dtype_mismatch<T: Element>(d: &ArrayDesc) -> String {
+    format!(
+        "array {:?} has dtype {}; expected {}",
+        d.name,
+        d.dtype.name(),
+        T::DTYPE.name()
+    )
+}
+
+/// Reads and drops `n` bytes; returns how many were there.
+fn skip(r: &mut impl std::io::Read, n: u64) -> std::io::Result<u64> {
+    std::io::copy(&mut std::io::Read::take(r, n), &mut std::io::sink())
 }
 
 /// An array to send: its description and the buffer holding it.
@@ -339,35 +454,23 @@ impl<T: Pod + Send + Sync> AsBytes for Vec<T> {
     }
 }
 
-/// A slice of a shared received payload, so received arrays can be sent back without a copy.
-struct PayloadSlice {
-    payload: std::sync::Arc<Arrays>,
-    start: usize,
-    end: usize,
-}
-
-impl AsBytes for PayloadSlice {
+impl AsBytes for Buffer {
     fn as_bytes(&self) -> &[u8] {
-        &bytemuck::cast_slice::<u64, u8>(&self.payload.words)[self.start..self.end]
+        self.bytes()
     }
 }
 
 impl Arrays {
-    /// Turns the received arrays into arrays to send, sharing the payload buffer (no copy).
+    /// Turns the received arrays into arrays to send, moving their buffers (no copy).
     pub fn into_owned(self) -> Vec<OwnedArray> {
-        let descs = self.descs.clone();
-        let payload = std::sync::Arc::new(self);
-        descs
+        self.descs
             .into_iter()
-            .map(|d| OwnedArray {
+            .zip(self.bufs)
+            .map(|(d, b)| OwnedArray {
                 name: d.name,
                 dtype: d.dtype,
                 shape: d.shape,
-                data: Box::new(PayloadSlice {
-                    payload: payload.clone(),
-                    start: d.offset as usize,
-                    end: (d.offset + d.length) as usize,
-                }),
+                data: Box::new(b),
             })
             .collect()
     }

@@ -193,7 +193,7 @@ impl Header {
 }
 
 /// Reads as many bytes as are available up to `buf.len()`; returns how many.
-fn read_full(r: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+pub(crate) fn read_full(r: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         match r.read(&mut buf[got..]) {
@@ -240,19 +240,14 @@ pub fn read_frame(r: &mut impl Read, limits: &Limits) -> Result<Frame, FrameErro
     let mut json = vec![0u8; header.json_len as usize];
     read_part(r, &mut json, "JSON")?;
     let json = parse_object(&json)?;
-    // The payload is backed by u64 words so that every 8-aligned array is aligned for any dtype.
-    // A zeroed allocation is lazily committed by the OS, so memory follows the bytes received.
-    let mut payload = Arrays::zeroed(header.payload_len)?;
-    read_part(r, payload.bytes_mut(), "payload")?;
+    // The table first, so that each array is read straight into its own typed buffer (and a
+    // bad table is refused before a large payload is read).
     let descs = match json.get("arrays") {
         None => Vec::new(),
         Some(v) => ArrayDesc::parse_table(v, header.payload_len).map_err(FrameError::BadArrays)?,
     };
-    payload.set_descs(descs);
-    Ok(Frame {
-        json,
-        arrays: payload,
-    })
+    let arrays = Arrays::read(r, descs, header.payload_len)?;
+    Ok(Frame { json, arrays })
 }
 
 /// Parses a JSON object from bytes.

@@ -158,7 +158,7 @@ impl Attribute {
             )));
         }
         check_rows(&label, self.domain, self.rows(), expected)?;
-        if let Some(i) = self.values.iter().position(|v| !v.is_finite()) {
+        if let Some(i) = crate::block_scan::first_non_finite(&self.values) {
             return Err(MeshError::Invalid(format!(
                 "{label} row {} is {}",
                 i / self.components,

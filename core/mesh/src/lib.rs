@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 pub mod attribute;
+mod block_scan;
 mod error;
 pub mod io;
 mod mesh;

@@ -7,6 +7,7 @@
 
 use crate::MeshError;
 use crate::attribute::Attribute;
+use crate::block_scan::{first_at_or_above, first_non_finite, steps_at_least};
 
 /// A face-varying attribute: `values`, and for each face corner (same order as
 /// [`Mesh::face_indices`]) the index of its value.
@@ -147,15 +148,26 @@ impl Mesh {
     /// [`MeshError::Invalid`] with a message such as "face 12 uses vertex 9000; the mesh has
     /// 8000 vertices".
     pub fn validate(&self) -> Result<(), MeshError> {
+        self.check(false)
+    }
+
+    /// [`Mesh::validate`] for a mesh whose faces a reader has already checked as it built them
+    /// (every face ≥ 3 corners, every index below the vertex count): skips those passes.
+    pub(crate) fn validate_read(&self) -> Result<(), MeshError> {
+        self.check(true)
+    }
+
+    fn check(&self, faces_checked: bool) -> Result<(), MeshError> {
         let bad = |m: String| Err(MeshError::Invalid(m));
-        for (i, p) in self.positions.iter().enumerate() {
-            if let Some(k) = p.iter().position(|c| !c.is_finite()) {
-                return bad(format!(
-                    "vertex {i} has a non-finite coordinate {} = {}",
-                    ["x", "y", "z"][k],
-                    p[k]
-                ));
-            }
+        // Bulk passes first (a max-reduction per block); the element-wise walks below only run
+        // to name what a failing pass found.
+        if let Some(c) = first_non_finite(self.positions.as_flattened()) {
+            let (i, k) = (c / 3, c % 3);
+            return bad(format!(
+                "vertex {i} has a non-finite coordinate {} = {}",
+                ["x", "y", "z"][k],
+                self.positions[i][k]
+            ));
         }
         if self.face_offsets.first() != Some(&0) {
             return bad("face offsets must start with 0".into());
@@ -168,45 +180,24 @@ impl Mesh {
             ));
         }
         let nv = self.positions.len();
-        for (f, w) in self.face_offsets.windows(2).enumerate() {
-            if w[1] < w[0] {
-                return bad(format!("face offsets decrease at face {f}"));
-            }
-            if w[1] - w[0] < 3 {
-                return bad(format!(
-                    "face {f} has {} vertices; a face needs at least 3",
-                    w[1] - w[0]
-                ));
-            }
-            for &v in &self.face_indices[w[0] as usize..w[1] as usize] {
-                if v as usize >= nv {
-                    return bad(format!(
-                        "face {f} uses vertex {v}; the mesh has {nv} vertices"
-                    ));
-                }
-            }
+        let bound = u32::try_from(nv).unwrap_or(u32::MAX);
+        let indices_ok = faces_checked
+            || nv > u32::MAX as usize
+            || first_at_or_above(&self.face_indices, bound).is_none();
+        if !(indices_ok && (faces_checked || steps_at_least(&self.face_offsets, 3))) {
+            self.name_face_error()?;
         }
         let corners = self.face_indices.len();
         if let Some(n) = &self.normals {
             check_face_varying("normal", n, corners)?;
-            if let Some((i, _)) = n
-                .values
-                .iter()
-                .enumerate()
-                .find(|(_, v)| v.iter().any(|c| !c.is_finite()))
-            {
-                return bad(format!("normal {i} has a non-finite component"));
+            if let Some(c) = first_non_finite(n.values.as_flattened()) {
+                return bad(format!("normal {} has a non-finite component", c / 3));
             }
         }
         if let Some(t) = &self.uvs {
             check_face_varying("uv", t, corners)?;
-            if let Some((i, _)) = t
-                .values
-                .iter()
-                .enumerate()
-                .find(|(_, v)| v.iter().any(|c| !c.is_finite()))
-            {
-                return bad(format!("uv {i} has a non-finite component"));
+            if let Some(c) = first_non_finite(t.values.as_flattened()) {
+                return bad(format!("uv {} has a non-finite component", c / 2));
             }
         }
         for (i, c) in self.creases.iter().enumerate() {
@@ -261,6 +252,35 @@ impl Mesh {
         Ok(())
     }
 
+    /// Walks the faces in order and returns the first bad one: offsets that decrease, fewer
+    /// than 3 corners, a vertex index out of range. The slow path of [`Mesh::validate`], run
+    /// only once its bulk passes have found something, so that the message names the face.
+    fn name_face_error(&self) -> Result<(), MeshError> {
+        let nv = self.positions.len();
+        for (f, w) in self.face_offsets.windows(2).enumerate() {
+            if w[1] < w[0] {
+                return Err(MeshError::Invalid(format!(
+                    "face offsets decrease at face {f}"
+                )));
+            }
+            if w[1] - w[0] < 3 {
+                return Err(MeshError::Invalid(format!(
+                    "face {f} has {} vertices; a face needs at least 3",
+                    w[1] - w[0]
+                )));
+            }
+            if let Some(&v) = self.face_indices[w[0] as usize..w[1] as usize]
+                .iter()
+                .find(|&&v| v as usize >= nv)
+            {
+                return Err(MeshError::Invalid(format!(
+                    "face {f} uses vertex {v}; the mesh has {nv} vertices"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// The protocol names of what this mesh carries besides positions and faces (`normals`,
     /// `uvs`, `crease_edges`, `face_groups`, `sharp_edges`, and each attribute's
     /// `domain:name`), for operations to report what an output could not hold.
@@ -287,14 +307,12 @@ fn check_face_varying<T>(what: &str, a: &FaceVarying<T>, corners: usize) -> Resu
         )));
     }
     let n = a.values.len();
-    if let Some((c, v)) = a
-        .indices
-        .iter()
-        .enumerate()
-        .find(|(_, v)| **v as usize >= n)
+    if let Some(c) = first_at_or_above(&a.indices, u32::try_from(n).unwrap_or(u32::MAX))
+        .filter(|_| n <= u32::MAX as usize)
     {
         return Err(MeshError::Invalid(format!(
-            "face corner {c} uses {what} {v}; there are {n} {what}s"
+            "face corner {c} uses {what} {}; there are {n} {what}s",
+            a.indices[c]
         )));
     }
     Ok(())

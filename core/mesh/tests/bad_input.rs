@@ -504,3 +504,59 @@ fn invalid_meshes_are_not_written() {
     let e = io::write_path(&grid(2, 2), &dir.path().join("x.dae")).unwrap_err();
     assert_eq!(e.code(), "unsupported");
 }
+
+/// The bulk paths of binary PLY (whole buffers of xyz records and of triangles, range-checked
+/// by a max per buffer) still name the face and index at fault, far into the file and after a
+/// quad that interrupts the run of triangles; and a NaN deep in the vertices names the vertex.
+#[test]
+fn binary_ply_bulk_paths_name_the_element() {
+    let faces = 20_000u32;
+    let ply = |bad_face: Option<u32>, nan_vertex: Option<usize>| {
+        let mut m = Mesh {
+            positions: (0..faces + 3).map(|i| [i as f32, 1.0, 2.0]).collect(),
+            ..Mesh::default()
+        };
+        for f in 0..faces {
+            if f == 7_000 {
+                m.push_face(&[f, f + 1, f + 2, f + 3]);
+            } else {
+                m.push_face(&[f, f + 1, f + 2]);
+            }
+        }
+        // Written valid (the writer validates), then broken in place.
+        let mut bytes = Vec::new();
+        io::write(&m, &mut bytes, Format::Ply).unwrap();
+        let body = bytes
+            .windows(11)
+            .position(|w| w == b"end_header\n")
+            .unwrap()
+            + 11;
+        if let Some(v) = nan_vertex {
+            let at = body + 12 * v + 8;
+            bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        }
+        if let Some(f) = bad_face {
+            // Every face before `f` is a triangle of 13 bytes but face 7000, a quad of 17.
+            let start =
+                body + 12 * (faces as usize + 3) + 13 * f as usize + 4 * (f > 7_000) as usize;
+            assert_eq!(bytes[start], 3);
+            bytes[start + 5..start + 9].copy_from_slice(&(faces + 3).to_le_bytes());
+        }
+        bytes
+    };
+    let m = read_mem(&ply(None, None), Format::Ply, true).unwrap();
+    assert_eq!((m.face_count(), m.triangle_count()), (20_000, 20_001));
+    assert_eq!(m.face(7_000), [7_000, 7_001, 7_002, 7_003]);
+    assert_eq!(
+        err(&ply(Some(15_321), None), Format::Ply),
+        "t.ply: face 15321: vertex index 20003 is out of range; the file has 20003 vertices"
+    );
+    assert_eq!(
+        err(&ply(Some(2), None), Format::Ply),
+        "t.ply: face 2: vertex index 20003 is out of range; the file has 20003 vertices"
+    );
+    assert_eq!(
+        err(&ply(None, Some(12_345)), Format::Ply),
+        "vertex 12345 has a non-finite coordinate z = NaN"
+    );
+}

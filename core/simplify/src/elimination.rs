@@ -4,6 +4,7 @@
 //! simplification actually lowers the complexity.
 
 use crate::area_vector;
+use crate::blocks;
 use crate::partition::UNUSED;
 use tessd_mesh::Mesh;
 
@@ -32,15 +33,20 @@ pub(crate) struct Eliminated {
 /// The first of several duplicates is kept, so the result is deterministic. `corners`: also
 /// record each output corner's input corner (needed only to carry face-varying attributes).
 ///
-/// One pass writes the surviving faces straight into the output; duplicates are then found by
-/// bucketing faces by their smallest cluster ([`find_duplicates`]) and squeezed out in place.
+/// One pass writes the surviving faces straight into the output — in parallel, fixed blocks of
+/// faces each writing their own part, joined in block order so faces keep their order
+/// ([`crate::blocks`]); duplicates are then found by bucketing faces by their smallest cluster
+/// ([`find_duplicates`]) and squeezed out in place.
 pub(crate) fn eliminate(
     mesh: &Mesh,
     cluster_of: &[u32],
     reps: &[[f32; 3]],
     corners: bool,
 ) -> Eliminated {
-    let mut out = collapse_faces(mesh, cluster_of, reps, 0..mesh.face_count(), corners);
+    let parts = blocks::map(mesh.face_count(), |r| {
+        collapse_faces(mesh, cluster_of, reps, r, corners)
+    });
+    let mut out = join(parts);
     let duplicate = find_duplicates(&out, reps.len());
     out.duplicates = duplicate.iter().filter(|&&d| d).count() as u64;
     if out.duplicates == 0 {
@@ -75,6 +81,34 @@ pub(crate) fn eliminate(
     out
 }
 
+/// The blocks' faces one after the other.
+fn join(mut parts: Vec<Eliminated>) -> Eliminated {
+    if parts.len() == 1 {
+        return parts.pop().expect("one part");
+    }
+    let faces: usize = parts.iter().map(|p| p.source_face.len()).sum();
+    let corners: usize = parts.iter().map(|p| p.face_indices.len()).sum();
+    let mut out = Eliminated {
+        face_offsets: Vec::with_capacity(faces + 1),
+        face_indices: Vec::with_capacity(corners),
+        source_face: Vec::with_capacity(faces),
+        ..Eliminated::default()
+    };
+    out.face_offsets.push(0);
+    for p in parts {
+        let base = out.face_indices.len() as u32;
+        out.face_offsets
+            .extend(p.face_offsets[1..].iter().map(|&o| o + base));
+        out.face_indices.extend_from_slice(&p.face_indices);
+        out.source_face.extend_from_slice(&p.source_face);
+        out.source_corner.extend_from_slice(&p.source_corner);
+        out.collapsed.extend_from_slice(&p.collapsed);
+        out.degenerate += p.degenerate;
+        out.flattened += p.flattened;
+    }
+    out
+}
+
 /// Maps the faces in `range` to clusters and drops those that collapse (no duplicate check).
 fn collapse_faces(
     mesh: &Mesh,
@@ -85,7 +119,9 @@ fn collapse_faces(
 ) -> Eliminated {
     let mut out = Eliminated {
         face_offsets: Vec::with_capacity(range.len() + 1),
-        face_indices: Vec::with_capacity(mesh.face_indices.len()),
+        face_indices: Vec::with_capacity(
+            (mesh.face_offsets[range.end] - mesh.face_offsets[range.start]) as usize,
+        ),
         source_face: Vec::with_capacity(range.len()),
         ..Eliminated::default()
     };
@@ -171,45 +207,58 @@ fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<bool> {
             canonical_polygon(&ring)
         }
     };
-    let mut dup = vec![false; n];
-    for c in 0..clusters {
-        let bucket = &bucketed[start[c] as usize..start[c + 1] as usize];
-        if bucket.len() < 2 {
-            continue;
-        }
-        // Faces were bucketed in increasing order, so the first of equal faces comes first.
-        if bucket.len() <= 32 {
-            let sorted3 = |f: u32| {
-                let fc = face(f as usize);
-                let mut k = [fc[0], fc[1], fc[2]];
-                k.sort_unstable();
-                k
-            };
-            for (i, &a) in bucket.iter().enumerate() {
-                let len = face(a as usize).len();
-                if dup[a as usize] {
-                    continue;
-                }
-                let same = |b: u32| match len {
-                    3 => sorted3(a) == sorted3(b),
-                    _ => canonical(a) == canonical(b),
+    // Buckets are disjoint: blocks of clusters mark their own faces on every core, each
+    // bucket exactly as one thread would.
+    let marked = blocks::map(clusters, |r| {
+        let mut marked: Vec<u32> = Vec::new();
+        let mut local: Vec<bool> = Vec::new();
+        for c in r {
+            let bucket = &bucketed[start[c] as usize..start[c + 1] as usize];
+            if bucket.len() < 2 {
+                continue;
+            }
+            // Faces were bucketed in increasing order, so the first of equal faces comes first.
+            if bucket.len() <= 32 {
+                let sorted3 = |f: u32| {
+                    let fc = face(f as usize);
+                    let mut k = [fc[0], fc[1], fc[2]];
+                    k.sort_unstable();
+                    k
                 };
-                for &b in &bucket[i + 1..] {
-                    if !dup[b as usize] && face(b as usize).len() == len && same(b) {
-                        dup[b as usize] = true;
+                local.clear();
+                local.resize(bucket.len(), false);
+                for (i, &a) in bucket.iter().enumerate() {
+                    let len = face(a as usize).len();
+                    if local[i] {
+                        continue;
+                    }
+                    let same = |b: u32| match len {
+                        3 => sorted3(a) == sorted3(b),
+                        _ => canonical(a) == canonical(b),
+                    };
+                    for (j, &b) in bucket.iter().enumerate().skip(i + 1) {
+                        if !local[j] && face(b as usize).len() == len && same(b) {
+                            local[j] = true;
+                            marked.push(b);
+                        }
+                    }
+                }
+            } else {
+                let mut keyed: Vec<(Vec<u32>, u32)> =
+                    bucket.iter().map(|&f| (canonical(f), f)).collect();
+                keyed.sort_unstable();
+                for w in keyed.windows(2) {
+                    if w[0].0 == w[1].0 {
+                        marked.push(w[1].1);
                     }
                 }
             }
-        } else {
-            let mut keyed: Vec<(Vec<u32>, u32)> =
-                bucket.iter().map(|&f| (canonical(f), f)).collect();
-            keyed.sort_unstable();
-            for w in keyed.windows(2) {
-                if w[0].0 == w[1].0 {
-                    dup[w[1].1 as usize] = true;
-                }
-            }
         }
+        marked
+    });
+    let mut dup = vec![false; n];
+    for f in marked.into_iter().flatten() {
+        dup[f as usize] = true;
     }
     dup
 }

@@ -2,9 +2,12 @@
 //! bounding box cut into a grid; every non-empty cell is one cluster. The cell size is the
 //! largest detail that disappears.
 
+use crate::blocks;
 use crate::cell_table::CellTable;
+use crate::cluster_stats::{BlockStats, Stats};
 use crate::options::GridSize;
 use crate::partition::{Cell, Partition, UNUSED};
+use rayon::prelude::*;
 
 /// Largest number of cells along one axis (keeps cell keys in 21 bits per axis).
 pub const MAX_CELLS_PER_AXIS: u64 = 1 << 20;
@@ -34,9 +37,17 @@ pub(crate) fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
     (dims, side)
 }
 
-/// Assigns every vertex with non-zero weight to the grid cell containing it. With `classes`,
-/// vertices of different classes never share a cluster (boundary preservation). Cluster ids
-/// follow the order in which cells are first met, so the output is deterministic.
+/// Assigns every vertex with non-zero weight to the grid cell containing it, and sums the
+/// cells' statistics in the same pass. With `classes`, vertices of different classes never
+/// share a cluster (boundary preservation). Cluster ids follow the order in which cells are
+/// first met, so the output is deterministic.
+///
+/// Every core bins (see [`crate::blocks`]): each block of vertices finds its cells in a small
+/// table of its own (in cache, where one table for the whole mesh would miss on almost every
+/// vertex), numbering them in the order it meets them and summing their statistics; the
+/// blocks' cells are then numbered in block order — which is the order in which the whole
+/// vertex sequence meets them — and their partial sums added in that order; a last parallel
+/// pass turns each vertex's block-local id into its cluster id.
 pub(crate) fn grid_partition(
     positions: &[[f32; 3]],
     weights: &[f32],
@@ -44,40 +55,94 @@ pub(crate) fn grid_partition(
     bounds: &Cell,
     size: GridSize,
     keep_cells: bool,
-) -> Partition {
+) -> (Partition, Vec<Stats>) {
     let (dims, side) = grid_dims(bounds, size);
     let inv: [f64; 3] = std::array::from_fn(|k| 1.0 / side[k]);
     let lo: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.min[k]));
-    let cell_of = |p: &[f32; 3]| -> [u64; 3] {
-        std::array::from_fn(|k| {
-            let i = ((f64::from(p[k]) - lo[k]) * inv[k]) as i64;
-            i.clamp(0, dims[k] as i64 - 1) as u64
-        })
+    let top: [i64; 3] = std::array::from_fn(|k| dims[k] as i64 - 1);
+    let key_of = |p: &[f32; 3], class: u64| -> u64 {
+        let c: [u64; 3] = std::array::from_fn(|k| {
+            (((f64::from(p[k]) - lo[k]) * inv[k]) as i64).clamp(0, top[k]) as u64
+        });
+        (((c[0] << 21 | c[1]) << 21 | c[2]) << 1) | class
     };
     let mut cluster_of = vec![UNUSED; positions.len()];
-    let mut table = CellTable::with_capacity(positions.len() / 4 + 16);
+    // Pass 1 (parallel): local ids and partial statistics per block.
+    let partials: Vec<BlockStats> = cluster_of
+        .par_chunks_mut(blocks::BLOCK)
+        .enumerate()
+        .map(|(b, out)| {
+            let start = b * blocks::BLOCK;
+            let (mut acc, mut table) = BlockStats::new(out.len());
+            for (i, slot) in out.iter_mut().enumerate() {
+                let v = start + i;
+                let w = weights[v];
+                if w <= 0.0 {
+                    continue;
+                }
+                let class = classes.map_or(0, |c| u64::from(c[v]));
+                let key = key_of(&positions[v], class);
+                *slot = acc.add(&mut table, key, v as u32, &positions[v], w);
+            }
+            acc
+        })
+        .collect();
+    // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order and
+    // the partial sums added in block order.
+    let local_total: usize = partials.iter().map(|b| b.keys.len()).sum();
+    // Sized for every block-local cell (an upper bound on the clusters): it never grows.
+    let mut table = CellTable::with_capacity(local_total + 16);
+    let mut stats: Vec<Stats> = Vec::new();
     let mut cells = Vec::new();
-    for (v, (p, &w)) in positions.iter().zip(weights).enumerate() {
-        if w <= 0.0 {
-            continue;
-        }
-        let c = cell_of(p);
-        let class = classes.map_or(0, |c| u64::from(c[v]));
-        let key = (((c[0] << 21 | c[1]) << 21 | c[2]) << 1) | class;
-        let id = table.id(key);
-        if keep_cells && id as usize == cells.len() {
-            cells.push(Cell {
-                min: std::array::from_fn(|k| (lo[k] + c[k] as f64 * side[k]) as f32),
-                max: std::array::from_fn(|k| (lo[k] + (c[k] + 1) as f64 * side[k]) as f32),
-            });
-        }
-        cluster_of[v] = id;
-    }
-    Partition {
+    let maps: Vec<Vec<u32>> = partials
+        .iter()
+        .map(|b| {
+            b.keys
+                .iter()
+                .zip(&b.stats)
+                .enumerate()
+                .map(|(i, (&key, s))| {
+                    if let Some(&ahead) = b.keys.get(i + 8) {
+                        table.prefetch(ahead);
+                    }
+                    let id = table.id(key);
+                    if id as usize == stats.len() {
+                        stats.push(*s);
+                        if keep_cells {
+                            let c = [key >> 43, (key >> 22) & 0x1f_ffff, (key >> 1) & 0x1f_ffff];
+                            cells.push(Cell {
+                                min: std::array::from_fn(|k| {
+                                    (lo[k] + c[k] as f64 * side[k]) as f32
+                                }),
+                                max: std::array::from_fn(|k| {
+                                    (lo[k] + (c[k] + 1) as f64 * side[k]) as f32
+                                }),
+                            });
+                        }
+                    } else {
+                        stats[id as usize].merge(s);
+                    }
+                    id
+                })
+                .collect()
+        })
+        .collect();
+    drop(partials);
+    // Pass 3 (parallel): block-local ids to cluster ids.
+    cluster_of
+        .par_chunks_mut(blocks::BLOCK)
+        .zip(&maps)
+        .for_each(|(out, map)| {
+            for c in out.iter_mut().filter(|c| **c != UNUSED) {
+                *c = map[*c as usize];
+            }
+        });
+    let partition = Partition {
         cluster_of,
         clusters: table.len() as usize,
         cells,
-    }
+    };
+    (partition, stats)
 }
 
 #[cfg(test)]
@@ -96,7 +161,7 @@ mod tests {
             min: [0.0; 3],
             max: [1.0, 1.0, 0.0],
         };
-        let p = grid_partition(&positions, &w, None, &b, GridSize::CellsPerAxis(5), true);
+        let (p, _) = grid_partition(&positions, &w, None, &b, GridSize::CellsPerAxis(5), true);
         assert_eq!(p.clusters, 25);
         // Points 0 and 1 (x = 0, 0.1) share the first cell; point 2 (x = 0.2) starts the second.
         assert_eq!(p.cluster_of[0], p.cluster_of[1]);
@@ -117,7 +182,7 @@ mod tests {
             min: [0.0; 3],
             max: [1.0; 3],
         };
-        let p = grid_partition(
+        let (p, _) = grid_partition(
             &positions,
             &[1.0, 1.0],
             Some(&[0, 1]),

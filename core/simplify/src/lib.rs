@@ -14,11 +14,17 @@
 //!    splitting driven by a quality or a complexity goal (`adaptive_partition.rs`, sections
 //!    3–5);
 //! 4. a representative per cell — weighted barycentre or heaviest vertex (the paper), or the
-//!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000);
+//!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000), from per-cell
+//!    statistics (`cluster_stats.rs`) that the grid sums while it bins;
 //! 5. elimination of what collapsed (`elimination.rs`);
 //! 6. beyond the paper, for the quality goal: cells split further until every collapsed face's
 //!    image lies on the output (`coverage.rs`), so the tolerance bounds the distance between the
 //!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`);
+//!
+//! The passes over vertices, faces and clusters (weights, bounds, binning with its statistics,
+//! quadrics, representatives, elimination) run on every core of rayon's pool (`--threads` /
+//! `RAYON_NUM_THREADS`) in blocks of a fixed size combined in block order (`blocks.rs`), so the
+//! output is the same bytes whatever the thread count.
 //!
 //! and beyond the paper: boundary/feature preservation ([`features`]), normals, UVs, face
 //! groups and generic attributes carried through (`attributes.rs`), sharp edges and creases
@@ -43,7 +49,9 @@
 mod adaptive_partition;
 mod area_vector;
 mod attributes;
+mod blocks;
 mod cell_table;
+mod cluster_stats;
 mod coverage;
 mod edges;
 mod elimination;
@@ -69,6 +77,7 @@ pub use quadric::Quadric;
 
 use adaptive_partition::{Adaptive, Stop};
 use partition::{UNUSED, weighted_bounds};
+use rayon::prelude::*;
 use std::borrow::Cow;
 use std::sync::atomic::Ordering;
 use tessd_mesh::{Domain, Mesh};
@@ -174,7 +183,7 @@ impl<'a> Prepared<'a> {
         let classes = options
             .preserve_boundaries
             .then(|| features::feature_classes(&work, options.feature_angle_deg));
-        let input_vertices = weights.iter().filter(|&&w| w > 0.0).count() as u64;
+        let input_vertices = weights.par_iter().filter(|&&w| w > 0.0).count() as u64;
         Ok(Prepared {
             work,
             weights,
@@ -213,6 +222,8 @@ impl<'a> Prepared<'a> {
         let stopped = |_: Stop| SimplifyError::Cancelled;
         // The quality goal's refinement, kept for the coverage rounds below.
         let mut refinable = None;
+        // The grid partition sums its cells' statistics while it bins.
+        let mut grid_stats = None;
         let (mut partition, tolerance) = match options.method {
             Method::Grid(grid) => {
                 let ok = match grid {
@@ -224,7 +235,7 @@ impl<'a> Prepared<'a> {
                         "grid size {grid:?} must be positive"
                     )));
                 }
-                let p = grid_partition::grid_partition(
+                let (p, stats) = grid_partition::grid_partition(
                     &work.positions,
                     weights,
                     classes,
@@ -232,6 +243,7 @@ impl<'a> Prepared<'a> {
                     grid,
                     options.keep_partition,
                 );
+                grid_stats = Some(stats);
                 (p, None)
             }
             Method::Quality(length) => {
@@ -276,7 +288,7 @@ impl<'a> Prepared<'a> {
                 let rep = options.representative;
                 let more = |p: &Partition| {
                     // The output loses clusters whose faces all collapsed: count what survives.
-                    let reps = representative::place(work, weights, p, rep, None);
+                    let reps = representative::place(work, weights, p, None, rep, None);
                     let kept = elimination::eliminate(work, &p.cluster_of, &reps, false);
                     target.saturating_sub(used_clusters(&kept, p.clusters).1 as u64)
                 };
@@ -320,8 +332,15 @@ impl<'a> Prepared<'a> {
                     report.refinement_rounds += 1;
                 }
             }
-            let reps =
-                representative::place(work, weights, &partition, options.representative, tolerance);
+            // The grid's statistics hold for its one partition; refinement rounds gather anew.
+            let reps = representative::place(
+                work,
+                weights,
+                &partition,
+                grid_stats.take().as_deref(),
+                options.representative,
+                tolerance,
+            );
             let kept = elimination::eliminate(work, &partition.cluster_of, &reps, attributes);
             // The grid goal is the fast path: it reports no surface bound.
             let check = bounded && (refinable.is_none() || stuck || kept.flattened > 0);
@@ -367,7 +386,7 @@ impl<'a> Prepared<'a> {
         let (degenerate, duplicates) = (kept.degenerate, kept.duplicates);
         let mut face_indices = kept.face_indices;
         face_indices
-            .iter_mut()
+            .par_iter_mut()
             .for_each(|c| *c = new_id[*c as usize]);
         let mut out = Mesh {
             positions: (0..partition.clusters)
@@ -399,13 +418,14 @@ impl<'a> Prepared<'a> {
         if !work.creases.is_empty() {
             out.creases = edges::carry_creases(work, vertex_of, &out);
         }
+        // A maximum: the same whatever order the cores take it in.
         report.max_displacement = work
             .positions
-            .iter()
+            .par_iter()
             .zip(cluster_of)
             .filter(|(_, c)| **c != UNUSED)
             .map(|(p, &c)| dist(*p, reps[c as usize]))
-            .fold(0.0, f64::max);
+            .reduce(|| 0.0, f64::max);
         report.uncovered_faces = gaps.faces.len() as u64;
         report.surface_error = if bounded {
             surface_bound::surface_bound(

@@ -23,19 +23,30 @@ pub struct Partition {
     pub cells: Vec<Cell>,
 }
 
-/// Bounds of the vertices with non-zero weight (the referenced ones), or `None` if there are none.
+/// Bounds of the vertices with non-zero weight (the referenced ones), or `None` if there are
+/// none. Minima and maxima do not depend on the order they are taken in: every core takes them.
 pub(crate) fn weighted_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Option<Cell> {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    let mut any = false;
-    for (p, &w) in positions.iter().zip(weights) {
-        if w > 0.0 {
-            any = true;
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
+    let parts = crate::blocks::map(positions.len(), |r| {
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for (p, &w) in positions[r.clone()].iter().zip(&weights[r]) {
+            if w > 0.0 {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
             }
         }
-    }
-    any.then_some(Cell { min: lo, max: hi })
+        (lo, hi)
+    });
+    let (lo, hi) = parts.into_iter().fold(
+        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+        |(lo, hi), (l, h)| {
+            (
+                std::array::from_fn(|k| lo[k].min(l[k])),
+                std::array::from_fn(|k| hi[k].max(h[k])),
+            )
+        },
+    );
+    (lo[0] <= hi[0]).then_some(Cell { min: lo, max: hi })
 }

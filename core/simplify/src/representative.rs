@@ -3,77 +3,67 @@
 //! the quadric minimiser of the cluster's face planes (Lindstrom 2000).
 
 use crate::area_vector;
+use crate::blocks;
+use crate::cell_table::CellTable;
+use crate::cluster_stats::{self, Stats};
 use crate::options::Representative;
 use crate::partition::{Partition, UNUSED};
 use crate::quadric::Quadric;
+use rayon::prelude::*;
 use tessd_mesh::Mesh;
 
-/// The position of every cluster.
+/// The position of every cluster, from its statistics (`stats`, when the partition gathered
+/// them while it binned; else gathered here).
 ///
 /// With [`Representative::Quadric`] the minimiser is kept only when it stays inside the
 /// cluster's box of vertices (grown by a quarter of its diagonal) and, when `tolerance` is set
 /// (quality goal), only when every vertex of the cluster stays within `tolerance` of it;
 /// otherwise the cluster falls back to its weighted barycentre, which the quality partition
-/// already guarantees.
+/// already guarantees. Every cluster is solved on its own, so the sweep runs on every core.
 pub(crate) fn place(
     mesh: &Mesh,
     weights: &[f32],
     partition: &Partition,
+    stats: Option<&[Stats]>,
     rep: Representative,
     tolerance: Option<f64>,
 ) -> Vec<[f32; 3]> {
     let n = partition.clusters;
     let cluster_of = &partition.cluster_of;
-    let mut sum = vec![[0f64; 4]; n];
-    let mut heaviest = vec![(f32::NEG_INFINITY, u32::MAX); n];
-    for (v, (&c, p)) in cluster_of.iter().zip(&mesh.positions).enumerate() {
-        if c == UNUSED {
-            continue;
+    let gathered;
+    let stats = match stats {
+        Some(s) => s,
+        None => {
+            gathered = cluster_stats::gather(&mesh.positions, weights, cluster_of, n);
+            &gathered[..]
         }
-        let w = f64::from(weights[v]);
-        let s = &mut sum[c as usize];
-        for k in 0..3 {
-            s[k] += w * f64::from(p[k]);
-        }
-        s[3] += w;
-        let h = &mut heaviest[c as usize];
-        if weights[v] > h.0 {
-            *h = (weights[v], v as u32);
-        }
-    }
-    let barycentre = |c: usize| -> [f64; 3] {
-        let s = sum[c];
-        [s[0] / s[3], s[1] / s[3], s[2] / s[3]]
     };
+    debug_assert_eq!(stats.len(), n);
     match rep {
-        Representative::Barycenter => (0..n).map(|c| barycentre(c).map(|x| x as f32)).collect(),
-        Representative::Heaviest => heaviest
-            .iter()
-            .map(|&(_, v)| mesh.positions[v as usize])
+        Representative::Barycenter => stats
+            .par_iter()
+            .map(|s| s.barycentre().map(|x| x as f32))
+            .collect(),
+        Representative::Heaviest => stats
+            .par_iter()
+            .map(|s| mesh.positions[s.heaviest as usize])
             .collect(),
         Representative::Quadric => {
             let quadrics = cluster_quadrics(mesh, cluster_of, n);
-            let mut lo = vec![[f32::INFINITY; 3]; n];
-            let mut hi = vec![[f32::NEG_INFINITY; 3]; n];
-            for (&c, p) in cluster_of.iter().zip(&mesh.positions) {
-                if c != UNUSED {
-                    for k in 0..3 {
-                        lo[c as usize][k] = lo[c as usize][k].min(p[k]);
-                        hi[c as usize][k] = hi[c as usize][k].max(p[k]);
-                    }
-                }
-            }
-            let mut reps: Vec<[f32; 3]> = (0..n)
-                .map(|c| {
-                    let x0 = barycentre(c);
-                    let x = quadrics[c].minimizer(x0);
+            let mut reps: Vec<[f32; 3]> = quadrics
+                .par_iter()
+                .zip(stats)
+                .map(|(q, s)| {
+                    let x0 = s.barycentre();
+                    let x = q.minimizer(x0);
+                    let (lo, hi) = (s.lo, s.hi);
                     let diag = (0..3)
-                        .map(|k| f64::from(hi[c][k] - lo[c][k]).powi(2))
+                        .map(|k| f64::from(hi[k] - lo[k]).powi(2))
                         .sum::<f64>()
                         .sqrt();
                     let margin = 0.25 * diag;
                     let inside = (0..3).all(|k| {
-                        x[k] >= f64::from(lo[c][k]) - margin && x[k] <= f64::from(hi[c][k]) + margin
+                        x[k] >= f64::from(lo[k]) - margin && x[k] <= f64::from(hi[k]) + margin
                     });
                     if inside && x.iter().all(|v| v.is_finite()) {
                         x
@@ -93,7 +83,7 @@ pub(crate) fn place(
                 }
                 for c in 0..n {
                     if worst[c] > tol {
-                        reps[c] = barycentre(c).map(|x| x as f32);
+                        reps[c] = stats[c].barycentre().map(|x| x as f32);
                     }
                 }
             }
@@ -103,24 +93,42 @@ pub(crate) fn place(
 }
 
 /// Sums, per cluster, the area-weighted plane quadrics of the faces touching it (each face once
-/// per distinct cluster among its corners).
+/// per distinct cluster among its corners): Lindstrom 2000, section 3.2, where each triangle's
+/// quadric goes to the cells of its vertices. Fixed blocks of faces sum into partial quadrics of
+/// their own, added into the clusters in block order ([`crate::blocks`]).
 fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
-    let mut q = vec![Quadric::default(); n];
-    let mut seen: Vec<u32> = Vec::with_capacity(8);
-    for face in mesh.faces() {
-        let (normal, area, centroid) = plane_of(mesh, face);
-        if area <= 0.0 {
-            continue;
-        }
-        let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
-        let fq = Quadric::plane(normal, d, area);
-        seen.clear();
-        for &v in face {
-            let c = cluster_of[v as usize];
-            if !seen.contains(&c) {
-                seen.push(c);
-                q[c as usize].add(&fq);
+    let partials = blocks::map(mesh.face_count(), |r| {
+        let mut table = CellTable::with_capacity((r.len() / 4).max(64));
+        let (mut keys, mut q) = (Vec::new(), Vec::<Quadric>::new());
+        let mut seen: Vec<u32> = Vec::with_capacity(8);
+        for f in r {
+            let face = mesh.face(f);
+            let (normal, area, centroid) = plane_of(mesh, face);
+            if area <= 0.0 {
+                continue;
             }
+            let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
+            let fq = Quadric::plane(normal, d, area);
+            seen.clear();
+            for &v in face {
+                let c = cluster_of[v as usize];
+                if !seen.contains(&c) {
+                    seen.push(c);
+                    let id = table.id(u64::from(c)) as usize;
+                    if id == q.len() {
+                        keys.push(c);
+                        q.push(Quadric::default());
+                    }
+                    q[id].add(&fq);
+                }
+            }
+        }
+        (keys, q)
+    });
+    let mut q = vec![Quadric::default(); n];
+    for (keys, partial) in &partials {
+        for (&c, p) in keys.iter().zip(partial) {
+            q[c as usize].add(p);
         }
     }
     q

@@ -2,7 +2,11 @@
 //! vertex saying how much it matters geometrically. The barycentre representative averages with
 //! these weights; the heaviest-vertex representative picks the largest.
 
+use crate::blocks;
 use crate::options::Weighting;
+use rayon::prelude::*;
+use std::sync::atomic::AtomicU32;
+use std::sync::atomic::Ordering::Relaxed;
 use tessd_mesh::Mesh;
 
 /// The weight of every vertex (0 for vertices no face uses).
@@ -14,40 +18,19 @@ use tessd_mesh::Mesh;
 ///   average normal), times the longest incident edge: sharp corners win.
 /// - [`Weighting::Uniform`]: 1 for every referenced vertex.
 pub fn vertex_weights(mesh: &Mesh, weighting: Weighting) -> Vec<f32> {
-    // Squared lengths first (one square root per vertex at the end, not one per edge).
-    let mut longest = vec![0f32; mesh.vertex_count()];
-    let p = &mesh.positions;
-    let mut edge = |a: u32, b: u32| {
-        let (a, b) = (a as usize, b as usize);
-        let l = dist2(p[a], p[b]);
-        longest[a] = longest[a].max(l);
-        longest[b] = longest[b].max(l);
+    // A vertex used only by faces of zero size still counts: its longest edge is raised to a
+    // tiny weight so that barycentres stay defined (curvature raises its product instead).
+    let floor = match weighting {
+        Weighting::Curvature => 0.0,
+        _ => f32::MIN_POSITIVE,
     };
-    for w in mesh.face_offsets.windows(2) {
-        let face = &mesh.face_indices[w[0] as usize..w[1] as usize];
-        if let [a, b, c] = *face {
-            edge(a, b);
-            edge(b, c);
-            edge(c, a);
-        } else {
-            for (i, &a) in face.iter().enumerate() {
-                edge(a, face[(i + 1) % face.len()]);
-            }
-        }
-    }
-    longest.iter_mut().for_each(|l| *l = l.sqrt());
+    let longest = longest_edges(mesh, floor);
     match weighting {
-        Weighting::LongestEdge => {
-            // A vertex used only by faces of zero size still counts: give it a tiny weight so
-            // that barycentres stay defined.
-            mark_referenced(mesh, &mut longest, f32::MIN_POSITIVE);
-            longest
-        }
-        Weighting::Uniform => {
-            let mut w = vec![0f32; mesh.vertex_count()];
-            mark_referenced(mesh, &mut w, 1.0);
-            w
-        }
+        Weighting::LongestEdge => longest,
+        Weighting::Uniform => longest
+            .par_iter()
+            .map(|&l| if l > 0.0 { 1.0 } else { 0.0 })
+            .collect(),
         Weighting::Curvature => {
             let normals: Vec<[f32; 3]> = mesh.faces().map(|f| face_normal(mesh, f)).collect();
             let mut avg = vec![[0f32; 3]; mesh.vertex_count()];
@@ -75,6 +58,58 @@ pub fn vertex_weights(mesh: &Mesh, weighting: Weighting) -> Vec<f32> {
             w
         }
     }
+}
+
+/// The longest edge incident to each vertex, at least `floor` for a vertex some face uses, 0
+/// for the others.
+///
+/// Every core walks its blocks of faces ([`crate::blocks`]) and raises the vertices' maxima
+/// with atomic compare-and-swap: a maximum does not depend on the order it is taken in, so
+/// neither does the result. Squared lengths are kept as their bits plus one (non-negative
+/// floats order as their bits; 0 marks a vertex no face uses) and rooted once per vertex.
+fn longest_edges(mesh: &Mesh, floor: f32) -> Vec<f32> {
+    let longest: Vec<AtomicU32> = (0..mesh.vertex_count())
+        .map(|_| AtomicU32::new(0))
+        .collect();
+    let p = &mesh.positions;
+    let single = blocks::single_thread();
+    let raise = |v: u32, bits: u32| {
+        let slot = &longest[v as usize];
+        let old = slot.load(Relaxed);
+        if bits > old {
+            if single {
+                slot.store(bits, Relaxed);
+            } else {
+                slot.fetch_max(bits, Relaxed);
+            }
+        }
+    };
+    let edge = |a: u32, b: u32| {
+        let bits = dist2(p[a as usize], p[b as usize]).to_bits() + 1;
+        raise(a, bits);
+        raise(b, bits);
+    };
+    blocks::ranges(mesh.face_count()).for_each(|r| {
+        for f in r {
+            let face = mesh.face(f);
+            if let [a, b, c] = *face {
+                edge(a, b);
+                edge(b, c);
+                edge(c, a);
+            } else {
+                for (i, &a) in face.iter().enumerate() {
+                    edge(a, face[(i + 1) % face.len()]);
+                }
+            }
+        }
+    });
+    longest
+        .into_par_iter()
+        .map(|b| match b.into_inner() {
+            0 => 0.0,
+            b => f32::from_bits(b - 1).sqrt().max(floor),
+        })
+        .collect()
 }
 
 /// Raises every referenced vertex's weight to at least `floor`.

@@ -17,6 +17,11 @@ use tessd_ipc::server::{Server, ServerOptions};
 #[derive(Parser)]
 #[command(name = "tessd", version)]
 struct Cli {
+    /// Worker threads for the parallel passes (simplification, ...), before or after the
+    /// command; default: RAYON_NUM_THREADS, else one per core. Simplification gives the same
+    /// bytes whatever it is.
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<usize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -332,7 +337,7 @@ enum JobAction {
 
 fn main() {
     let cli = Cli::parse();
-    let code = match run(cli) {
+    let code = match set_threads(cli.threads).and_then(|()| run(cli)) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("tessd: {e:#}");
@@ -346,6 +351,21 @@ fn main() {
         }
     };
     std::process::exit(code);
+}
+
+/// Builds the global rayon pool with `threads` workers (`--threads`); without it rayon's default
+/// applies (RAYON_NUM_THREADS, else one per core).
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    let Some(n) = threads else {
+        return Ok(());
+    };
+    if n == 0 {
+        bail!("--threads must be at least 1");
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .context("setting up the thread pool")
 }
 
 fn run(cli: Cli) -> Result<()> {

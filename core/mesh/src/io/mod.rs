@@ -188,7 +188,12 @@ fn read_source<R: Read>(
 ) -> Result<Mesh, MeshError> {
     let mesh = match format {
         Format::Obj => obj::read(&mut src, options)?,
-        Format::Ply => ply::read(&mut src, options)?,
+        Format::Ply => {
+            // The PLY reader range-checks every face as it decodes it.
+            let mesh = ply::read(&mut src, options)?;
+            mesh.validate_read()?;
+            return Ok(mesh);
+        }
         Format::Stl => stl::read(&mut src, options)?,
         Format::Off => off::read(&mut src, options)?,
     };

@@ -420,16 +420,39 @@ fn read_vertices<R: Read>(
             }
             offset += t.size();
         }
-        for i in 0..element.count {
+        // Whole records at a time out of each buffer fill; `x y z` only, little-endian float
+        // (what most writers produce), is a straight copy of each record.
+        let xyz_f32 = !be
+            && size == 12
+            && fields
+                == [
+                    (0, Scalar::F32, 0),
+                    (4, Scalar::F32, 1),
+                    (8, Scalar::F32, 2),
+                ];
+        let mut i = 0;
+        while i < element.count {
             let b = src.fill(size)?;
             if b.len() < size {
                 return Err(src.error_at(0, format!("{name} {i}: file ends")));
             }
-            for &(off, t, k) in &fields {
-                s[k] = t.decode(&b[off..], be);
+            let k = (b.len() / size).min(usize::try_from(element.count - i).unwrap_or(usize::MAX));
+            let records = &b[..k * size];
+            if xyz_f32 {
+                mesh.positions.extend(records.chunks_exact(12).map(|r| {
+                    let f = |o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]);
+                    [f(0), f(4), f(8)]
+                }));
+            } else {
+                for r in records.chunks_exact(size) {
+                    for &(off, t, k) in &fields {
+                        s[k] = t.decode(&r[off..], be);
+                    }
+                    push_vertex(mesh, attrs, layout, &s);
+                }
             }
-            src.consume(size);
-            push_vertex(mesh, attrs, layout, &s);
+            src.consume(k * size);
+            i += k as u64;
         }
         return Ok(());
     }
@@ -509,8 +532,55 @@ fn read_faces<R: Read>(
     if let (Some(signed), Decoder::Binary { src, .. }) = (fast, &mut *dec) {
         // The common binary triangle file: `list uchar int|uint`, little-endian.
         let nv = u32::try_from(ctx.vertices).unwrap_or(u32::MAX);
-        for i in 0..element.count {
+        // Indices at or above `bound` are out of range (negative ones too, when signed).
+        let bound = if signed { nv.min(1 << 31) } else { nv };
+        let out_of_range = |v: u32| {
+            let shown = if signed {
+                i64::from(v as i32)
+            } else {
+                i64::from(v)
+            };
+            ctx.out_of_range(shown)
+        };
+        let mut i = 0;
+        while i < element.count {
             let b = src.fill(1 + 255 * 4)?;
+            // Triangles in bulk: the run of whole 13-byte records starting with 3 in the buffer,
+            // range-checked by a max-reduction (the record at fault is found only on failure).
+            let room = (ctx.limit.saturating_sub(mesh.face_indices.len() as u64) / 3)
+                .min(element.count - i);
+            let k_max = (b.len() / 13).min(usize::try_from(room).unwrap_or(usize::MAX));
+            let k = b[..k_max * 13]
+                .chunks_exact(13)
+                .position(|r| r[0] != 3)
+                .unwrap_or(k_max);
+            if k > 0 {
+                let base = mesh.face_indices.len();
+                let mut top = 0u32;
+                mesh.face_indices
+                    .extend(b[..k * 13].chunks_exact(13).flat_map(|r| {
+                        let v = |o: usize| u32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]);
+                        let t = [v(1), v(5), v(9)];
+                        top = top.max(t[0]).max(t[1]).max(t[2]);
+                        t
+                    }));
+                if top >= bound {
+                    let c = mesh.face_indices[base..]
+                        .iter()
+                        .position(|&v| v >= bound)
+                        .expect("an index is at or above the bound");
+                    let v = mesh.face_indices[base + c];
+                    let f = i + (c / 3) as u64;
+                    return Err(src.error_at(0, format!("{name} {f}: {}", out_of_range(v))));
+                }
+                let end = mesh.face_offsets.last().copied().unwrap_or(0);
+                mesh.face_offsets
+                    .extend((1..=k as u32).map(|j| end + 3 * j));
+                src.consume(k * 13);
+                i += k as u64;
+                continue;
+            }
+            // Any other face (or a triangle across the buffer's end): one record.
             let Some(&n) = b.first() else {
                 return Err(src.error_at(0, format!("{name} {i}: file ends")));
             };
@@ -523,18 +593,14 @@ fn read_faces<R: Read>(
             }
             for c in b[1..need].chunks_exact(4) {
                 let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-                if v >= nv || (signed && v > i32::MAX as u32) {
-                    let shown = if signed {
-                        i64::from(v as i32)
-                    } else {
-                        i64::from(v)
-                    };
-                    return Err(src.error_at(0, format!("{name} {i}: {}", ctx.out_of_range(shown))));
+                if v >= bound {
+                    return Err(src.error_at(0, format!("{name} {i}: {}", out_of_range(v))));
                 }
                 mesh.face_indices.push(v);
             }
             src.consume(need);
             mesh.face_offsets.push(mesh.face_indices.len() as u32);
+            i += 1;
         }
         return Ok(());
     }

@@ -105,7 +105,7 @@ fn per_level_format(request: &Request) -> Result<String, OpError> {
 /// `invalid_request` for missing or invalid settings (naming the parameter and value),
 /// `unsupported` for an output that is not `.usda` or an unknown per-level format,
 /// `invalid_mesh`, `io`, `cancelled`.
-pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
     let kind = match request.str_param("method")? {
         Some(m) => MethodKind::parse(m)?,
@@ -170,7 +170,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         None => stem(input_path.as_deref(), "mesh"),
     };
 
-    let mesh = input_mesh(&request, ctx)?;
+    let mesh = input_mesh(&mut request, ctx)?;
     ctx.progress(0.05, "simplify", "")?;
     let mut progress = |f: f64, stage: &str| ctx.progress(0.05 + 0.8 * f, stage, "").is_ok();
     let chain = tessd_simplify::lod::lod_chain(&mesh, &methods, &options, &mut progress)

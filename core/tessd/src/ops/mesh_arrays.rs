@@ -5,7 +5,7 @@
 
 use super::common::usd_error;
 use std::path::{Path, PathBuf};
-use tessd_ipc::arrays::{Arrays, Element, OwnedArray, TypedView};
+use tessd_ipc::arrays::{Arrays, DType, Element, OwnedArray, TakenArray, TypedView};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::Request;
@@ -29,14 +29,14 @@ fn invalid(message: String) -> OpError {
     OpError::new(ErrorCode::InvalidMesh, message)
 }
 
-/// The request's input mesh: read from `params.input` when given, else built from the arrays.
-/// Either way it is validated before it is returned; reading a file stops early when the job
-/// is cancelled.
+/// The request's input mesh: read from `params.input` when given, else built from the arrays,
+/// which are moved out of the request into the mesh (no copy). Either way it is validated
+/// before it is returned; reading a file stops early when the job is cancelled.
 ///
 /// # Errors
 /// `invalid_request` when there is neither; `invalid_mesh`, `io`, `too_large`, `unsupported`
 /// as the input deserves, naming the element at fault.
-pub fn input_mesh(request: &Request, ctx: &JobContext) -> Result<Mesh, OpError> {
+pub fn input_mesh(request: &mut Request, ctx: &JobContext) -> Result<Mesh, OpError> {
     match request.str_param("input")? {
         Some(path) => {
             let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
@@ -48,7 +48,7 @@ pub fn input_mesh(request: &Request, ctx: &JobContext) -> Result<Mesh, OpError> 
                 Some(v) => serde_json::from_value::<Vec<String>>(v.clone())
                     .map_err(|_| OpError::request("`group_names` must be a list of strings"))?,
             };
-            let mesh = mesh_from_arrays(&request.arrays, group_names)?;
+            let mesh = mesh_from_arrays(&mut request.arrays, group_names)?;
             mesh.validate().map_err(mesh_error)?;
             Ok(mesh)
         }
@@ -94,67 +94,103 @@ fn view<'a, T: Element>(
     arrays.get::<T>(name).transpose().map_err(invalid)
 }
 
-fn rows<const N: usize>(name: &str, data: &[f32], shape: &[u64]) -> Result<Vec<[f32; N]>, OpError> {
+/// Array `name` taken out of the request (moved, not copied), if it is there.
+fn take<T: Element>(arrays: &mut Arrays, name: &str) -> Result<Option<TakenArray<T>>, OpError> {
+    arrays.take::<T>(name).transpose().map_err(invalid)
+}
+
+fn check_rows_shape<const N: usize>(name: &str, shape: &[u64]) -> Result<(), OpError> {
     if shape.len() != 2 || shape[1] != N as u64 {
         return Err(invalid(format!(
             "array {name:?} must have shape [n, {N}], got {shape:?}"
         )));
     }
-    // A straight copy: [f32; N] rows have the layout of N consecutive f32 (shape checked above).
-    Ok(bytemuck::cast_slice::<f32, [f32; N]>(data).to_vec())
+    Ok(())
 }
 
-/// Builds a mesh from the protocol's arrays (not yet validated).
+/// `data` as rows of `N` (shape checked), moved when it can be (a `Vec<f32>` of exactly
+/// `rows × N` elements, as received), copied once otherwise.
+fn into_rows<const N: usize>(
+    name: &str,
+    data: Vec<f32>,
+    shape: &[u64],
+) -> Result<Vec<[f32; N]>, OpError> {
+    check_rows_shape::<N>(name, shape)?;
+    Ok(bytemuck::allocation::try_cast_vec::<f32, [f32; N]>(data)
+        .unwrap_or_else(|(_, data)| bytemuck::cast_slice(&data).to_vec()))
+}
+
+/// The `positions` array as f32 rows: f32 moved out of the request, f64 converted once.
+fn take_positions(arrays: &mut Arrays) -> Result<Vec<[f32; 3]>, OpError> {
+    let Some(d) = arrays.desc("positions") else {
+        return Err(invalid("the `positions` array is missing".into()));
+    };
+    match d.dtype {
+        DType::F32 => {
+            let (p, shape) = take::<f32>(arrays, "positions")?.expect("the array exists");
+            into_rows::<3>("positions", p, &shape)
+        }
+        DType::F64 => {
+            let (p, shape) = view::<f64>(arrays, "positions")?.expect("the array exists");
+            check_rows_shape::<3>("positions", shape)?;
+            Ok(p.chunks_exact(3)
+                .map(|r| [r[0] as f32, r[1] as f32, r[2] as f32])
+                .collect())
+        }
+        other => Err(invalid(format!(
+            "array \"positions\" has dtype {}; expected f32 or f64",
+            other.name()
+        ))),
+    }
+}
+
+/// Face offsets from per-face sizes in one pass (a prefix sum; the checks are folded into it
+/// and only a failure walks the sizes again to name the face).
+fn offsets_from_sizes(sizes: &[u32], corners: usize) -> Result<Vec<u32>, OpError> {
+    let mut offsets = Vec::with_capacity(sizes.len() + 1);
+    offsets.push(0u32);
+    let (mut total, mut smallest) = (0u64, u32::MAX);
+    offsets.extend(sizes.iter().map(|&s| {
+        smallest = smallest.min(s);
+        total += u64::from(s);
+        total as u32
+    }));
+    if smallest >= 3 && total == corners as u64 && corners <= u32::MAX as usize {
+        return Ok(offsets);
+    }
+    let mut total = 0u64;
+    for (f, &s) in sizes.iter().enumerate() {
+        if s < 3 {
+            return Err(invalid(format!(
+                "face {f} has {s} vertices; a face needs at least 3"
+            )));
+        }
+        total += u64::from(s);
+        if total > corners as u64 {
+            return Err(invalid(format!(
+                "face_sizes add up to more than the {corners} face_indices (at face {f})"
+            )));
+        }
+    }
+    Err(invalid(if total == corners as u64 {
+        format!("{corners} face_indices are more than a mesh can index")
+    } else {
+        format!("face_sizes add up to {total} but there are {corners} face_indices")
+    }))
+}
+
+/// Builds a mesh from the protocol's arrays (not yet validated), moving the large ones out of
+/// `arrays` (positions, face indices, face-varying values and indices, face groups) instead of
+/// copying them.
 ///
 /// # Errors
 /// `invalid_mesh` naming the array at fault.
-pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mesh, OpError> {
-    let positions = match (view::<f32>(arrays, "positions"), arrays.desc("positions")) {
-        (Ok(Some((p, shape))), _) => rows::<3>("positions", p, shape)?,
-        (Err(_), Some(d)) if d.dtype == tessd_ipc::arrays::DType::F64 => {
-            let (p, shape) = view::<f64>(arrays, "positions")?.expect("the array exists");
-            let p32: Vec<f32> = p.iter().map(|&x| x as f32).collect();
-            rows::<3>("positions", &p32, shape)?
-        }
-        (Err(_), Some(d)) => {
-            return Err(invalid(format!(
-                "array \"positions\" has dtype {}; expected f32 or f64",
-                d.dtype.name()
-            )));
-        }
-        (Err(e), None) => return Err(e),
-        (Ok(None), _) => return Err(invalid("the `positions` array is missing".into())),
-    };
-    let (indices, ishape) = view::<u32>(arrays, "face_indices")?
+pub fn mesh_from_arrays(arrays: &mut Arrays, group_names: Vec<String>) -> Result<Mesh, OpError> {
+    let positions = take_positions(arrays)?;
+    let (indices, ishape) = take::<u32>(arrays, "face_indices")?
         .ok_or_else(|| invalid("the `face_indices` array is missing".into()))?;
     let face_offsets: Vec<u32> = match (ishape.len(), view::<u32>(arrays, "face_sizes")?) {
-        (1, Some((sizes, _))) => {
-            let mut offsets = Vec::with_capacity(sizes.len() + 1);
-            offsets.push(0u32);
-            let mut total = 0u64;
-            for (f, &s) in sizes.iter().enumerate() {
-                if s < 3 {
-                    return Err(invalid(format!(
-                        "face {f} has {s} vertices; a face needs at least 3"
-                    )));
-                }
-                total += u64::from(s);
-                if total > indices.len() as u64 {
-                    return Err(invalid(format!(
-                        "face_sizes add up to more than the {} face_indices (at face {f})",
-                        indices.len()
-                    )));
-                }
-                offsets.push(total as u32);
-            }
-            if total != indices.len() as u64 {
-                return Err(invalid(format!(
-                    "face_sizes add up to {total} but there are {} face_indices",
-                    indices.len()
-                )));
-            }
-            offsets
-        }
+        (1, Some((sizes, _))) => offsets_from_sizes(sizes, indices.len())?,
         (1, None) => {
             return Err(invalid(
                 "1-D `face_indices` needs a `face_sizes` array".into(),
@@ -206,8 +242,8 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
                 .collect()
         }
     };
-    let face_groups = view::<u32>(arrays, "face_groups")?
-        .map(|(g, _)| g.to_vec())
+    let face_groups = take::<u32>(arrays, "face_groups")?
+        .map(|(g, _)| g)
         .unwrap_or_default();
     // Groups without (enough) names get `group<i>`, so hosts may send bare group indices.
     let mut group_names = group_names;
@@ -237,7 +273,7 @@ pub fn mesh_from_arrays(arrays: &Arrays, group_names: Vec<String>) -> Result<Mes
     Ok(Mesh {
         positions,
         face_offsets,
-        face_indices: indices.to_vec(),
+        face_indices: indices,
         normals,
         uvs,
         creases,
@@ -292,17 +328,17 @@ fn attributes_from_arrays(
 }
 
 fn face_varying<const N: usize>(
-    arrays: &Arrays,
+    arrays: &mut Arrays,
     values: &str,
     indices: &str,
     corners: usize,
 ) -> Result<Option<FaceVarying<[f32; N]>>, OpError> {
-    let Some((data, shape)) = view::<f32>(arrays, values)? else {
+    let Some((data, shape)) = take::<f32>(arrays, values)? else {
         return Ok(None);
     };
-    let values_rows = rows::<N>(values, data, shape)?;
-    let idx = match view::<u32>(arrays, indices)? {
-        Some((i, _)) => i.to_vec(),
+    let values_rows = into_rows::<N>(values, data, &shape)?;
+    let idx = match take::<u32>(arrays, indices)? {
+        Some((i, _)) => i,
         None if values_rows.len() == corners => (0..corners as u32).collect(),
         None => {
             return Err(invalid(format!(

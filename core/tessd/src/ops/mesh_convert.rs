@@ -15,14 +15,14 @@ use tessd_ipc::registry::{Request, Response};
 /// # Errors
 /// As the input deserves; `unsupported` for an unknown output extension; `io` when writing
 /// fails (no partial file remains).
-pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
     let output = output_path(&request)?;
     if let Some(path) = output.as_deref() {
         // Refuse an unknown format before reading a large input.
         check_mesh_output(path)?;
     }
-    let mesh = input_mesh(&request, ctx)?;
+    let mesh = input_mesh(&mut request, ctx)?;
     ctx.progress(0.5, "write", "")?;
     let counts = json!({"vertices": mesh.vertex_count(), "faces": mesh.face_count()});
     match output {

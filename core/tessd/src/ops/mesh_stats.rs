@@ -11,9 +11,9 @@ use tessd_mesh::stats::MeshStats;
 ///
 /// # Errors
 /// As [`input_mesh`], or `cancelled`.
-pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let mesh = input_mesh(&request, ctx)?;
+    let mesh = input_mesh(&mut request, ctx)?;
     ctx.progress(0.5, "topology", "")?;
     let stats = tessd_mesh::stats::compute(&mesh);
     ctx.progress(1.0, "done", "")?;

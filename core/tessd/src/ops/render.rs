@@ -299,7 +299,7 @@ enum Part {
 /// (a LOD chain, a cage beside its subdivided surface); one USD stage one panel per variant of
 /// its first variant set that holds meshes (the LOD chain `tessd lod` writes), else one; any
 /// other file or the mesh arrays one panel.
-fn mesh_panels(request: &Request, ctx: &JobContext) -> Result<Vec<(String, Mesh)>, OpError> {
+fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, Mesh)>, OpError> {
     let label = |path: &Path| stem(Some(path), "mesh");
     match request.params.get("input") {
         Some(Value::Array(items)) => {
@@ -510,7 +510,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
                  rasterised as it is",
             ));
         }
-        let meshes = mesh_panels(&request, ctx)?;
+        let meshes = mesh_panels(&mut request, ctx)?;
         ctx.checkpoint()?;
         // One camera for every panel, fitted to them all: the panels compare at one scale.
         let mut scenes = Vec::with_capacity(meshes.len());

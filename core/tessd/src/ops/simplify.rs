@@ -316,7 +316,7 @@ pub fn remove_all(files: &[std::path::PathBuf]) {
 /// `invalid_request` for missing or invalid settings (naming the parameter and value),
 /// `invalid_mesh` for a mesh that breaks an invariant or has no faces, `unsupported` for an
 /// output format tessd cannot write, `io`, `cancelled`.
-pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
     let (kind, method, what) = parse_method(&request)?;
     let partition_path = request
@@ -335,7 +335,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
         None => stem(output.as_deref(), "mesh"),
     };
     stage_options(&request)?;
-    let mesh = input_mesh(&request, ctx)?;
+    let mesh = input_mesh(&mut request, ctx)?;
     ctx.progress(0.05, "simplify", "")?;
     let mut progress = |f: f64, stage: &str| ctx.progress(0.05 + 0.85 * f, stage, "").is_ok();
     let simplified =

@@ -98,7 +98,7 @@ enum UsdOutput {
 /// Bad options (`invalid_request`), bad cages or frames (`invalid_mesh`, naming the element),
 /// outputs estimated too large (`too_large`, before allocating), `unsupported` for a cage in
 /// USD with a scheme USD cannot name, `io` when writing fails.
-pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
     let options = parse_options(&request)?;
     let gpu = bool_param(&request, "gpu")?.unwrap_or(false);
@@ -115,7 +115,7 @@ pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             )));
         }
     };
-    let cage = input_mesh(&request, ctx)?;
+    let cage = input_mesh(&mut request, ctx)?;
     let frames = read_frames(&request, cage.vertex_count())?;
     if frames.is_some() && output.as_deref().is_some_and(|p| !is_usda(p)) {
         return Err(OpError::request(

@@ -1,0 +1,46 @@
+//! Deterministic data parallelism: every parallel pass of the pipeline cuts its items
+//! (vertices, faces, clusters) into blocks of a fixed size that does not depend on the thread
+//! count, computes one partial result per block (in parallel, on rayon's pool) and combines
+//! the partials in block order. Floating-point sums are then always added in the same order,
+//! cluster ids are given in the same (first-met) order and faces keep their order, so the
+//! output is the same bytes on 1, 2 or N threads.
+
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// Items per block: large enough that a block's work dwarfs rayon's scheduling, small enough
+/// that a block's scratch (a local cell table, partial sums) stays in cache.
+pub(crate) const BLOCK: usize = 1 << 14;
+
+/// The ranges of the blocks of `0..n`.
+pub(crate) fn ranges(n: usize) -> impl IndexedParallelIterator<Item = Range<usize>> {
+    (0..n.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(move |b| b * BLOCK..((b + 1) * BLOCK).min(n))
+}
+
+/// `f` of every block of `0..n`, in block order.
+pub(crate) fn map<T: Send>(n: usize, f: impl Fn(Range<usize>) -> T + Sync + Send) -> Vec<T> {
+    ranges(n).map(f).collect()
+}
+
+/// Whether the pool running the caller has a single thread (passes may then skip the
+/// synchronisation a shared result needs; their results must not differ).
+pub(crate) fn single_thread() -> bool {
+    rayon::current_num_threads() == 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_cover_in_order() {
+        let r = map(2 * BLOCK + 5, |r| (r.start, r.end));
+        assert_eq!(
+            r,
+            vec![(0, BLOCK), (BLOCK, 2 * BLOCK), (2 * BLOCK, 2 * BLOCK + 5)]
+        );
+        assert!(map(0, |r| r.len()).is_empty());
+    }
+}
