@@ -2,25 +2,36 @@
 # Simplification benchmark (side by side, one run): tessd grid / quality / complexity
 # (barycentre and quadric representatives) vs meshoptimizer simplifySloppy / simplify (the
 # `meshopt` crate) vs MeshLab vertex clustering (pymeshlab), on the shared meshes and generated
-# bumpy tori up to 10 M triangles, at 50 / 10 / 1 % of the input vertices.
+# bumpy tori up to 10 M triangles, at 50 / 10 / 1 % of the input vertices, plus a 50 M-triangle
+# torus at 10 %. The tessd methods are also timed with 2 threads (same parameter, output checked
+# identical) and, on the tori, end to end through the daemon (`elapsed_ms`, mesh sent as arrays).
 #
 #   bash bench/run_simplify.sh [extra `bench-simplify run` options, e.g. --sizes 0.1,1 --scaling-sizes ""]
+#   SIMPLIFY_BENCH_50M=0 bash bench/run_simplify.sh      # without the 50 M torus
+#   bash bench/run_simplify.sh --no-shared --sizes 0.1 --scaling-sizes "" --fractions 0.1   # smoke
 #
-# Writes bench/results/simplify_raw.jsonl (one line per mesh, method, target),
-# simplify_inputs.json (the inputs), simplify.md, simplify_summary.json and the plots
-# simplify_error_vs_size.png, simplify_time_vs_input.png. Outputs and generated inputs go to
-# $BENCH_WORK (default /tmp/tessd-bench-simplify). Needs the bench venv (.venv-bench, see
-# bench/requirements-bench.txt) for MeshLab and matplotlib. About 20 min on 2 cores.
+# Writes bench/results/simplify_raw.jsonl (one line per mesh, method, target; `"record": "e2e"`
+# lines for the daemon), simplify_inputs.json (the inputs), simplify.md, simplify_summary.json
+# and the plots simplify_error_vs_size.png, simplify_time_vs_input.png (another folder with
+# BENCH_RESULTS=DIR). Outputs and generated inputs go to $BENCH_WORK (default
+# /tmp/tessd-bench-simplify; the 50 M torus needs ~1.3 GB there and ~10 GB of RAM). Needs the
+# bench venv (.venv-bench, see bench/requirements-bench.txt) for MeshLab, numpy and matplotlib.
+# About 30 min on 2 cores (extrapolated; about 20 without the 50 M torus).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY="${BENCH_PYTHON:-$PWD/.venv-bench/bin/python}"
 WORK="${BENCH_WORK:-/tmp/tessd-bench-simplify}"
+RESULTS="${BENCH_RESULTS:-bench/results}"
+export SIMPLIFY_BENCH_50M="${SIMPLIFY_BENCH_50M:-1}"
 start=$(date +%s)
-cargo build --release -q -p tessd-bench-simplify
-mkdir -p bench/results "$WORK"
-rm -f bench/results/simplify_raw.jsonl
+cargo build --release -q -p tessd -p tessd-bench-simplify
+mkdir -p "$RESULTS" "$WORK"
+rm -f "$RESULTS/simplify_raw.jsonl"
 rm -rf "$WORK/outputs"
-target/release/bench-simplify run --work "$WORK" "$@"
-"$PY" bench/simplify/meshlab.py run --harness target/release/bench-simplify --work "$WORK"
-"$PY" bench/simplify/report.py --wall-s "$(( $(date +%s) - start ))"
+FILES=(--jsonl "$RESULTS/simplify_raw.jsonl" --manifest "$RESULTS/simplify_inputs.json")
+target/release/bench-simplify run --work "$WORK" "${FILES[@]}" "$@"
+"$PY" bench/simplify/meshlab.py run --harness target/release/bench-simplify --work "$WORK" "${FILES[@]}"
+"$PY" bench/simplify/e2e_daemon.py run --harness target/release/bench-simplify \
+    --tessd target/release/tessd --work "$WORK" "${FILES[@]}"
+"$PY" bench/simplify/report.py --wall-s "$(( $(date +%s) - start ))" "${FILES[@]}" --out "$RESULTS"
 echo "simplify benchmark: $(( $(date +%s) - start )) s"

@@ -4,7 +4,7 @@
     meshlab.py run --manifest bench/results/simplify_inputs.json \
         --jsonl bench/results/simplify_raw.jsonl --harness target/release/bench-simplify \
         [--work /tmp/tessd-bench-simplify] [--repeat 3] [--budget 12] [--meshes a,b]
-        [--max-output-vertices 1.5e6]
+        [--max-output-vertices 1.5e6] [--max-input-triangles 2e7]
     meshlab.py one INPUT THRESHOLD OUT.ply   (child: one timed run, prints JSON)
 
 For every input of the manifest written by `bench-simplify run` and every target vertex count
@@ -16,6 +16,8 @@ input with `bench-simplify compare` (the same tessd-compare options as every oth
 One JSON line per (mesh, target) is appended to the jsonl. Targets above
 `--max-output-vertices` are skipped (and say so): MeshLab's clustering is superlinear in its
 output size (measured: 36 s at 0.5 M and 362 s at 2.1 M output vertices from the 10 M torus).
+Inputs above `--max-input-triangles` (the 50 M torus) are skipped too: its time grows as about
+size^1.56 (0.1 M → 10 M tori at 10 %), ~200 s a call at 50 M, ~10 min with the search.
 
 Run with /work/main/.venv-bench/bin/python.
 """
@@ -189,6 +191,23 @@ def run(args):
             if only and name not in only:
                 continue
             t_mesh = time.perf_counter()
+            if entry["input_triangles"] > args.max_input_triangles:
+                for t in entry["targets"]:
+                    out_f.write(json.dumps({
+                        "mesh": name, "generated": entry["generated"], "method": METHOD, "family": "meshlab",
+                        "fraction": t["fraction"], "target_vertices": t["target"],
+                        "input_vertices": entry["input_vertices"], "input_triangles": entry["input_triangles"],
+                        "input_faces": entry["input_faces"], "input_bytes": entry["input_bytes"],
+                        "param_name": "threshold",
+                        "skipped": (f"input of {entry['input_triangles'] / 1e6:.3g} M triangles is above "
+                                    f"{args.max_input_triangles / 1e6:g} M: MeshLab's clustering grows as about "
+                                    "size^1.56 (16.6 s a call on the 10 M torus at 10 %), "
+                                    f"~{16.6 * (entry['input_triangles'] / 1e7) ** 1.56:.0f} s a call here, "
+                                    "beyond the run's budget"),
+                    }) + "\n")
+                out_f.flush()
+                print(f"== {name}: skipped (MeshLab, {entry['input_triangles']} triangles)", file=sys.stderr)
+                continue
             ms = pm.MeshSet()
             try:
                 ms.load_new_mesh(path)
@@ -307,6 +326,7 @@ def main():
     ap.add_argument("--budget", type=float, default=12.0)
     ap.add_argument("--meshes", default=None)
     ap.add_argument("--max-output-vertices", type=float, default=1.5e6)
+    ap.add_argument("--max-input-triangles", type=float, default=2e7)
     run(ap.parse_args())
 
 

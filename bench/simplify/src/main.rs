@@ -6,9 +6,12 @@
 //!                    [--sizes 0.1,1,10] [--scaling-sizes 0.3,3] [--scaling-fraction 0.1]
 //!                    [--fractions 0.5,0.1,0.01] [--methods a,b,..] [--meshes a,b,..]
 //!                    [--no-shared] [--repeat 3] [--budget 12] [--threads 1]
+//!                    [--scaling-threads 2] [--scaling-threads-min-triangles 0]
+//!                    [--big] [--big-sizes 50] [--big-fractions 0.1]
 //! bench-simplify one METHOD INPUT PARAM --out OUT.ply [--repeat 3] [--budget 12]
 //! bench-simplify compare OUTPUT INPUT --samples N
 //! bench-simplify gen TRIANGLES OUT.ply
+//! bench-simplify arrays INPUT DIR
 //! ```
 //!
 //! `run` is the harness: for every input (the shared meshes of `$TESSD_SHARED_DATA/mesh`
@@ -21,6 +24,19 @@
 //! `compare` prints the distance of one output to its input as JSON (used by `meshlab.py`, so
 //! every error comes from the same tool and options). Timed children run with
 //! `RAYON_NUM_THREADS=--threads` (1 by default: throughput per core, like meshoptimizer's).
+//!
+//! Thread scaling: every tessd method (inputs of at least `--scaling-threads-min-triangles`) is
+//! timed again in a child with each of `--scaling-threads` (`RAYON_NUM_THREADS`, default 2;
+//! `""` for none) with the parameter found for one thread; the record's `scaling` list holds
+//! those times and whether the output is byte-identical to the one-thread output.
+//!
+//! Big inputs: with `--big` (or `SIMPLIFY_BENCH_50M=1` in the environment) the tori of
+//! `--big-sizes` (50 M triangles) are added, at `--big-fractions` only (10 %: one target keeps
+//! the run short; runs over the budget are timed once, as everywhere).
+//!
+//! `arrays` writes a mesh as fan-triangulated raw arrays, `DIR/positions.f32` ([V, 3] f32) and
+//! `DIR/faces.u32` ([T, 3] u32), and prints their shapes as JSON (for `e2e_daemon.py`, which
+//! sends them to the daemon).
 
 mod generate;
 mod mem;
@@ -45,6 +61,7 @@ fn main() -> ExitCode {
         Some("one") => one(&args[1..]),
         Some("compare") => compare_cmd(&args[1..]),
         Some("gen") => gen_cmd(&args[1..]),
+        Some("arrays") => arrays_cmd(&args[1..]),
         _ => Err(USAGE.to_string()),
     };
     match result {
@@ -57,7 +74,11 @@ fn main() -> ExitCode {
 }
 
 const USAGE: &str = "usage: bench-simplify run [options] | one METHOD INPUT PARAM --out OUT.ply \
-                     [--repeat N] [--budget S] | compare OUTPUT INPUT --samples N | gen TRIANGLES OUT.ply";
+                     [--repeat N] [--budget S] | compare OUTPUT INPUT --samples N | gen TRIANGLES OUT.ply | \
+                     arrays INPUT DIR";
+
+/// Options that take no value.
+const FLAGS: [&str; 2] = ["no-shared", "big"];
 
 /// Splits `--key value` options from positional arguments.
 /// Positional arguments and `--key value` pairs.
@@ -68,7 +89,7 @@ fn options(args: &[String]) -> Result<Parsed, String> {
     let mut it = args.iter();
     while let Some(a) = it.next() {
         if let Some(k) = a.strip_prefix("--") {
-            if k == "no-shared" {
+            if FLAGS.contains(&k) {
                 opts.push((k.to_string(), String::new()));
                 continue;
             }
@@ -281,6 +302,27 @@ fn gen_cmd(args: &[String]) -> Result<(), String> {
     write_path(&m, Path::new(out)).map_err(|e| e.to_string())
 }
 
+fn arrays_cmd(args: &[String]) -> Result<(), String> {
+    let [input, dir] = args else {
+        return Err(USAGE.to_string());
+    };
+    let mesh = read(Path::new(input))?;
+    let dir = Path::new(dir);
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let tris = Triangles::from_mesh(&mesh);
+    let write = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    write("positions.f32", bytemuck::cast_slice(&tris.positions))?;
+    write("faces.u32", bytemuck::cast_slice(&tris.indices))?;
+    println!(
+        "{}",
+        json!({"vertices": tris.positions.len(), "triangles": tris.indices.len() / 3})
+    );
+    Ok(())
+}
+
 // ---------------------------------------------------------------------------------------
 // Harness.
 
@@ -292,6 +334,10 @@ struct Config {
     repeat: u32,
     budget: f64,
     threads: String,
+    /// Further thread counts timed for the tessd methods (thread scaling).
+    scaling_threads: Vec<String>,
+    /// Inputs below this many triangles get no thread-scaling runs.
+    scaling_threads_min_triangles: u64,
 }
 
 /// Figures of an input mesh.
@@ -371,6 +417,16 @@ fn run(args: &[String]) -> Result<(), String> {
         repeat: parse(opt(&opts, "repeat").unwrap_or("3"), "--repeat")?,
         budget: parse(opt(&opts, "budget").unwrap_or("12"), "--budget")?,
         threads: opt(&opts, "threads").unwrap_or("1").to_string(),
+        scaling_threads: opt(&opts, "scaling-threads")
+            .unwrap_or("2")
+            .split(',')
+            .filter(|x| !x.is_empty())
+            .map(|x| parse::<u32>(x, "--scaling-threads").map(|n| n.to_string()))
+            .collect::<Result<_, _>>()?,
+        scaling_threads_min_triangles: parse::<f64>(
+            opt(&opts, "scaling-threads-min-triangles").unwrap_or("0"),
+            "--scaling-threads-min-triangles",
+        )? as u64,
     };
     let manifest_path =
         PathBuf::from(opt(&opts, "manifest").unwrap_or("bench/results/simplify_inputs.json"));
@@ -383,6 +439,15 @@ fn run(args: &[String]) -> Result<(), String> {
         opt(&opts, "scaling-fraction").unwrap_or("0.1"),
         "--scaling-fraction",
     )?;
+    let big =
+        opt(&opts, "big").is_some() || std::env::var("SIMPLIFY_BENCH_50M").is_ok_and(|v| v == "1");
+    let big_sizes: Vec<f64> = if big {
+        list(opt(&opts, "big-sizes").unwrap_or("50"), "big size")?
+    } else {
+        Vec::new()
+    };
+    let big_fractions: Vec<f64> =
+        list(opt(&opts, "big-fractions").unwrap_or("0.1"), "big fraction")?;
     let only: Option<Vec<String>> =
         opt(&opts, "meshes").map(|s| s.split(',').map(String::from).collect());
     for d in ["inputs", "outputs"] {
@@ -413,6 +478,7 @@ fn run(args: &[String]) -> Result<(), String> {
         .iter()
         .map(|&s| (s, cfg.fractions.clone()))
         .chain(scaling_sizes.iter().map(|&s| (s, vec![scaling_fraction])))
+        .chain(big_sizes.iter().map(|&s| (s, big_fractions.clone())))
         .collect();
     generated.sort_by(|a, b| a.0.total_cmp(&b.0));
     for (s, fractions) in generated {
@@ -435,6 +501,10 @@ fn run(args: &[String]) -> Result<(), String> {
             "nproc": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0),
             "cpu_model": cpu_model(),
             "timing_threads": cfg.threads,
+            "scaling_threads": cfg.scaling_threads,
+            "scaling_threads_min_triangles": cfg.scaling_threads_min_triangles,
+            "big_sizes": big_sizes,
+            "big_fractions": if big { json!(big_fractions) } else { json!([]) },
             "fractions": cfg.fractions,
             "repeat": cfg.repeat,
             "budget_s": cfg.budget,
@@ -633,7 +703,8 @@ fn bench_one(
                     )
                 }
             };
-            let deadline = Duration::from_secs(120);
+            // 2 minutes, more on inputs above 10 M triangles (a few evaluations of many seconds).
+            let deadline = Duration::from_secs_f64(120.0 * (st.triangles as f64 / 1e7).max(1.0));
             let mut evals_time = Vec::new();
             let r = search::find(target, p0, slope, range, integer, 40, |p| {
                 if t_search.elapsed() > deadline {
@@ -668,33 +739,9 @@ fn bench_one(
         .work
         .join("outputs")
         .join(format!("{name}__{}__{pct}.ply", method.name()));
-    let exe = std::env::current_exe().map_err(|e| (rec.clone(), e.to_string()))?;
-    let child = Command::new(exe)
-        .arg("one")
-        .arg(method.name())
-        .arg(path)
-        .arg(format!("{}", found.param))
-        .arg("--out")
-        .arg(&out)
-        .arg("--repeat")
-        .arg(cfg.repeat.to_string())
-        .arg("--budget")
-        .arg(cfg.budget.to_string())
-        .env("RAYON_NUM_THREADS", &cfg.threads)
-        .output()
-        .map_err(|e| (rec.clone(), e.to_string()))?;
-    if !child.status.success() {
-        let e = String::from_utf8_lossy(&child.stderr).to_string();
-        return Err((rec, format!("child: {e}")));
-    }
-    let c: Value =
-        serde_json::from_slice(&child.stdout).map_err(|e| (rec.clone(), e.to_string()))?;
-    let times: Vec<f64> = c["times_s"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(Value::as_f64)
-        .collect();
+    let c = time_child(cfg, method, path, found.param, &out, &cfg.threads)
+        .map_err(|e| (rec.clone(), e))?;
+    let times = child_times(&c);
     let t = median(&times);
     let out_vertices = c["out_vertices"].as_u64().unwrap_or(0);
     let kib = |k: &str| c[k].as_u64().unwrap_or(0);
@@ -726,14 +773,73 @@ fn bench_one(
     rec["hit"] = json!((out_vertices as f64 - target as f64).abs() <= search::tolerance(target));
     rec["output_path"] = json!(out);
 
+    // 2b. Thread scaling: the same parameter with more threads; the output must not change.
+    let scaling = !method.is_meshopt() && st.triangles >= cfg.scaling_threads_min_triangles;
+    let mut scaling_recs = Vec::new();
+    for threads in cfg.scaling_threads.iter().filter(|_| scaling) {
+        let out_n = cfg
+            .work
+            .join("outputs")
+            .join(format!("{name}__{}__{pct}__{threads}t.ply", method.name()));
+        let r = match time_child(cfg, method, path, found.param, &out_n, threads) {
+            Ok(cn) => {
+                let tn = child_times(&cn);
+                let med = median(&tn);
+                let vn = cn["out_vertices"].as_u64().unwrap_or(0);
+                let identical = same_bytes(&out, &out_n);
+                let extra_n = (cn["hwm_run_kib"].as_u64().unwrap_or(0))
+                    .saturating_sub(cn["rss_before_run_kib"].as_u64().unwrap_or(0))
+                    * 1024;
+                json!({
+                    "threads": threads,
+                    "times_s": tn,
+                    "time_s": med,
+                    "repeats": tn.len(),
+                    "speedup": t / med,
+                    "mtris_per_s": st.triangles as f64 / med / 1e6,
+                    "out_vertices": vn,
+                    "same_count": vn == out_vertices,
+                    "identical": identical,
+                    "extra_peak_bytes": extra_n,
+                    "mem_ratio": extra_n as f64 / st.input_bytes as f64,
+                })
+            }
+            Err(e) => json!({ "threads": threads, "error": e }),
+        };
+        let _ = std::fs::remove_file(&out_n);
+        scaling_recs.push(r);
+    }
+    if scaling {
+        rec["scaling"] = json!(scaling_recs);
+    }
+
     // 3. Error against the input.
     let out_mesh = read(&out).map_err(|e| (rec.clone(), e))?;
     let m = measure(&out_mesh, mesh, input_index, samples);
     for (k, v) in m.as_object().unwrap() {
         rec[k] = v.clone();
     }
+    let scaling_note: String = scaling_recs
+        .iter()
+        .map(|r| match r["time_s"].as_f64() {
+            Some(tn) => format!(
+                " | {}t {:.2} ms {:.2}x{}",
+                r["threads"].as_str().unwrap_or("?"),
+                tn * 1e3,
+                t / tn,
+                if r["identical"] == json!(true) {
+                    ""
+                } else if r["same_count"] == json!(true) {
+                    " (count same, bytes DIFFER)"
+                } else {
+                    " (OUTPUT DIFFERS)"
+                }
+            ),
+            None => format!(" | {}t FAILED", r["threads"].as_str().unwrap_or("?")),
+        })
+        .collect();
     eprintln!(
-        "   {:<25} {:>5}% target {:>8} got {:>8} ({} evals, {:.1} s search) {:>9.2} ms x{} {:>7.1} Mtri/s mem {:.2}x  H {:.3e} RMS {:.3e}",
+        "   {:<25} {:>5}% target {:>8} got {:>8} ({} evals, {:.1} s search) {:>9.2} ms x{} {:>7.1} Mtri/s mem {:.2}x  H {:.3e} RMS {:.3e}{}",
         method.name(),
         pct,
         target,
@@ -746,6 +852,56 @@ fn bench_one(
         extra as f64 / st.input_bytes as f64,
         rec["hausdorff"].as_f64().unwrap_or(f64::NAN),
         rec["rms"].as_f64().unwrap_or(f64::NAN),
+        scaling_note,
     );
     Ok(rec)
+}
+
+/// One timed child run (`one`) of `method` with `param` on `path` under
+/// `RAYON_NUM_THREADS=threads`, writing `out`; its JSON line.
+fn time_child(
+    cfg: &Config,
+    method: Method,
+    path: &Path,
+    param: f64,
+    out: &Path,
+    threads: &str,
+) -> Result<Value, String> {
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let child = Command::new(exe)
+        .arg("one")
+        .arg(method.name())
+        .arg(path)
+        .arg(format!("{param}"))
+        .arg("--out")
+        .arg(out)
+        .arg("--repeat")
+        .arg(cfg.repeat.to_string())
+        .arg("--budget")
+        .arg(cfg.budget.to_string())
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !child.status.success() {
+        let e = String::from_utf8_lossy(&child.stderr).to_string();
+        return Err(format!("child ({threads} threads): {e}"));
+    }
+    serde_json::from_slice(&child.stdout).map_err(|e| e.to_string())
+}
+
+/// The run times of a child's JSON line.
+fn child_times(c: &Value) -> Vec<f64> {
+    c["times_s"]
+        .as_array()
+        .map(|a| a.iter().filter_map(Value::as_f64).collect())
+        .unwrap_or_default()
+}
+
+/// Whether two files hold the same bytes (false when either cannot be read). Outputs are at
+/// most a few hundred MB, read whole.
+fn same_bytes(a: &Path, b: &Path) -> bool {
+    match (std::fs::read(a), std::fs::read(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
 }
