@@ -12,6 +12,10 @@ use rayon::prelude::*;
 /// Largest number of cells along one axis (keeps cell keys in 21 bits per axis).
 pub const MAX_CELLS_PER_AXIS: u64 = 1 << 20;
 
+/// Blocks binned per wave (see [`grid_partition`]): enough for every core, few enough that
+/// a wave's partial statistics stay a fraction of the mesh.
+const WAVE_BLOCKS: usize = 8;
+
 /// Cells per axis and cell sides for a grid of `size` over `bounds`.
 pub(crate) fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
     let ext: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.max[k] - bounds.min[k]));
@@ -46,8 +50,8 @@ pub(crate) fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
 /// table of its own (in cache, where one table for the whole mesh would miss on almost every
 /// vertex), numbering them in the order it meets them and summing their statistics; the
 /// blocks' cells are then numbered in block order — which is the order in which the whole
-/// vertex sequence meets them — and their partial sums added in that order; a last parallel
-/// pass turns each vertex's block-local id into its cluster id.
+/// vertex sequence meets them — and their partial sums added in that order, a wave of blocks
+/// at a time; a last parallel pass turns each vertex's block-local id into its cluster id.
 pub(crate) fn grid_partition(
     positions: &[[f32; 3]],
     weights: &[f32],
@@ -67,37 +71,49 @@ pub(crate) fn grid_partition(
         (((c[0] << 21 | c[1]) << 21 | c[2]) << 1) | class
     };
     let mut cluster_of = vec![UNUSED; positions.len()];
-    // Pass 1 (parallel): local ids and partial statistics per block.
-    let partials: Vec<BlockStats> = cluster_of
-        .par_chunks_mut(blocks::BLOCK)
-        .enumerate()
-        .map(|(b, out)| {
-            let start = b * blocks::BLOCK;
-            let (mut acc, mut table) = BlockStats::new(out.len());
-            for (i, slot) in out.iter_mut().enumerate() {
-                let v = start + i;
-                let w = weights[v];
-                if w <= 0.0 {
-                    continue;
-                }
-                let class = classes.map_or(0, |c| u64::from(c[v]));
-                let key = key_of(&positions[v], class);
-                *slot = acc.add(&mut table, key, v as u32, &positions[v], w);
-            }
-            acc
-        })
-        .collect();
-    // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order and
-    // the partial sums added in block order.
-    let local_total: usize = partials.iter().map(|b| b.keys.len()).sum();
-    // Sized for every block-local cell (an upper bound on the clusters): it never grows.
-    let mut table = CellTable::with_capacity(local_total + 16);
+    let cell_box = |key: u64| {
+        let c = [key >> 43, (key >> 22) & 0x1f_ffff, (key >> 1) & 0x1f_ffff];
+        Cell {
+            min: std::array::from_fn(|k| (lo[k] + c[k] as f64 * side[k]) as f32),
+            max: std::array::from_fn(|k| (lo[k] + (c[k] + 1) as f64 * side[k]) as f32),
+        }
+    };
+    let mut table = CellTable::with_capacity(blocks::BLOCK);
     let mut stats: Vec<Stats> = Vec::new();
     let mut cells = Vec::new();
-    let maps: Vec<Vec<u32>> = partials
-        .iter()
-        .map(|b| {
-            b.keys
+    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(positions.len().div_ceil(blocks::BLOCK));
+    // The blocks go in waves of WAVE_BLOCKS, so that only one wave's partials are held at
+    // once (they are as large as the cells' statistics); the wave size does not depend on the
+    // thread count, and neither does the order in which partials are merged (block order).
+    for (wave, chunk) in cluster_of
+        .chunks_mut(WAVE_BLOCKS * blocks::BLOCK)
+        .enumerate()
+    {
+        // Pass 1 (parallel): local ids and partial statistics per block.
+        let partials: Vec<BlockStats> = chunk
+            .par_chunks_mut(blocks::BLOCK)
+            .enumerate()
+            .map(|(b, out)| {
+                let start = (wave * WAVE_BLOCKS + b) * blocks::BLOCK;
+                let (mut acc, mut table) = BlockStats::new(out.len());
+                for (i, slot) in out.iter_mut().enumerate() {
+                    let v = start + i;
+                    let w = weights[v];
+                    if w <= 0.0 {
+                        continue;
+                    }
+                    let class = classes.map_or(0, |c| u64::from(c[v]));
+                    let key = key_of(&positions[v], class);
+                    *slot = acc.add(&mut table, key, v as u32, &positions[v], w);
+                }
+                acc
+            })
+            .collect();
+        // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order
+        // and the partial sums added in block order.
+        for b in &partials {
+            let map = b
+                .keys
                 .iter()
                 .zip(&b.stats)
                 .enumerate()
@@ -109,25 +125,17 @@ pub(crate) fn grid_partition(
                     if id as usize == stats.len() {
                         stats.push(*s);
                         if keep_cells {
-                            let c = [key >> 43, (key >> 22) & 0x1f_ffff, (key >> 1) & 0x1f_ffff];
-                            cells.push(Cell {
-                                min: std::array::from_fn(|k| {
-                                    (lo[k] + c[k] as f64 * side[k]) as f32
-                                }),
-                                max: std::array::from_fn(|k| {
-                                    (lo[k] + (c[k] + 1) as f64 * side[k]) as f32
-                                }),
-                            });
+                            cells.push(cell_box(key));
                         }
                     } else {
                         stats[id as usize].merge(s);
                     }
                     id
                 })
-                .collect()
-        })
-        .collect();
-    drop(partials);
+                .collect();
+            maps.push(map);
+        }
+    }
     // Pass 3 (parallel): block-local ids to cluster ids.
     cluster_of
         .par_chunks_mut(blocks::BLOCK)
