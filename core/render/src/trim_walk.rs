@@ -175,12 +175,6 @@ impl TrimWalk {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trim results read-back"),
-            size: result_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let [headers, nodes, curves, lines, query_buffer] = &buffers;
         let bind = bindings::bind_buffers(
             device,
@@ -212,30 +206,9 @@ impl TrimWalk {
         let dispatch = start.elapsed();
 
         let start = Instant::now();
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("trim_walk read-back"),
-        });
-        encoder.copy_buffer_to_buffer(&results, 0, &staging, 0, result_bytes);
-        self.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(gpu_error)?;
+        let words = bindings::read_words(device, &self.queue, &results)?;
         scopes.pop_blocking()?;
-        rx.recv()
-            .map_err(gpu_error)?
-            .map_err(|e| gpu_error(format!("reading back: {e}")))?;
-        let on = {
-            let view = staging
-                .get_mapped_range(..)
-                .map_err(|e| gpu_error(format!("reading back: {e}")))?;
-            let words: &[u32] = bytemuck::cast_slice(&view);
-            words.iter().map(|&w| w != 0).collect()
-        };
-        staging.unmap();
+        let on = words.iter().map(|&w| w != 0).collect();
         let readback = start.elapsed();
         Ok((
             on,
