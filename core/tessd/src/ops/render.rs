@@ -343,10 +343,7 @@ fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, M
                     panels.len()
                 )));
             }
-            for (label, mesh) in &panels {
-                mesh.validate()
-                    .map_err(|e| OpError::new(ErrorCode::InvalidMesh, format!("{label}: {e}")))?;
-            }
+            // Each prim's mesh is validated as the reader builds it; merging keeps it valid.
             Ok(panels)
         }
         _ => {
