@@ -28,8 +28,10 @@ lines = [
         name, ms(x["total"]), ms(x["prepare"]), ms(x["export"]), ms(x["wait"]), ms(x["build"]),
         ms(x["apply"]), ms(x["daemon"]) + (" (overlapped)" if overlapped else ""),
         "–" if overlapped else ms(x["wait"] - x["daemon"]), x["triangles"])
-    for name, x, overlapped in [("tessd workbench (pipelined, as shipped)", t, True),
-                                ("tessd, one request at a time", r["sequential"], False)]
+    for name, x, overlapped in [("tessd workbench (pipelined, BREP text, as shipped)", t, True),
+                                ("tessd, one request at a time", r["sequential"], False),
+                                ("tessd, Python B-Rep export (the fallback)",
+                                 r["python_export"], True)]
 ] + [
     "| `MeshPart.meshFromShape` | **%s** | | | | | | | | %d |" % (ms(m["total"]), m["triangles"]),
     "",

@@ -13,7 +13,10 @@ the median of RUNS runs; the workbench's tessellation cache is cleared before ea
 
 The split of the workbench's time (instrumented by wrapping the functions the tasks call):
 - prepare: `api.prepare_tessellate` on the GUI thread (reading the objects, copying the shapes);
-- export: the B-Rep export to a tessd-brep document (tessd.brep.freecad, Python, FreeCAD's Part API);
+- export: the B-Rep export: OpenCASCADE's BREP text (`Shape.exportBrepToString()`, C++; the
+  daemon reads it, core/brep/src/occt) as shipped, or — the "Python export" row, the fallback
+  for geometry that reader refuses — the tessd-brep document of tessd.brep.freecad (Python,
+  FreeCAD's Part API);
 - wait: time the worker thread is blocked on daemon requests (`Task.wait`);
 - daemon: the daemon's own time for its requests (`elapsed_ms` of each job, summed);
 - build: welding and building the FreeCAD meshes; apply: creating the document objects.
@@ -107,6 +110,7 @@ def main():
         return wrapper
 
     tessellation.export_shape = timed("export", tessellation.export_shape)
+    tessellation.brep_text = timed("export", tessellation.brep_text)
     meshes.weld = timed("build", meshes.weld)
     meshes.build_mesh = timed("build", meshes.build_mesh)
     original_wait = task.Task.wait
@@ -120,8 +124,9 @@ def main():
         return out
     task.Task.wait = wait
 
-    def tessd_tessellate(in_flight):
+    def tessd_tessellate(in_flight, native=True):
         tessellation.IN_FLIGHT = in_flight
+        tessellation.NATIVE_BREP = native
         tessellation._cache.clear()
         clock.clear()
         daemon.clear()
@@ -157,12 +162,14 @@ def main():
                 doc.removeObject(o.Name)
         return {"total": t1 - t0, "triangles": tri}
 
-    rows = {"tessd": [], "sequential": [], "meshFromShape": []}
+    rows = {"tessd": [], "sequential": [], "python_export": [], "meshFromShape": []}
     for _ in range(RUNS):
         rows["meshFromShape"].append(freecad_mesh())
         rows["tessd"].append(tessd_tessellate(2))
         rows["sequential"].append(tessd_tessellate(1))
+        rows["python_export"].append(tessd_tessellate(2, native=False))
     tessellation.IN_FLIGHT = 2
+    tessellation.NATIVE_BREP = True
 
     # Simplify the tessellated meshes to 20 % of their vertices (complexity goal, quadric).
     feats = api.tessellate(parts, tolerance="%gmm" % TOLERANCE_MM, angle=ANGLE, doc=doc)
@@ -201,6 +208,7 @@ def main():
         "freecad": FreeCAD.Version()[:3],
         "tessellate": {k: med(rows["tessd"], k) for k in rows["tessd"][0]},
         "sequential": {k: med(rows["sequential"], k) for k in rows["sequential"][0]},
+        "python_export": {k: med(rows["python_export"], k) for k in rows["python_export"][0]},
         "meshFromShape": {k: med(rows["meshFromShape"], k) for k in rows["meshFromShape"][0]},
         "simplify": {k: med(simp, k) for k in simp[0]},
         "decimate": {k: med(decimate, k) for k in decimate[0]},

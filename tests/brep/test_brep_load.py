@@ -6,9 +6,12 @@ equal to what was sent; a broken document is refused naming the element."""
 from __future__ import annotations
 
 import copy
+import os
+import tempfile
 from collections import Counter
 
 import pytest
+from OCP.BRepTools import BRepTools
 
 import tessd
 from tessd import TessdError
@@ -58,3 +61,36 @@ def test_a_broken_document_is_refused(daemon):
     assert e.value.code == "invalid_brep"
     assert f"face {face['id']}, loop 0" in e.value.message, e.value.message
     assert load(daemon, doc)["faces"]  # the daemon is still up
+
+
+def brep_text(shape) -> str:
+    """OpenCASCADE's own BREP text of a shape (what FreeCAD's exportBrepToString gives)."""
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "s.brep")
+        assert BRepTools.Write_s(shape, path)
+        with open(path) as f:
+            return f.read()
+
+
+def test_brep_text_requests_and_their_errors(daemon):
+    """`brep` as OpenCASCADE BREP text, with `units`; the refusals name what is wrong and the
+    daemon serves on."""
+    name = sorted(PARTS)[0]
+    text = brep_text(PARTS[name]())
+    with tessd.Client(daemon.socket, timeout=120) as c:
+        got = c.call("brep.load", {"brep": text, "units": "cm"})[0]
+        assert got["units"] == "cm" and got["faces"][0] == 1
+        assert got["faces"] == list(range(1, len(got["faces"]) + 1))
+        for params, code, words in [
+            ({"brep": "not a shape"}, "invalid_brep", "OpenCASCADE BREP text"),
+            ({"brep": text, "units": "furlong"}, "invalid_request", "`units`"),
+            ({"brep": export_shape(PARTS[name]()), "units": "mm"}, "invalid_request",
+             "BREP text only"),
+            ({"brep": text[: len(text) // 2]}, "invalid_brep", "line"),
+            ({"brep": 7}, "invalid_request", "a number"),
+        ]:
+            with pytest.raises(TessdError) as e:
+                c.call("brep.load", params)
+            assert e.value.code == code, (params.get("units"), e.value)
+            assert words in e.value.message, e.value.message
+        assert c.call("brep.load", {"brep": text})[0]["faces"] == got["faces"]

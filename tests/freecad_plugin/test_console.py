@@ -28,6 +28,7 @@ import workbench_checks as checks
 import workbench_parts as parts
 from freecad.tessd import api, camera, daemon_link, shapes
 from freecad.tessd import task as task_module
+from freecad.tessd import tessellation
 from tessd.brep.freecad import export_shape
 
 import tessd  # the client the workbench bundles (freecad.tessd put it on sys.path)
@@ -203,6 +204,36 @@ class Tessellate(DocCase):
         np.testing.assert_allclose(hi, [expect.XMax, expect.YMax, expect.ZMax], atol=0.2)
         np.testing.assert_allclose(shapes.world_placement(obj).toMatrix().A,
                                    obj.getGlobalPlacement().toMatrix().A, atol=1e-9)
+
+    def test_sent_as_brep_text_with_the_python_walk_as_fallback(self):
+        """Parts go to the daemon as OpenCASCADE BREP text (the daemon's own reader); a face
+        the reader has no exact type for (an offset surface: `unsupported`) is sent again as
+        the Part API walk's document, and both give faithful meshes."""
+        walked = []
+        original = tessellation.export_shape
+
+        def spy(shape, **kw):
+            walked.append(len(shape.Faces))
+            return original(shape, **kw)
+
+        tessellation.export_shape = spy
+        try:
+            box = self.part("FilletedBox")
+            tol = SIZE_TOLERANCE * size(box.Shape)
+            [m] = api.tessellate(box, tolerance=tol)
+            self.assert_faithful(box, m, tol)
+            self.assertEqual(walked, [])  # the BREP text was read: no Python walk
+            bs = Part.BSplineSurface()
+            bs.interpolate([[V(i, j, 0.3 * ((i - 1.5) ** 2 - (j - 1.5) ** 2)) for j in range(4)]
+                            for i in range(4)])
+            offset = parts.add_part(self.doc, "OffsetFace", Part.OffsetSurface(bs, 0.5).toShape())
+            self.doc.recompute()
+            tol = SIZE_TOLERANCE * size(offset.Shape)
+            [m] = api.tessellate(offset, tolerance=tol)
+            self.assert_faithful(offset, m, tol, closed=False)
+            self.assertEqual(walked, [1])  # refused by the reader, walked in Python
+        finally:
+            tessellation.export_shape = original
 
     def test_one_undo_step(self):
         self.doc.UndoMode = 1

@@ -23,6 +23,7 @@ pub mod bounds;
 pub mod bspline;
 pub mod curve;
 pub mod model;
+pub mod occt;
 pub mod stats;
 pub mod surface;
 pub mod transform;

@@ -195,10 +195,12 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Tessellate a B-Rep exchange document (docs/brep-format.md): each face's surface to the
-    /// chordal tolerance, trimmed by its loops, shared edges discretised once (watertight).
+    /// Tessellate a B-Rep (an exchange document, docs/brep-format.md, or an OpenCASCADE .brep
+    /// file): each face's surface to the chordal tolerance, trimmed by its loops, shared edges
+    /// discretised once (watertight).
     Tessellate {
-        /// B-Rep JSON document (`python -m tessd.brep export`).
+        /// B-Rep JSON document (`python -m tessd.brep export`) or OpenCASCADE BREP text
+        /// (.brep / .brp: `BRepTools::Write`, FreeCAD's `Shape.exportBrep`).
         input: PathBuf,
         /// Output mesh: a USD stage (.usda, a GeomSubset per face) or OBJ, PLY, STL, OFF.
         output: PathBuf,
@@ -216,14 +218,18 @@ enum Command {
         /// written absolute in f64.
         #[arg(long)]
         origin: Option<String>,
+        /// The length unit of a .brep file's coordinates (mm, cm, m, in; default mm): OpenCASCADE
+        /// BREP text carries none. A JSON document names its own.
+        #[arg(long)]
+        units: Option<String>,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
     },
     /// Render a mesh (OBJ, PLY, STL, OFF, USD .usda: a LOD stage's levels side by side) or a
-    /// B-Rep document (.json) to a PNG, headless on the GPU (lavapipe without one).
+    /// B-Rep (a .json document or an OpenCASCADE .brep file) to a PNG, headless on the GPU (lavapipe without one).
     Render {
-        /// Mesh file or `tessd-brep` JSON document; several mesh files are drawn side by side
+        /// Mesh file, `tessd-brep` JSON document or OpenCASCADE .brep file; several mesh files are drawn side by side
         /// (one panel each, one camera fitted to them all: LOD chains, cage and result), as are
         /// the LOD variants of one USD stage.
         #[arg(required = true, num_args = 1..)]
@@ -531,6 +537,7 @@ fn run(cli: Cli) -> Result<()> {
             tolerance,
             angle,
             origin,
+            units,
             json,
         } => {
             let params = serde_json::json!({
@@ -539,6 +546,7 @@ fn run(cli: Cli) -> Result<()> {
                 "tolerance": tolerance,
                 "angle": angle,
                 "origin": origin.as_deref().map(origin_param),
+                "units": units,
             });
             report_or_json(run_local("tessellate", params)?, json, |r| {
                 let r = &r.result;

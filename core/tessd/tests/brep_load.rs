@@ -161,9 +161,13 @@ fn refuses_bad_requests() {
     )
     .unwrap_err();
     assert_eq!(e.code, ErrorCode::InvalidRequest);
+    // A string is OpenCASCADE BREP text; anything else as a string is refused as such.
     let e = call(json!({"brep": "doc.json"}), &[]).unwrap_err();
+    assert_eq!(e.code, ErrorCode::InvalidBrep);
+    assert!(e.message.contains("OpenCASCADE BREP text"), "{}", e.message);
+    let e = call(json!({"brep": 3}), &[]).unwrap_err();
     assert_eq!(e.code, ErrorCode::InvalidRequest);
-    assert!(e.message.contains("a string"), "{}", e.message);
+    assert!(e.message.contains("a number"), "{}", e.message);
     let e = call(json!({"input": "/nonexistent/part.json"}), &[]).unwrap_err();
     assert_eq!(e.code, ErrorCode::Io);
     assert!(

@@ -1,7 +1,8 @@
 """Render precise image: a PNG of Part objects through the daemon's `render` (paper 001).
 
-Part objects, placed in the world, go to the daemon as one B-Rep document (a compound when
-there are several), which it renders headless on the GPU (lavapipe without one) with per-frame
+Part objects, placed in the world, go to the daemon as one B-Rep (a compound when there are
+several) in OpenCASCADE's BREP text — or, where the daemon's reader answers `unsupported`, as
+the Part API walk's document — which it renders headless on the GPU (lavapipe without one) with per-frame
 tessellation, GPU trimming and crack filling (``cracks``: "object", "image" or "none"); Mesh
 objects are rendered as meshes, one face id per object. Parts and meshes cannot share one
 picture (the op renders one B-Rep document, or meshes). The camera is a standard view fitted
@@ -14,7 +15,9 @@ from typing import Any, Dict, List, Optional
 import numpy as np
 import Part
 from tessd.brep.freecad import export_shape
+from tessd.client import TessdError
 
+from . import tessellation
 from .shapes import MeshInput, PartInput
 from .task import Task
 
@@ -48,16 +51,25 @@ class RenderTask(Task):
         self.params.update(extra or {})
 
     def _run(self, client: Any) -> None:
-        params, arrays = dict(self.params), None
+        params = dict(self.params)
         if isinstance(self.inputs[0], PartInput):
             shapes = [p.shape for p in self.inputs]
             shape = shapes[0] if len(shapes) == 1 else Part.makeCompound(shapes)
             self.report(0.0, "exporting the B-Rep")
-            params["brep"] = export_shape(shape, units="mm",
-                                          source=", ".join(p.label for p in self.inputs))
+            params["brep"], params["units"] = tessellation.brep_text(shape), "mm"
+            try:
+                result, _ = self.call(client, "render", params, span=(0.1, 1.0))
+            except TessdError as e:
+                if e.code != "unsupported":
+                    raise
+                # geometry the daemon's BREP reader has no exact type for: the Part API walk
+                del params["units"]
+                params["brep"] = export_shape(shape, units="mm",
+                                              source=", ".join(p.label for p in self.inputs))
+                result, _ = self.call(client, "render", params, span=(0.1, 1.0))
         else:
-            arrays = self._mesh_arrays()
-        result, _ = self.call(client, "render", params, arrays, span=(0.1, 1.0))
+            result, _ = self.call(client, "render", params, self._mesh_arrays(),
+                                  span=(0.1, 1.0))
         self.reports = [result]
         self.warnings.extend(result.get("warnings") or ())
 

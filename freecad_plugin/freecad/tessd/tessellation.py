@@ -1,10 +1,13 @@
 """Part inputs to triangle meshes: the B-Rep export and the daemon's `tessellate`, welded.
 
 Every operation that needs a Part object as triangles (Tessellate, and Simplify, Generate LODs
-and Export USD on Part objects) goes through :func:`tessellate_part`: the shape is exported to
-a `tessd-brep` document (tessd.brep.freecad, FreeCAD's own Part API), tessellated by the daemon
-(trimmed faces, shared edges discretised once) and welded (meshes.weld) into a shared-vertex
-mesh whose face groups are the B-Rep faces in `shape.Faces` order. Positions come back as f64
+and Export USD on Part objects) goes through :func:`tessellate_part`: the shape goes to the
+daemon as OpenCASCADE's own BREP text (`Shape.exportBrepToString()`, a few ms in C++; the
+daemon reads it into its exchange document, core/brep/src/occt), is tessellated there (trimmed
+faces, shared edges discretised once) and welded (meshes.weld) into a shared-vertex mesh whose
+face groups are the B-Rep faces in `shape.Faces` order. A shape holding geometry the daemon's
+reader has no exact type for (it answers `unsupported`: offset surfaces, ...) is sent again as
+the `tessd-brep` document of tessd.brep.freecad (FreeCAD's Part API walk, ~0.3 ms a face). Positions come back as f64
 (absolute), so welding compares exact values and nothing is rounded before FreeCAD's own f32.
 
 The last few tessellations are kept (keyed by the shape, its placement, the tolerance and the
@@ -19,6 +22,7 @@ from typing import Any, Dict, List
 
 import numpy as np
 from tessd.brep.freecad import export_shape
+from tessd.client import TessdError
 
 from . import meshes
 from .params import length
@@ -28,6 +32,8 @@ from .shapes import PartInput
 CACHE_SIZE = 4
 #: Tessellate requests in flight at once while the next parts are exported.
 IN_FLIGHT = 2
+#: Send shapes as OpenCASCADE BREP text (else always as the Python walk's document).
+NATIVE_BREP = True
 
 _cache: "collections.OrderedDict[tuple, Tessellation]" = collections.OrderedDict()
 _cache_lock = threading.Lock()
@@ -65,7 +71,7 @@ def tessellate_part(task: Any, client: Any, part: PartInput, tolerance: Any = "0
 def tessellate_parts(task: Any, client: Any, parts: List[PartInput], tolerance: Any = "0.1mm",
                      angle: float = 0.5, span=(0.0, 1.0)) -> List[Tessellation]:
     """:func:`tessellate_part` of every part, pipelined: while the daemon tessellates a part,
-    this thread exports the next one's B-Rep (Python, the longest step of a round trip), up to
+    this thread writes the next one's BREP text, up to
     :data:`IN_FLIGHT` requests at once; the results are collected and welded in order. A
     cancel or an error cancels the requests still running."""
     tol = length(tolerance, "tolerance", percent=True)
@@ -77,12 +83,32 @@ def tessellate_parts(task: Any, client: Any, parts: List[PartInput], tolerance: 
     def part_span(i: int) -> tuple:
         return (lo + (hi - lo) * i / n, lo + (hi - lo) * (i + 1) / n)
 
+    def submit(i: int, native: bool) -> Any:
+        part = parts[i]
+        task.report(part_span(i)[0], "%s: exporting the B-Rep" % part.label)
+        if native:
+            brep: Any = brep_text(part.shape)
+        else:
+            brep = export_shape(part.shape, units="mm", source=part.label)
+        task.check_cancel()
+        params = {"brep": brep, "tolerance": tol, "angle": float(angle), "positions": "f64"}
+        if native:
+            params["units"] = "mm"
+        return task.submit(client, "tessellate", params, span=part_span(i), label=part.label)
+
     def finish() -> None:
-        i, key, faces, job = pending.popleft()
-        result, arrays = task.wait(job, "tessellate", part_span(i), parts[i].label)
+        i, key, job = pending.popleft()
+        try:
+            result, arrays = task.wait(job, "tessellate", part_span(i), parts[i].label)
+        except TessdError as e:
+            if e.code != "unsupported":
+                raise
+            # geometry the BREP reader has no exact type for: the Part API walk instead
+            result, arrays = task.wait(submit(i, native=False), "tessellate", part_span(i),
+                                       parts[i].label)
         positions, triangles = meshes.weld(arrays["positions"], meshes.triangles_of(arrays))
         groups = np.asarray(arrays["face_groups"], dtype=np.int64).reshape(-1)
-        out[i] = Tessellation(positions, triangles, groups, faces, result)
+        out[i] = Tessellation(positions, triangles, groups, int(result["faces"]), result)
         if key:
             with _cache_lock:
                 _cache[key] = out[i]
@@ -99,14 +125,7 @@ def tessellate_parts(task: Any, client: Any, parts: List[PartInput], tolerance: 
             if hit is not None:
                 out[i] = hit
                 continue
-            task.report(part_span(i)[0], "%s: exporting the B-Rep" % part.label)
-            document = export_shape(part.shape, units="mm", source=part.label)
-            task.check_cancel()
-            params = {"brep": document, "tolerance": tol, "angle": float(angle),
-                      "positions": "f64"}
-            job = task.submit(client, "tessellate", params, span=part_span(i), label=part.label)
-            pending.append((i, key, len(document["faces"]), job))
-            del document
+            pending.append((i, key, submit(i, native=NATIVE_BREP)))
             while len(pending) >= IN_FLIGHT:
                 finish()
         while pending:
@@ -118,10 +137,15 @@ def tessellate_parts(task: Any, client: Any, parts: List[PartInput], tolerance: 
     return out
 
 
+def brep_text(shape: Any) -> str:
+    """The shape as OpenCASCADE's BREP text, the daemon's fastest B-Rep input."""
+    return shape.exportBrepToString()
+
+
 def clear_cache() -> None:
     """Forgets the kept tessellations."""
     with _cache_lock:
         _cache.clear()
 
 
-__all__ = ["Tessellation", "clear_cache", "tessellate_part", "tessellate_parts"]
+__all__ = ["Tessellation", "brep_text", "clear_cache", "tessellate_part", "tessellate_parts"]

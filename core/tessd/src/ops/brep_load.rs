@@ -5,8 +5,11 @@
 //!
 //! Parameters are described in docs/protocol.md ("brep.load").
 
+use std::path::Path;
+
 use serde_json::{Map, Value, json};
-use tessd_brep::{Document, ValidationError};
+use tessd_brep::occt::{self, OcctError, OcctErrorKind};
+use tessd_brep::{Document, Units, ValidationError};
 use tessd_ipc::arrays::{Arrays, DType};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
@@ -25,10 +28,7 @@ pub fn brep_error(e: ValidationError) -> OpError {
 /// (its first error, with the count of the others).
 pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let value = request_document(&mut request)?;
-    ctx.progress(0.3, "parse", "")?;
-    let doc = Document::from_value(&value).map_err(brep_error)?;
-    drop(value);
+    let doc = request_brep(&mut request)?;
     ctx.progress(0.5, "validate", "")?;
     let errors = doc.errors();
     if let Some(first) = errors.first() {
@@ -55,25 +55,27 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     Ok(Response::json(result))
 }
 
-/// The request's document as JSON, its payload array references resolved (shared by the ops
-/// that take a B-Rep document: `brep.load`, `tessellate`).
+/// The request's B-Rep as a document, not yet validated (shared by the ops that take one:
+/// `brep.load`, `tessellate`, `trim.classify`, `render`). Either the exchange format's JSON —
+/// the file `input` or the object `brep`, payload array references resolved — or
+/// OpenCASCADE's own BREP text — an `input` ending `.brep` / `.brp`, or `brep` as a string
+/// (FreeCAD's `Shape.exportBrepToString()`) — read by `tessd_brep::occt` in the units of
+/// `units` (default `"mm"`; that text carries none).
 ///
 /// # Errors
-/// As [`document_value`] and [`resolve_array_refs`].
-pub fn request_document(request: &mut Request) -> Result<Value, OpError> {
-    let mut value = document_value(request)?;
-    resolve_array_refs(&mut value, &request.arrays)?;
-    Ok(value)
-}
-
-/// The document as JSON: the file `input` (resolved against the request's folder) or the
-/// object `brep`, exactly one of them.
-fn document_value(request: &mut Request) -> Result<Value, OpError> {
+/// `invalid_request` for missing or conflicting parameters and unknown array references,
+/// `io` when the file cannot be read, `invalid_brep` for JSON that is no document or BREP
+/// text that breaks its format (naming the line), `unsupported` for BREP geometry the
+/// exchange format has no exact type for (a host can fall back to its own exporter).
+pub fn request_brep(request: &mut Request) -> Result<Document, OpError> {
+    let units = occt_units(request)?;
     let inline = request.params.remove("brep").filter(|v| !v.is_null());
-    match (request.str_param("input")?, inline) {
-        (Some(_), Some(_)) => Err(OpError::request(
-            "give the document as `input` (a path) or `brep` (inline), not both",
-        )),
+    let (mut value, where_) = match (request.str_param("input")?, inline) {
+        (Some(_), Some(_)) => {
+            return Err(OpError::request(
+                "give the document as `input` (a path) or `brep` (inline), not both",
+            ));
+        }
         (Some(path), None) => {
             let path = request.resolve(path);
             let text = std::fs::read_to_string(&path).map_err(|e| {
@@ -82,22 +84,105 @@ fn document_value(request: &mut Request) -> Result<Value, OpError> {
                     format!("cannot read {}: {e}", path.display()),
                 )
             })?;
-            serde_json::from_str(&text).map_err(|e| {
-                OpError::new(
-                    ErrorCode::InvalidBrep,
-                    format!("{}: not JSON: {e}", path.display()),
-                )
-            })
+            let name = path.display().to_string();
+            if is_occt_path(&path) || occt::is_occt_brep(&text) {
+                return read_occt(&text, units, &name, stem_of(&path));
+            }
+            let value = serde_json::from_str(&text).map_err(|e| {
+                OpError::new(ErrorCode::InvalidBrep, format!("{name}: not JSON: {e}"))
+            })?;
+            (value, name)
         }
-        (None, Some(v @ Value::Object(_))) => Ok(v),
-        (None, Some(v)) => Err(OpError::request(format!(
-            "`brep` must be the document as a JSON object, got {}",
-            kind(&v)
-        ))),
-        (None, None) => Err(OpError::request(
-            "`input` (a path to a B-Rep JSON document) or `brep` (the document inline) is required",
-        )),
+        (None, Some(Value::String(text))) => {
+            if !occt::is_occt_brep(&text) {
+                return Err(OpError::new(
+                    ErrorCode::InvalidBrep,
+                    "`brep` as a string must be OpenCASCADE BREP text (starting \
+                     `DBRep_DrawableShape` or `CASCADE Topology V1`); give a tessd-brep \
+                     document as a JSON object, a file's path as `input`",
+                ));
+            }
+            return read_occt(&text, units, "`brep`", None);
+        }
+        (None, Some(v @ Value::Object(_))) => (v, "`brep`".to_string()),
+        (None, Some(v)) => {
+            return Err(OpError::request(format!(
+                "`brep` must be the document as a JSON object or OpenCASCADE BREP text as a string, got {}",
+                kind(&v)
+            )));
+        }
+        (None, None) => {
+            return Err(OpError::request(
+                "`input` (a path to a B-Rep JSON document or an OpenCASCADE .brep file) or `brep` (the document inline) is required",
+            ));
+        }
+    };
+    if units.is_some() {
+        return Err(OpError::request(format!(
+            "`units` applies to OpenCASCADE BREP text only: the document {where_} names its own"
+        )));
     }
+    resolve_array_refs(&mut value, &request.arrays)?;
+    Document::from_value(&value).map_err(brep_error)
+}
+
+/// Whether `path` names OpenCASCADE BREP text by its extension (`.brep`, `.brp`, any case).
+pub fn is_occt_path(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("brep") || e.eq_ignore_ascii_case("brp"))
+}
+
+/// Whether `path` names a B-Rep input by its extension: a JSON document or BREP text.
+pub fn is_brep_path(path: &Path) -> bool {
+    is_occt_path(path)
+        || path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+}
+
+fn stem_of(path: &Path) -> Option<String> {
+    path.file_name().map(|n| n.to_string_lossy().into_owned())
+}
+
+/// The `units` parameter, `None` when absent.
+fn occt_units(request: &Request) -> Result<Option<Units>, OpError> {
+    let Some(name) = request.str_param("units")? else {
+        return Ok(None);
+    };
+    [
+        Units::Millimetres,
+        Units::Centimetres,
+        Units::Metres,
+        Units::Inches,
+    ]
+    .into_iter()
+    .find(|u| u.name() == name)
+    .map(Some)
+    .ok_or_else(|| {
+        OpError::request(format!(
+            "`units` must be \"mm\", \"cm\", \"m\" or \"in\", got {name:?}"
+        ))
+    })
+}
+
+/// BREP text read into a document; errors name `where_` (the file or `brep`).
+fn read_occt(
+    text: &str,
+    units: Option<Units>,
+    where_: &str,
+    source: Option<String>,
+) -> Result<Document, OpError> {
+    let options = occt::ReadOptions {
+        units: units.unwrap_or(Units::Millimetres),
+        source,
+    };
+    occt::read(text, &options).map_err(|e: OcctError| {
+        let code = match e.kind {
+            OcctErrorKind::Syntax => ErrorCode::InvalidBrep,
+            OcctErrorKind::Unsupported => ErrorCode::Unsupported,
+        };
+        OpError::new(code, format!("{where_}: {e}"))
+    })
 }
 
 fn kind(v: &Value) -> &'static str {

@@ -7,7 +7,7 @@
 //!
 //! Parameters are described in docs/protocol.md ("render").
 
-use super::brep_load::{brep_error, request_document};
+use super::brep_load::{brep_error, is_brep_path, request_brep};
 use super::common::{bool_param, stem, u64_param, usd_error};
 use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file};
 use super::tessellate::parse_tolerance;
@@ -15,7 +15,6 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use tessd_brep::Document;
 use tessd_ipc::arrays::OwnedArray;
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
@@ -361,12 +360,6 @@ fn prefixed(what: &str, mut error: OpError) -> OpError {
     error
 }
 
-/// Whether `path` names a `tessd-brep` document (`.json`).
-fn is_brep_path(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-}
-
 /// The B-Rep frames' time per step of paper 001 table 1, summed over the frames, ms.
 fn step_timings(reports: &[BrepReport]) -> Value {
     let mut t = StepTimings::default();
@@ -453,9 +446,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         .filter(|v| !v.is_null());
     let mut result = json!({});
     let (part, cams, prepare_ms, device_ms, upload_ms) = if is_brep {
-        let value = request_document(&mut request)?;
-        let doc = Document::from_value(&value).map_err(brep_error)?;
-        drop(value);
+        let doc = request_brep(&mut request)?;
         doc.validate().map_err(brep_error)?;
         let b = doc
             .bounding_box()

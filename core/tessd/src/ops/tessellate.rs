@@ -11,7 +11,7 @@
 //!
 //! Parameters are described in docs/protocol.md ("tessellate").
 
-use super::brep_load::{brep_error, request_document};
+use super::brep_load::{brep_error, request_brep};
 use super::common::{check_mesh_output, is_usda, plain_number, stage_options, stem, usd_error};
 use super::mesh_arrays::{mesh_error, mesh_to_arrays, output_path};
 use serde_json::{Value, json};
@@ -235,9 +235,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     if let Some(path) = output.as_deref() {
         check_mesh_output(path)?;
     }
-    let value = request_document(&mut request)?;
-    let doc = Document::from_value(&value).map_err(brep_error)?;
-    drop(value);
+    let doc = request_brep(&mut request)?;
     let asked = match request.params.get("tolerance") {
         None | Some(Value::Null) => {
             return Err(OpError::request(

@@ -9,7 +9,7 @@
 //!
 //! Parameters are described in docs/protocol.md ("trim.classify").
 
-use super::brep_load::{array_as_f64, brep_error, request_document};
+use super::brep_load::{array_as_f64, brep_error, request_brep};
 use super::tessellate::parse_length;
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -28,9 +28,7 @@ use tessd_trim::TrimStructure;
 /// refuses or a non-finite point (naming face and point); `io`; `cancelled`.
 pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let value = request_document(&mut request)?;
-    let doc = Document::from_value(&value).map_err(brep_error)?;
-    drop(value);
+    let doc = request_brep(&mut request)?;
     if let Some(e) = doc.errors().into_iter().next() {
         return Err(brep_error(e));
     }
