@@ -28,26 +28,74 @@ const PARALLEL_CELL: usize = 1 << 15;
 /// box.
 #[derive(Clone, Copy, Debug)]
 struct Eval {
-    err: f64,
+    /// The largest squared displacement, as measured (in f32): the displacement is its root in
+    /// f64 ([`Eval::err`]), which orders exactly as it does, and it takes half the room.
+    err2: f32,
     lo: [f32; 3],
     hi: [f32; 3],
 }
 
-/// A quality partition that can still be refined: the vertices in leaf order and the leaves
-/// (sorted by range; leaf `i` is cluster `i`).
+impl Eval {
+    /// The largest displacement.
+    fn err(&self) -> f64 {
+        f64::from(self.err2).sqrt()
+    }
+}
+
+/// A quality partition that can still be refined: the vertices in leaf order and the leaves.
 pub(crate) struct Refinable {
     order: Vec<Point>,
-    leaves: Vec<Node>,
+    leaves: Leaves,
     tolerance: f64,
 }
 
-/// A cell during refinement: its range of the index array, its box and its evaluation.
+/// The leaves of a partition in the order of their ranges, which follow one another and cover
+/// the whole index array: leaf `i` (cluster `i`) holds `order[start[i]..start[i + 1]]`. Four
+/// bytes a leaf, plus its cell when the cells are kept; a leaf's evaluation is not kept, since
+/// only the few leaves that coverage splits again need it (it is recomputed for them).
+#[derive(Default)]
+pub(crate) struct Leaves {
+    /// Where each leaf starts, and the end of the last one.
+    pub start: Vec<u32>,
+    /// The cell of each leaf (empty unless the cells are kept).
+    cells: Vec<Cell>,
+}
+
+impl Leaves {
+    /// Appends the leaf starting at `start` in `cell`.
+    fn push(&mut self, start: usize, cell: &Cell, keep_cells: bool) {
+        self.start.push(start as u32);
+        if keep_cells {
+            self.cells.push(*cell);
+        }
+    }
+
+    /// Appends `other`'s leaves (without its end), their starts shifted by `by`.
+    fn append(&mut self, other: Leaves, by: usize) {
+        self.start
+            .extend(other.start.iter().map(|&s| s + by as u32));
+        self.cells.extend(other.cells);
+    }
+
+    /// Number of leaves (once the end is pushed).
+    fn len(&self) -> usize {
+        self.start.len() - 1
+    }
+}
+
+/// A cell during refinement: its range of the index array and its evaluation (its box
+/// travels beside it, and only when the cells are kept is it stored).
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    start: usize,
-    end: usize,
-    cell: Cell,
+    start: u32,
+    end: u32,
     eval: Eval,
+}
+
+impl Node {
+    fn range(&self) -> std::ops::Range<usize> {
+        self.start as usize..self.end as usize
+    }
 }
 
 /// The inputs shared by every step.
@@ -55,6 +103,7 @@ pub(crate) struct Adaptive<'a> {
     positions: &'a [[f32; 3]],
     weights: &'a [f32],
     heaviest: bool,
+    keep_cells: bool,
     cancel: Option<&'a AtomicBool>,
 }
 
@@ -69,16 +118,19 @@ impl<'a> Adaptive<'a> {
     /// Refinement over `positions` with `weights` (zero = unreferenced). Cells are judged with
     /// the heaviest vertex for [`Representative::Heaviest`] and with the weighted barycentre
     /// otherwise (the quadric representative is placed afterwards, see `representative.rs`).
+    /// `keep_cells`: the partitions list their cells ("show partition").
     pub(crate) fn new(
         positions: &'a [[f32; 3]],
         weights: &'a [f32],
         rep: Representative,
+        keep_cells: bool,
         cancel: Option<&'a AtomicBool>,
     ) -> Self {
         Adaptive {
             positions,
             weights,
             heaviest: rep == Representative::Heaviest,
+            keep_cells,
             cancel,
         }
     }
@@ -89,7 +141,7 @@ impl<'a> Adaptive<'a> {
 
     /// The referenced vertices, grouped by class (one root cell per class), and the root cells.
     /// Vertices are copied with their weights so that every later pass reads memory in order.
-    fn roots(&self, classes: Option<&[u8]>, bounds: &Cell) -> (Vec<Point>, Vec<Node>) {
+    fn roots(&self, classes: Option<&[u8]>) -> (Vec<Point>, Vec<Node>) {
         let mut order: Vec<Point> = (0..self.positions.len())
             .filter(|&v| self.weights[v] > 0.0)
             .map(|v| Point {
@@ -107,14 +159,18 @@ impl<'a> Adaptive<'a> {
         let roots = ranges
             .into_iter()
             .filter(|(s, e)| e > s)
-            .map(|(start, end)| Node {
-                start,
-                end,
-                cell: *bounds,
-                eval: self.evaluate(&order[start..end]),
-            })
+            .map(|(start, end)| self.node(&order, start, end))
             .collect();
         (order, roots)
+    }
+
+    /// The node of the vertices `order[start..end]` (non-empty).
+    fn node(&self, order: &[Point], start: usize, end: usize) -> Node {
+        Node {
+            start: start as u32,
+            end: end as u32,
+            eval: self.evaluate(&order[start..end]),
+        }
     }
 
     /// Representative, largest displacement and inner box of a non-empty set of vertices.
@@ -139,22 +195,23 @@ impl<'a> Adaptive<'a> {
             err2 = err2.max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         }
         Eval {
-            err: f64::from(err2).sqrt(),
+            err2,
             lo: acc.lo,
             hi: acc.hi,
         }
     }
 
     /// Splits `node` across the largest side of its inner box: partitions its vertices in place
-    /// and returns the two children (both non-empty), or `None` when its vertices coincide. The
-    /// partition pass also accumulates both children's sums, so each child costs one more pass.
-    fn split(&self, order: &mut [Point], node: &Node) -> Option<(Node, Node)> {
+    /// and returns the two children (both non-empty) and the cut (axis, coordinate), or `None`
+    /// when its vertices coincide. The partition pass also accumulates both children's sums, so
+    /// each child costs one more pass.
+    fn split(&self, order: &mut [Point], node: &Node) -> Option<(Node, Node, Cut)> {
         let Eval { lo, hi, .. } = node.eval;
         let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))?;
         if hi[axis] <= lo[axis] {
             return None;
         }
-        let verts = &mut order[node.start..node.end];
+        let verts = &mut order[node.range()];
         let mut at = 0.5 * (lo[axis] + hi[axis]);
         let (mut left_acc, mut right_acc) = (Acc::default(), Acc::default());
         let mut mid = partition_in_place(verts, |q| q.p[axis] < at, &mut left_acc, &mut right_acc);
@@ -168,27 +225,23 @@ impl<'a> Adaptive<'a> {
             verts[mid..].iter().for_each(|q| right_acc.add(q));
         }
         let (left, right) = verts.split_at(mid);
-        let mut lcell = node.cell;
-        let mut rcell = node.cell;
-        lcell.max[axis] = at;
-        rcell.min[axis] = at;
         let (le, re) = (
             self.finish_eval(&left_acc, left),
             self.finish_eval(&right_acc, right),
         );
+        let mid = node.start + mid as u32;
         Some((
             Node {
                 start: node.start,
-                end: node.start + mid,
-                cell: lcell,
+                end: mid,
                 eval: le,
             },
             Node {
-                start: node.start + mid,
+                start: mid,
                 end: node.end,
-                cell: rcell,
                 eval: re,
             },
+            Cut { axis, at },
         ))
     }
 
@@ -201,8 +254,10 @@ impl<'a> Adaptive<'a> {
         bounds: &Cell,
         tolerance: f64,
     ) -> Result<Refinable, Stop> {
-        let (mut order, roots) = self.roots(classes, bounds);
-        let leaves = self.refine_all(&mut order, &roots, tolerance)?;
+        let (mut order, roots) = self.roots(classes);
+        let roots: Vec<(Node, Cell)> = roots.into_iter().map(|n| (n, *bounds)).collect();
+        let mut leaves = self.refine_all(&mut order, &roots, tolerance)?;
+        leaves.start.push(order.len() as u32);
         Ok(Refinable {
             order,
             leaves,
@@ -211,8 +266,8 @@ impl<'a> Adaptive<'a> {
     }
 
     /// The partition of a quality refinement: cluster `i` is its `i`-th leaf.
-    pub(crate) fn partition(&self, r: &Refinable, keep_cells: bool) -> Partition {
-        self.finish(&r.order, r.leaves.iter(), keep_cells)
+    pub(crate) fn partition(&self, r: &Refinable) -> Partition {
+        self.finish(&r.order, &r.leaves.start, r.leaves.cells.clone())
     }
 
     /// Splits each of `clusters` (sorted leaf indices of `r`) once and refines both halves to
@@ -227,92 +282,113 @@ impl<'a> Adaptive<'a> {
         let mut split = vec![false; r.leaves.len()];
         let mut halves = Vec::with_capacity(2 * clusters.len());
         for &c in clusters {
-            if let Some((left, right)) = self.split(&mut r.order, &r.leaves[c as usize]) {
-                split[c as usize] = true;
-                halves.extend([left, right]);
+            let c = c as usize;
+            let (start, end) = (r.leaves.start[c] as usize, r.leaves.start[c + 1] as usize);
+            // A leaf keeps no evaluation: its box (a minimum and maximum, the same whatever the
+            // order of its vertices) is measured again.
+            let leaf = self.node(&r.order, start, end);
+            let cell = r.leaves.cells.get(c).copied().unwrap_or(ANY_CELL);
+            if let Some((left, right, cut)) = self.split(&mut r.order, &leaf) {
+                split[c] = true;
+                let (lcell, rcell) = cut.cells(&cell);
+                halves.extend([(left, lcell), (right, rcell)]);
             }
         }
         let count = halves.len() / 2;
         if count > 0 {
             // Both the kept leaves and the refined halves are in range order: merge them.
             let refined = self.refine_all(&mut r.order, &halves, r.tolerance)?;
-            let mut kept = (r.leaves.iter().zip(&split))
-                .filter(|(_, s)| !**s)
-                .map(|(n, _)| *n)
-                .peekable();
-            let mut leaves = Vec::with_capacity(r.leaves.len() + refined.len() - count);
-            for n in refined {
-                while let Some(k) = kept.next_if(|k| k.start < n.start) {
-                    leaves.push(k);
+            let old = std::mem::take(&mut r.leaves);
+            let keep = self.keep_cells;
+            let mut kept = (0..old.len()).filter(|&c| !split[c]).peekable();
+            let mut leaves = Leaves::default();
+            leaves
+                .start
+                .reserve(old.len() + refined.start.len() - count + 1);
+            for (i, &start) in refined.start.iter().enumerate() {
+                while let Some(k) = kept.next_if(|&k| old.start[k] < start) {
+                    leaves.push(
+                        old.start[k] as usize,
+                        old.cells.get(k).unwrap_or(&ANY_CELL),
+                        keep,
+                    );
                 }
-                leaves.push(n);
+                leaves.push(
+                    start as usize,
+                    refined.cells.get(i).unwrap_or(&ANY_CELL),
+                    keep,
+                );
             }
-            leaves.extend(kept);
+            for k in kept {
+                leaves.push(
+                    old.start[k] as usize,
+                    old.cells.get(k).unwrap_or(&ANY_CELL),
+                    keep,
+                );
+            }
+            leaves.start.push(r.order.len() as u32);
             r.leaves = leaves;
         }
         Ok(count)
     }
 
-    /// Refines each of `cells` (disjoint ranges of `order`, sorted by start) until every
-    /// resulting cell's displacement is at most `tolerance`; returns the leaves sorted by start.
+    /// Refines each of `cells` (disjoint ranges of `order`, sorted by start, with their boxes)
+    /// until every resulting cell's displacement is at most `tolerance`; returns the leaves
+    /// sorted by start (without the end).
     ///
     /// Refining is *tentative-safe*: splitting a cell only permutes its own range and always
     /// yields the same children, so the input cells stay valid whatever is done with the result.
     fn refine_all(
         &self,
         order: &mut [Point],
-        cells: &[Node],
+        cells: &[(Node, Cell)],
         tolerance: f64,
-    ) -> Result<Vec<Node>, Stop> {
-        let mut jobs: Vec<(Node, &mut [Point])> = Vec::with_capacity(cells.len());
+    ) -> Result<Leaves, Stop> {
+        let mut jobs: Vec<(Node, Cell, &mut [Point])> = Vec::with_capacity(cells.len());
         let mut rest = order;
         let mut consumed = 0;
-        for c in cells {
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(c.start - consumed);
-            let (mine, tail) = tail.split_at_mut(c.end - c.start);
+        for (c, cell) in cells {
+            let (start, end) = (c.start as usize, c.end as usize);
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(start - consumed);
+            let (mine, tail) = tail.split_at_mut(end - start);
             rest = tail;
-            consumed = c.end;
-            jobs.push((*c, mine));
+            consumed = end;
+            jobs.push((*c, *cell, mine));
         }
-        let parts: Vec<Result<Vec<Node>, Stop>> = if jobs.len() > 1 {
+        let parts: Vec<Result<Leaves, Stop>> = if jobs.len() > 1 {
             use rayon::prelude::*;
             jobs.into_par_iter()
                 .with_min_len(64)
-                .map(|(c, slice)| self.refine_one(slice, c, tolerance))
+                .map(|(c, cell, slice)| self.refine_one(slice, c, cell, tolerance))
                 .collect()
         } else {
             jobs.into_iter()
-                .map(|(c, slice)| self.refine_one(slice, c, tolerance))
+                .map(|(c, cell, slice)| self.refine_one(slice, c, cell, tolerance))
                 .collect()
         };
-        let mut out = Vec::with_capacity(cells.len());
-        for p in parts {
-            out.extend(p?);
+        let mut out = Leaves::default();
+        for (p, (c, _)) in parts.into_iter().zip(cells) {
+            out.append(p?, c.start as usize);
         }
         Ok(out)
     }
 
-    /// Refines one cell whose vertices are exactly `slice`; leaves are numbered globally.
+    /// Refines one cell whose vertices are exactly `slice`; its leaves are numbered from the
+    /// cell's start.
     fn refine_one(
         &self,
         slice: &mut [Point],
-        cell: Node,
+        node: Node,
+        cell: Cell,
         tolerance: f64,
-    ) -> Result<Vec<Node>, Stop> {
-        if cell.eval.err <= tolerance {
-            return Ok(vec![cell]);
-        }
-        let mut out = Vec::new();
+    ) -> Result<Leaves, Stop> {
+        let mut out = Leaves::default();
         let local = Node {
             start: 0,
-            end: cell.end - cell.start,
-            ..cell
+            end: node.end - node.start,
+            ..node
         };
-        self.refine(slice, local, tolerance, &mut out)?;
-        for n in &mut out {
-            n.start += cell.start;
-            n.end += cell.start;
-        }
+        self.refine(slice, local, cell, tolerance, &mut out)?;
         Ok(out)
     }
 
@@ -323,48 +399,46 @@ impl<'a> Adaptive<'a> {
         &self,
         order: &mut [Point],
         node: Node,
+        cell: Cell,
         tolerance: f64,
-        out: &mut Vec<Node>,
+        out: &mut Leaves,
     ) -> Result<(), Stop> {
-        if node.eval.err <= tolerance {
-            out.push(node);
+        if node.eval.err() <= tolerance {
+            out.push(0, &cell, self.keep_cells);
             return Ok(());
         }
         if self.cancelled() {
             return Err(Stop::Cancelled);
         }
-        let Some((l, r)) = self.split(order, &node) else {
-            out.push(node);
+        let Some((l, r, cut)) = self.split(order, &node) else {
+            out.push(0, &cell, self.keep_cells);
             return Ok(());
         };
+        let (lcell, rcell) = cut.cells(&cell);
         let mid = l.end;
-        let (lo, hi) = order.split_at_mut(mid);
+        let (lo, hi) = order.split_at_mut(mid as usize);
         let r_local = Node {
             start: 0,
             end: r.end - mid,
             ..r
         };
-        if node.end - node.start > PARALLEL_CELL {
-            let mut right = Vec::new();
+        if (node.end - node.start) as usize > PARALLEL_CELL {
+            let (mut left, mut right) = (Leaves::default(), Leaves::default());
             let (a, b) = rayon::join(
-                || self.refine(lo, l, tolerance, out),
-                || self.refine(hi, r_local, tolerance, &mut right),
+                || self.refine(lo, l, lcell, tolerance, &mut left),
+                || self.refine(hi, r_local, rcell, tolerance, &mut right),
             );
             a?;
             b?;
-            out.extend(right.into_iter().map(|n| Node {
-                start: n.start + mid,
-                end: n.end + mid,
-                ..n
-            }));
+            out.append(left, 0);
+            out.append(right, mid as usize);
         } else {
-            self.refine(lo, l, tolerance, out)?;
-            let from = out.len();
-            self.refine(hi, r_local, tolerance, out)?;
-            for n in &mut out[from..] {
-                n.start += mid;
-                n.end += mid;
-            }
+            let from = out.start.len();
+            self.refine(lo, l, lcell, tolerance, out)?;
+            let middle = out.start.len();
+            self.refine(hi, r_local, rcell, tolerance, out)?;
+            out.start[middle..].iter_mut().for_each(|s| *s += mid);
+            debug_assert!(out.start[from..].is_sorted());
         }
         Ok(())
     }
@@ -372,27 +446,44 @@ impl<'a> Adaptive<'a> {
     /// Complexity goal (section 4): splits, one at a time, the cell with the largest
     /// displacement until there are `target` cells. `more` then counts the output vertices
     /// after elimination (cells whose faces all collapse are lost) and asks for that many
-    /// further splits. Stops early when no cell can be split (all remaining cells hold
-    /// coincident vertices).
+    /// further splits; it is given the partition and its leaves (over [`Adaptive::order`]).
+    /// Stops early when no cell can be split (all remaining cells hold coincident vertices).
     pub(crate) fn complexity(
         &self,
         classes: Option<&[u8]>,
         bounds: &Cell,
         target: u64,
-        keep_cells: bool,
-        mut more: impl FnMut(&Partition) -> u64,
+        mut more: impl FnMut(&Partition, LeafView) -> u64,
     ) -> Result<Partition, Stop> {
-        // The leaves live in an arena (`live`, a split cell hands its slot to its left child);
-        // `by_start` lists them in the order of their ranges.
-        let (mut order, mut live) = self.roots(classes, bounds);
-        let mut by_start: Vec<u32> = (0..live.len() as u32).collect();
+        // The leaves live in an arena (`live`, a split cell hands its slot to its left child;
+        // `cells` beside it when they are kept); `by_start` lists them in the order of their
+        // ranges.
+        let (mut order, mut live) = self.roots(classes);
+        let mut cells = if self.keep_cells {
+            vec![*bounds; live.len()]
+        } else {
+            Vec::new()
+        };
         let mut goal = target as usize;
         loop {
-            self.approach(&mut order, &mut live, &mut by_start, goal)?;
-            let leaves = by_start.iter().map(|&i| &live[i as usize]);
-            let partition = self.finish(&order, leaves, keep_cells);
-            let extra = more(&partition) as usize;
-            if extra == 0 || live.iter().all(|n| n.eval.err <= 0.0) {
+            let mut by_start = self.approach(&mut order, &mut live, &mut cells, goal)?;
+            let leaf_cells = if self.keep_cells {
+                by_start.iter().map(|&i| cells[i as usize]).collect()
+            } else {
+                Vec::new()
+            };
+            // The leaves' starts, in place of their arena indices.
+            by_start
+                .iter_mut()
+                .for_each(|i| *i = live[*i as usize].start);
+            by_start.push(order.len() as u32);
+            let partition = self.finish(&order, &by_start, leaf_cells);
+            let view = LeafView {
+                order: &order,
+                start: &by_start,
+            };
+            let extra = more(&partition, view) as usize;
+            if extra == 0 || live.iter().all(|n| n.eval.err() <= 0.0) {
                 return Ok(partition);
             }
             // Ask for half the shortfall at a time: a split can revive clusters whose faces had
@@ -402,21 +493,22 @@ impl<'a> Adaptive<'a> {
     }
 
     /// Greedy splitting up to `goal` cells. A [`SplitQueue`] holds the cells that can still be
-    /// split (displacement above zero) by arena index; afterwards `by_start` lists every leaf
-    /// in the order of its range.
+    /// split (displacement above zero) by arena index; returns every leaf's arena index in the
+    /// order of its range.
     fn approach(
         &self,
         order: &mut [Point],
         live: &mut Vec<Node>,
-        by_start: &mut Vec<u32>,
+        cells: &mut Vec<Cell>,
         goal: usize,
-    ) -> Result<(), Stop> {
-        let top = live.iter().map(|n| n.eval.err).fold(0.0, f64::max);
+    ) -> Result<Vec<u32>, Stop> {
+        let top = live.iter().map(|n| n.eval.err()).fold(0.0, f64::max);
         let mut queue = SplitQueue::new(top);
-        let mut kept: Vec<u32> = Vec::with_capacity(goal);
+        let mut kept: Vec<u32> = Vec::with_capacity(goal + 1);
+        live.reserve_exact(goal.saturating_sub(live.len()));
         for (i, n) in live.iter().enumerate() {
-            if n.eval.err > 0.0 {
-                queue.push(ByError(n.eval.err, i as u32));
+            if n.eval.err() > 0.0 {
+                queue.push(ByError(n.eval.err(), i as u32));
             } else {
                 kept.push(i as u32);
             }
@@ -430,12 +522,17 @@ impl<'a> Adaptive<'a> {
             };
             let node = live[i as usize];
             match self.split(order, &node) {
-                Some((l, r)) => {
+                Some((l, r, cut)) => {
                     live[i as usize] = l;
                     live.push(r);
+                    if self.keep_cells {
+                        let (lcell, rcell) = cut.cells(&cells[i as usize]);
+                        cells[i as usize] = lcell;
+                        cells.push(rcell);
+                    }
                     for (child, slot) in [(l, i), (r, live.len() as u32 - 1)] {
-                        if child.eval.err > 0.0 {
-                            queue.push(ByError(child.eval.err, slot));
+                        if child.eval.err() > 0.0 {
+                            queue.push(ByError(child.eval.err(), slot));
                         } else {
                             kept.push(slot);
                         }
@@ -446,37 +543,75 @@ impl<'a> Adaptive<'a> {
         }
         kept.extend(queue.drain().map(|k| k.1));
         kept.sort_unstable_by_key(|&i| live[i as usize].start);
-        *by_start = kept;
-        Ok(())
+        Ok(kept)
     }
 
-    /// Numbers the leaves in order of their ranges and labels every vertex with its cluster.
-    fn finish<'n>(
-        &self,
-        order: &[Point],
-        leaves: impl Iterator<Item = &'n Node> + Clone,
-        keep_cells: bool,
-    ) -> Partition {
+    /// Labels every vertex with its leaf (leaves given by their starts and the end, in order).
+    fn finish(&self, order: &[Point], start: &[u32], cells: Vec<Cell>) -> Partition {
         let mut cluster_of = vec![UNUSED; self.positions.len()];
-        let mut clusters = 0;
-        for (id, leaf) in leaves.clone().enumerate() {
-            clusters += 1;
-            for q in &order[leaf.start..leaf.end] {
+        for (id, w) in start.windows(2).enumerate() {
+            for q in &order[w[0] as usize..w[1] as usize] {
                 cluster_of[q.id as usize] = id as u32;
             }
         }
-        let cells = if keep_cells {
-            leaves.map(|l| l.cell).collect()
-        } else {
-            Vec::new()
-        };
         Partition {
             cluster_of,
-            clusters,
+            clusters: start.len() - 1,
             cells,
         }
     }
 }
+
+impl Refinable {
+    /// The leaves over the vertex order.
+    pub(crate) fn view(&self) -> LeafView<'_> {
+        LeafView {
+            order: &self.order,
+            start: &self.leaves.start,
+        }
+    }
+}
+
+/// The clusters of an adaptive partition as ranges of its vertex order: cluster `i` holds
+/// `order[start[i]..start[i + 1]]`. The representatives are placed from it
+/// (`cluster_stats::of_points`), with no per-cluster statistics held.
+#[derive(Clone, Copy)]
+pub(crate) struct LeafView<'a> {
+    /// The referenced vertices, in leaf order.
+    pub order: &'a [Point],
+    /// Where each leaf starts, and the end.
+    pub start: &'a [u32],
+}
+
+impl LeafView<'_> {
+    /// The vertices of cluster `c`.
+    pub(crate) fn points(&self, c: usize) -> &[Point] {
+        &self.order[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+}
+
+/// Where a split cut its cell.
+#[derive(Clone, Copy, Debug)]
+struct Cut {
+    axis: usize,
+    at: f32,
+}
+
+impl Cut {
+    /// The two halves of `cell`.
+    fn cells(&self, cell: &Cell) -> (Cell, Cell) {
+        let (mut l, mut r) = (*cell, *cell);
+        l.max[self.axis] = self.at;
+        r.min[self.axis] = self.at;
+        (l, r)
+    }
+}
+
+/// A stand-in for the cell of a leaf when the cells are not kept.
+const ANY_CELL: Cell = Cell {
+    min: [0.0; 3],
+    max: [0.0; 3],
+};
 
 /// A max-priority queue of split candidates that pops in exactly the order of a binary heap
 /// but keeps that heap small: keys are binned by their float bits (8 mantissa bits, so a bin
@@ -569,10 +704,13 @@ impl Ord for ByError {
 
 /// A referenced vertex as the partition handles it: position, weight and vertex index.
 #[derive(Clone, Copy, Debug)]
-struct Point {
-    p: [f32; 3],
-    w: f32,
-    id: u32,
+pub(crate) struct Point {
+    /// Position.
+    pub p: [f32; 3],
+    /// Weight.
+    pub w: f32,
+    /// Vertex index.
+    pub id: u32,
 }
 
 /// Running sums of a cell: inner box, weighted position sum, heaviest vertex.
@@ -659,8 +797,8 @@ mod tests {
     #[test]
     fn quality_bounds_every_displacement() {
         let (p, w, b) = line(100);
-        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
-        let part = a.partition(&a.quality(None, &b, 2.0).unwrap(), true);
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, true, None);
+        let part = a.partition(&a.quality(None, &b, 2.0).unwrap());
         let mut sum = vec![[0f64; 2]; part.clusters];
         for (v, &c) in part.cluster_of.iter().enumerate() {
             sum[c as usize][0] += p[v][0] as f64;
@@ -688,8 +826,8 @@ mod tests {
             min: [0.0; 3],
             max: [999.0, (n / 1000) as f32, 0.0],
         };
-        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
-        let part = a.partition(&a.quality(None, &b, 3.0).unwrap(), false);
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, false, None);
+        let part = a.partition(&a.quality(None, &b, 3.0).unwrap());
         let mut sum = vec![[0f64; 3]; part.clusters];
         for (v, &c) in part.cluster_of.iter().enumerate() {
             sum[c as usize][0] += p[v][0] as f64;
@@ -708,11 +846,11 @@ mod tests {
     #[test]
     fn split_clusters_splits_the_named_leaves_and_keeps_the_bound() {
         let (p, w, b) = line(100);
-        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, true, None);
         let mut r = a.quality(None, &b, 2.0).unwrap();
-        let before = a.partition(&r, true);
+        let before = a.partition(&r);
         assert_eq!(a.split_clusters(&mut r, &[0, 3]).unwrap(), 2);
-        let after = a.partition(&r, true);
+        let after = a.partition(&r);
         assert!(after.clusters >= before.clusters + 2);
         // Leaves still partition the line in order, each cell's vertices inside its box.
         for (v, &c) in after.cluster_of.iter().enumerate() {
@@ -733,8 +871,8 @@ mod tests {
     #[test]
     fn complexity_hits_the_target_exactly() {
         let (p, w, b) = line(1000);
-        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
-        let part = a.complexity(None, &b, 137, false, |_| 0).unwrap();
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, false, None);
+        let part = a.complexity(None, &b, 137, |_, _| 0).unwrap();
         assert_eq!(part.clusters, 137);
     }
 
@@ -746,11 +884,11 @@ mod tests {
             min: [1.0; 3],
             max: [1.0; 3],
         };
-        let a = Adaptive::new(&p, &w, Representative::Barycenter, None);
+        let a = Adaptive::new(&p, &w, Representative::Barycenter, false, None);
         let mut r = a.quality(None, &b, 1e-9).unwrap();
-        assert_eq!(a.partition(&r, false).clusters, 1);
+        assert_eq!(a.partition(&r).clusters, 1);
         assert_eq!(a.split_clusters(&mut r, &[0]).unwrap(), 0);
-        assert_eq!(a.complexity(None, &b, 5, false, |_| 1).unwrap().clusters, 1);
+        assert_eq!(a.complexity(None, &b, 5, |_, _| 1).unwrap().clusters, 1);
     }
 
     #[test]

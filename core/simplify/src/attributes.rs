@@ -22,9 +22,8 @@ pub(crate) fn carry_groups(input: &Mesh, kept: &Eliminated) -> Vec<u32> {
     if input.face_groups.is_empty() {
         return Vec::new();
     }
-    kept.source_face
-        .iter()
-        .map(|&f| input.face_groups[f as usize])
+    kept.source_faces()
+        .map(|f| input.face_groups[f as usize])
         .collect()
 }
 
@@ -149,7 +148,7 @@ pub(crate) fn carry_attributes(
                     ..a.empty_like()
                 }
             }
-            Domain::Face => a.gather(kept.source_face.iter().copied()),
+            Domain::Face => a.gather(kept.source_faces().collect::<Vec<_>>().into_iter()),
         })
         .collect()
 }

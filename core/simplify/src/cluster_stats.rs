@@ -2,14 +2,15 @@
 //! des sommets") are made of: the weight sum and weighted position sum (barycentre), the
 //! heaviest vertex, and the box of the cluster's vertices (the quadric minimiser's bound).
 //!
-//! Accumulated in one pass over the vertices in fixed blocks ([`crate::blocks`]): each block
-//! sums into its own partials, and the partials are added into the clusters in block order,
-//! so the sums do not depend on the thread count. The grid partition accumulates them while
-//! it bins (`grid_partition.rs`); the adaptive partitions gather them from the cluster ids.
+//! Summed as one pass over the vertices in fixed blocks ([`crate::blocks`]) would: each block
+//! sums its part of a cluster in vertex order, and the parts are added in block order, so the
+//! sums do not depend on the thread count. They are summed cluster by cluster when each
+//! representative is placed, from the cluster's vertices — a range of the vertex order for the
+//! adaptive partitions ([`of_points`]), the vertex lists of `Partition::members` for the grid
+//! ([`of_members`]) — so no statistics are held for every cluster at once.
 
+use crate::adaptive_partition::Point;
 use crate::blocks;
-use crate::cell_table::CellTable;
-use crate::partition::UNUSED;
 
 /// The statistics of one cluster (one cache line).
 #[derive(Clone, Copy, Debug)]
@@ -75,66 +76,59 @@ impl Stats {
     }
 }
 
-/// One block's partials: the clusters it met (in first-met order), their keys and their sums.
-pub(crate) struct BlockStats {
-    /// Key of each local cluster.
-    pub keys: Vec<u64>,
-    /// Partial statistics of each local cluster.
-    pub stats: Vec<Stats>,
-}
-
-impl BlockStats {
-    /// Empty partials for a block of `n` items, and a table that never grows for them.
-    pub fn new(n: usize) -> (BlockStats, CellTable) {
-        let table = CellTable::with_capacity(n);
-        let out = BlockStats {
-            keys: Vec::with_capacity(n / 4),
-            stats: Vec::with_capacity(n / 4),
-        };
-        (out, table)
-    }
-
-    /// Adds vertex `v` to the cluster of `key`; returns its local id.
-    #[inline]
-    pub fn add(&mut self, table: &mut CellTable, key: u64, v: u32, p: &[f32; 3], w: f32) -> u32 {
-        let id = table.id(key);
-        if id as usize == self.stats.len() {
-            self.keys.push(key);
-            self.stats.push(Stats::EMPTY);
-        }
-        self.stats[id as usize].add(v, p, w);
-        id
-    }
-}
-
-/// The statistics of every cluster of `cluster_of` (`clusters` of them).
-pub(crate) fn gather(
-    positions: &[[f32; 3]],
-    weights: &[f32],
-    cluster_of: &[u32],
-    clusters: usize,
-) -> Vec<Stats> {
-    let partials = blocks::map(positions.len(), |r| {
-        let (mut b, mut table) = BlockStats::new(r.len());
-        for v in r {
-            let c = cluster_of[v];
-            if c != UNUSED {
-                b.add(
-                    &mut table,
-                    u64::from(c),
-                    v as u32,
-                    &positions[v],
-                    weights[v],
-                );
-            }
-        }
-        b
+/// The statistics of one cluster whose vertices are `points` (in any order; `scratch` is
+/// reused between calls), summed exactly as a pass over the vertices in fixed blocks sums
+/// them: each block's partial in index order, the partials added in block order. So an adaptive partition, which holds each cluster's vertices as a range of its
+/// vertex order, places representatives without a statistics array for all its clusters, and
+/// they are the same bits as if it had one.
+pub(crate) fn of_points(points: &[Point], scratch: &mut Vec<u64>) -> Stats {
+    // Sorted as (vertex index, place in `points`) pairs: eight bytes a vertex to move.
+    scratch.clear();
+    scratch.extend(
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, q)| u64::from(q.id) << 32 | i as u64),
+    );
+    scratch.sort_unstable();
+    let verts = scratch.iter().map(|&k| {
+        let q = &points[k as u32 as usize];
+        (q.id, q.p, q.w)
     });
-    let mut stats = vec![Stats::EMPTY; clusters];
-    for b in &partials {
-        for (&k, s) in b.keys.iter().zip(&b.stats) {
-            stats[k as usize].merge(s);
+    in_blocks(verts, false)
+}
+
+/// The statistics of a grid cluster whose vertices are `members` (in increasing index order),
+/// summed as the grid summed them while it binned: each block's partial in index order, the
+/// first block's partial taken as it is and the others added in block order.
+pub(crate) fn of_members(members: &[u32], positions: &[[f32; 3]], weights: &[f32]) -> Stats {
+    let verts = members
+        .iter()
+        .map(|&v| (v, positions[v as usize], weights[v as usize]));
+    in_blocks(verts, true)
+}
+
+/// The sum of `verts` (index, position, weight; in increasing index order) block by block of
+/// [`blocks::BLOCK`] indices. `copy_first`: the sum starts as the first block's partial (the
+/// grid's way) rather than as that partial added to an empty sum (the adaptive partitions'
+/// former way); the two differ only in the sign of a zero sum, and each is kept to the bit.
+fn in_blocks(verts: impl Iterator<Item = (u32, [f32; 3], f32)>, copy_first: bool) -> Stats {
+    let mut total = (!copy_first).then_some(Stats::EMPTY);
+    let mut part = Stats::EMPTY;
+    let mut block = None;
+    let add = |total: &mut Option<Stats>, part: &Stats| match total {
+        Some(t) => t.merge(part),
+        None => *total = Some(*part),
+    };
+    for (v, p, w) in verts {
+        let b = v as usize / blocks::BLOCK;
+        if block.is_some_and(|block| block != b) {
+            add(&mut total, &part);
+            part = Stats::EMPTY;
         }
+        block = Some(b);
+        part.add(v, &p, w);
     }
-    stats
+    add(&mut total, &part);
+    total.unwrap_or(Stats::EMPTY)
 }

@@ -105,29 +105,28 @@ struct Covered {
 
 impl Covered {
     /// The output whose faces `each_face(f)` calls `f` with (twice: once to count, once to
-    /// fill); `corners` is their number of corners.
-    fn new(clusters: usize, corners: usize, each_face: impl Fn(&mut dyn FnMut(&[u32]))) -> Self {
+    /// fill each list from its end, so the row starts are the only index array).
+    fn new(clusters: usize, mut each_face: impl FnMut(&mut dyn FnMut(&[u32]))) -> Self {
         let mut used = vec![false; clusters];
         let mut start = vec![0u32; clusters + 1];
         each_face(&mut |face| {
             let mut prev = face[face.len() - 1];
             for &c in face {
                 used[c as usize] = true;
-                start[prev.min(c) as usize + 1] += 1;
+                start[prev.min(c) as usize] += 1;
                 prev = c;
             }
         });
-        for c in 0..clusters {
-            start[c + 1] += start[c];
+        for c in 1..=clusters {
+            start[c] += start[c - 1];
         }
-        let mut cursor = start.clone();
-        let mut other = vec![0u32; corners];
+        let mut other = vec![0u32; start[clusters] as usize];
         each_face(&mut |face| {
             let mut prev = face[face.len() - 1];
             for &c in face {
                 let lo = prev.min(c) as usize;
-                other[cursor[lo] as usize] = prev.max(c);
-                cursor[lo] += 1;
+                start[lo] -= 1;
+                other[start[lo] as usize] = prev.max(c);
                 prev = c;
             }
         });
@@ -180,40 +179,89 @@ impl Gaps {
 /// `moved`: after a round, only faces with a vertex in a cell that was split (`moved[v]`) are
 /// read. The others' pieces were covered before, by a kept face with those two clusters, and
 /// that face stays kept: a split gives its third cluster a new id, never one of those two.
+///
+/// The kept faces are read twice and the collapsed ones once more rather than copied (two bits
+/// a face say which is which): neither the kept faces nor the collapsed ones' pieces are held.
 pub(crate) fn gaps_by_clusters(
     mesh: &Mesh,
     cluster_of: &[u32],
     clusters: usize,
     moved: Option<&[bool]>,
 ) -> Gaps {
-    let mut kept: Vec<[u32; 3]> = Vec::new();
-    let mut pieces: Vec<Piece> = Vec::new();
-    for t in mesh.face_indices.chunks_exact(3) {
-        if moved.is_some_and(|m| !t.iter().any(|&v| m[v as usize])) {
-            continue;
-        }
-        let t = [0, 1, 2].map(|k| cluster_of[t[k] as usize]);
-        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
-            kept.push(t);
-        } else {
-            // Neighbouring faces, neighbours in the mesh's order too, collapse alike.
-            triangle_image(t, |p| {
-                if pieces.last() != Some(&p) {
-                    pieces.push(p)
+    let faces = mesh.face_indices.len() / 3;
+    let (mut kept, mut collapsed) = (Bits::new(faces), Bits::new(faces));
+    let read = |f: usize| {
+        let t = &mesh.face_indices[3 * f..3 * f + 3];
+        [0, 1, 2].map(|k| cluster_of[t[k] as usize])
+    };
+    let mut first = true;
+    let covered = Covered::new(clusters, |each| {
+        if std::mem::take(&mut first) {
+            // The first reading sorts the faces.
+            for f in 0..faces {
+                let t = &mesh.face_indices[3 * f..3 * f + 3];
+                if moved.is_some_and(|m| !t.iter().any(|&v| m[v as usize])) {
+                    continue;
                 }
-            });
+                let t = read(f);
+                if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+                    kept.set(f);
+                    each(&t);
+                } else {
+                    collapsed.set(f);
+                }
+            }
+        } else {
+            kept.ones().for_each(|f| each(&read(f)));
         }
-    }
-    let covered = Covered::new(clusters, 3 * kept.len(), |f| kept.iter().for_each(|t| f(t)));
-    drop(kept);
+    });
     let mut gaps = Gaps::default();
     let mut involved = vec![false; clusters];
-    for piece in pieces {
-        if !covered.covers(piece) {
-            gaps.add(piece, &mut involved);
-        }
+    // Neighbouring faces, neighbours in the mesh's order too, collapse alike: a piece that
+    // repeats the one before is checked once.
+    let mut last = None;
+    for f in collapsed.ones() {
+        triangle_image(read(f), |p| {
+            if last != Some(p) {
+                last = Some(p);
+                if !covered.covers(p) {
+                    gaps.add(p, &mut involved);
+                }
+            }
+        });
     }
     gaps.finish(&involved)
+}
+
+/// A set of face indices, a bit each.
+struct Bits {
+    words: Vec<u64>,
+}
+
+impl Bits {
+    fn new(n: usize) -> Bits {
+        Bits {
+            words: vec![0; n.div_ceil(64)],
+        }
+    }
+
+    fn set(&mut self, i: usize) {
+        self.words[i / 64] |= 1 << (i % 64);
+    }
+
+    /// The members, in increasing order.
+    fn ones(&self) -> impl Iterator<Item = usize> + '_ {
+        self.words.iter().enumerate().flat_map(|(w, &bits)| {
+            let mut bits = bits;
+            std::iter::from_fn(move || {
+                (bits != 0).then(|| {
+                    let b = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    64 * w + b
+                })
+            })
+        })
+    }
 }
 
 /// Marks the vertices of `split` (sorted cluster ids under `cluster_of`, as [`Gaps::clusters`]
@@ -227,7 +275,7 @@ pub(crate) fn vertices_of(cluster_of: &[u32], split: &[u32], clusters: usize) ->
         .collect()
 }
 
-/// The collapsed faces of `mesh` (as `kept.collapsed` lists them) whose image under
+/// The collapsed faces of `mesh` (as `kept.collapsed()` lists them) whose image under
 /// `cluster_of` is not on the output `kept`, which has `clusters` clusters.
 pub(crate) fn find_gaps(
     mesh: &Mesh,
@@ -236,16 +284,16 @@ pub(crate) fn find_gaps(
     clusters: usize,
 ) -> Gaps {
     let mut gaps = Gaps::default();
-    if kept.collapsed.is_empty() {
+    if kept.degenerate == 0 {
         return gaps;
     }
-    let covered = Covered::new(clusters, kept.face_indices.len(), |f| {
+    let covered = Covered::new(clusters, |f| {
         kept.face_offsets
             .windows(2)
             .for_each(|w| f(&kept.face_indices[w[0] as usize..w[1] as usize]))
     });
     let mut involved = vec![false; clusters];
-    for &f in &kept.collapsed {
+    for f in kept.collapsed() {
         let mut open = false;
         collapsed_image(mesh.face(f as usize), cluster_of, |piece| {
             if !covered.covers(piece) {
@@ -292,7 +340,7 @@ mod tests {
         let cluster_of = [0, 1, 2, 1, 1];
         let reps = [m.positions[0], m.positions[1], m.positions[2]];
         let kept = eliminate(&m, &cluster_of, &reps, false);
-        assert_eq!(kept.collapsed, vec![1, 2]);
+        assert_eq!(kept.collapsed().collect::<Vec<_>>(), vec![1, 2]);
         let gaps = find_gaps(&m, &cluster_of, &kept, 3);
         assert!(gaps.is_empty(), "{gaps:?}");
     }

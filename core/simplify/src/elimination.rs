@@ -6,7 +6,22 @@
 use crate::area_vector;
 use crate::blocks;
 use crate::partition::UNUSED;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use tessd_mesh::Mesh;
+
+/// What became of an input face.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Fate {
+    /// It is an output face.
+    Kept,
+    /// It collapsed: fewer than 3 distinct corners, or zero area (its image is a segment or a
+    /// point, see `coverage.rs`).
+    Collapsed,
+    /// It repeats an earlier kept face.
+    Duplicate,
+}
 
 /// Faces over cluster ids, with where each came from.
 #[derive(Debug, Default)]
@@ -15,12 +30,11 @@ pub(crate) struct Eliminated {
     pub face_offsets: Vec<u32>,
     /// Cluster id of each corner.
     pub face_indices: Vec<u32>,
-    /// The input face of each output face.
-    pub source_face: Vec<u32>,
+    /// The fate of each input face (one byte a face: the output faces are the kept ones, in
+    /// order, so no list of source faces is held).
+    pub fate: Vec<Fate>,
     /// The input corner (index into the input's `face_indices`) of each output corner.
     pub source_corner: Vec<u32>,
-    /// The input faces that collapsed (their image is a segment or a point, see `coverage.rs`).
-    pub collapsed: Vec<u32>,
     /// Faces removed because they collapsed (fewer than 3 distinct corners or zero area).
     pub degenerate: u64,
     /// Of those, faces with 3 distinct clusters whose representatives are collinear.
@@ -29,173 +43,331 @@ pub(crate) struct Eliminated {
     pub duplicates: u64,
 }
 
+impl Eliminated {
+    /// The input face of each output face, in order.
+    pub(crate) fn source_faces(&self) -> impl Iterator<Item = u32> + '_ {
+        self.faces_with(Fate::Kept)
+    }
+
+    /// The input faces that collapsed, in order.
+    pub(crate) fn collapsed(&self) -> impl Iterator<Item = u32> + '_ {
+        self.faces_with(Fate::Collapsed)
+    }
+
+    fn faces_with(&self, fate: Fate) -> impl Iterator<Item = u32> + '_ {
+        (self.fate.iter().enumerate())
+            .filter(move |(_, f)| **f == fate)
+            .map(|(f, _)| f as u32)
+    }
+}
+
 /// Maps every face of `mesh` through `cluster_of` and removes collapsed and duplicate faces.
 /// The first of several duplicates is kept, so the result is deterministic. `corners`: also
 /// record each output corner's input corner (needed only to carry face-varying attributes).
 ///
-/// One pass writes the surviving faces straight into the output — in parallel, fixed blocks of
-/// faces each writing their own part, joined in block order so faces keep their order
-/// ([`crate::blocks`]); duplicates are then found by bucketing faces by their smallest cluster
-/// ([`find_duplicates`]) and squeezed out in place.
+/// Two passes over fixed blocks of faces, on every core ([`crate::blocks`]): the first decides
+/// each face's fate and counts what each block keeps, the second writes the surviving faces
+/// straight into their final place in outputs of the exact size (no per-block parts to join,
+/// so the faces are never held twice); duplicates are then found by bucketing faces by their
+/// smallest cluster ([`find_duplicates`]) and squeezed out in place.
+///
+/// (The pipeline runs the two steps itself, [`fates`] then [`Fates::eliminate`], to free what
+/// it can in between.)
+#[cfg(test)]
 pub(crate) fn eliminate(
     mesh: &Mesh,
     cluster_of: &[u32],
     reps: &[[f32; 3]],
     corners: bool,
 ) -> Eliminated {
-    let parts = blocks::map(mesh.face_count(), |r| {
-        collapse_faces(mesh, cluster_of, reps, r, corners)
+    fates(mesh, cluster_of, reps).eliminate(mesh, cluster_of, reps, corners)
+}
+
+/// [`eliminate`]'s first pass: the fate of every face, and what each block keeps.
+pub(crate) struct Fates {
+    fate: Vec<Fate>,
+    /// Per block: kept faces, kept corners, degenerate faces, flattened faces.
+    counts: Vec<[u64; 4]>,
+}
+
+impl Fates {
+    /// Faces with 3 distinct clusters whose representatives are collinear.
+    pub(crate) fn flattened(&self) -> u64 {
+        self.counts.iter().map(|c| c[3]).sum()
+    }
+}
+
+/// Decides the fate of every face of `mesh` under `cluster_of` and `reps` (collapsed or kept;
+/// duplicates are found later).
+pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates {
+    let mut fate = vec![Fate::Kept; mesh.face_count()];
+    // Pass 1: fates, and per block (kept faces, kept corners, degenerate, flattened).
+    let counts: Vec<[u64; 4]> = fate
+        .par_chunks_mut(blocks::BLOCK)
+        .enumerate()
+        .map(|(b, fates)| {
+            let mut c = [0u64; 4];
+            let mut ring = Vec::new();
+            for (i, slot) in fates.iter_mut().enumerate() {
+                let f = b * blocks::BLOCK + i;
+                match image(mesh, cluster_of, reps, f, &mut ring) {
+                    Image::Face(corners) => {
+                        c[0] += 1;
+                        c[1] += corners as u64;
+                    }
+                    Image::Collapsed { distinct } => {
+                        *slot = Fate::Collapsed;
+                        c[2] += 1;
+                        c[3] += u64::from(distinct);
+                    }
+                }
+            }
+            c
+        })
+        .collect();
+    Fates { fate, counts }
+}
+
+impl Fates {
+    /// [`eliminate`]'s second pass and the removal of duplicates.
+    pub(crate) fn eliminate(
+        self,
+        mesh: &Mesh,
+        cluster_of: &[u32],
+        reps: &[[f32; 3]],
+        corners: bool,
+    ) -> Eliminated {
+        let Fates { fate, counts } = self;
+        let n = mesh.face_count();
+        let faces: usize = counts.iter().map(|c| c[0] as usize).sum();
+        let total: usize = counts.iter().map(|c| c[1] as usize).sum();
+        let mut out = Eliminated {
+            face_offsets: vec![0; faces + 1],
+            face_indices: vec![0; total],
+            source_corner: vec![0; if corners { total } else { 0 }],
+            degenerate: counts.iter().map(|c| c[2]).sum(),
+            flattened: counts.iter().map(|c| c[3]).sum(),
+            ..Eliminated::default()
+        };
+        // Pass 2: each block writes its faces into its own slices of the outputs.
+        {
+            let mut jobs = Vec::with_capacity(counts.len());
+            let (mut offsets, mut indices) =
+                (&mut out.face_offsets[1..], &mut out.face_indices[..]);
+            let mut sources = &mut out.source_corner[..];
+            let mut base = 0u32;
+            for (b, c) in counts.iter().enumerate() {
+                let (o, rest) = std::mem::take(&mut offsets).split_at_mut(c[0] as usize);
+                offsets = rest;
+                let (i, rest) = std::mem::take(&mut indices).split_at_mut(c[1] as usize);
+                indices = rest;
+                let k = if corners { c[1] as usize } else { 0 };
+                let (s, rest) = std::mem::take(&mut sources).split_at_mut(k);
+                sources = rest;
+                jobs.push((b, base, o, i, s));
+                base += c[1] as u32;
+            }
+            let fate = &fate;
+            jobs.into_par_iter()
+                .for_each(|(b, base, offsets, indices, sources)| {
+                    let range = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(n);
+                    write_faces(
+                        mesh, cluster_of, fate, range, base, offsets, indices, sources,
+                    );
+                });
+        }
+        out.fate = fate;
+        let duplicate = find_duplicates(&out, reps.len());
+        out.duplicates = duplicate.len() as u64;
+        if duplicate.is_empty() {
+            return out;
+        }
+        // The input faces of the duplicates change fate.
+        let mut next = duplicate.iter().peekable();
+        let kept = out.fate.iter_mut().filter(|f| **f == Fate::Kept);
+        for (i, f) in kept.enumerate() {
+            if next.next_if(|&&d| d as usize == i).is_some() {
+                *f = Fate::Duplicate;
+            }
+        }
+        // Squeeze the duplicates out in place: the write position never passes the read position.
+        let mut next = duplicate.iter().peekable();
+        let (mut corner_w, mut face_w) = (0usize, 0usize);
+        for f in 0..faces {
+            // Offsets f and f + 1 are still the originals here: writes go to `face_w` ≤ f, or to
+            // f + 1 with its own value when nothing was dropped yet.
+            let (s, e) = (
+                out.face_offsets[f] as usize,
+                out.face_offsets[f + 1] as usize,
+            );
+            if next.next_if(|&&d| d as usize == f).is_some() {
+                continue;
+            }
+            out.face_indices.copy_within(s..e, corner_w);
+            if corners {
+                out.source_corner.copy_within(s..e, corner_w);
+            }
+            corner_w += e - s;
+            face_w += 1;
+            out.face_offsets[face_w] = corner_w as u32;
+        }
+        out.face_indices.truncate(corner_w);
+        out.source_corner
+            .truncate(if corners { corner_w } else { 0 });
+        out.face_offsets.truncate(face_w + 1);
+        out
+    }
+}
+
+/// How many clusters the faces that survive elimination use: [`eliminate`]'s output vertex
+/// count without building its faces (duplicates use the clusters of the face they repeat).
+pub(crate) fn count_used(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> usize {
+    let used: Vec<AtomicBool> = (0..reps.len()).map(|_| AtomicBool::new(false)).collect();
+    // Whether a cluster is used does not depend on which core marks it first.
+    blocks::ranges(mesh.face_count()).for_each(|r| {
+        let mut ring = Vec::new();
+        for f in r {
+            let mark = |c: u32| used[c as usize].store(true, Ordering::Relaxed);
+            match image(mesh, cluster_of, reps, f, &mut ring) {
+                Image::Face(3) => mesh
+                    .face(f)
+                    .iter()
+                    .for_each(|&v| mark(cluster_of[v as usize])),
+                // A polygon keeps the clusters of its collapsed ring.
+                Image::Face(_) => ring.iter().for_each(|&(c, _)| mark(c)),
+                Image::Collapsed { .. } => {}
+            }
+        }
     });
-    let mut out = join(parts);
-    let duplicate = find_duplicates(&out, reps.len());
-    out.duplicates = duplicate.iter().filter(|&&d| d).count() as u64;
-    if out.duplicates == 0 {
-        return out;
-    }
-    // Squeeze the duplicates out in place: the write position never passes the read position.
-    let (mut corner_w, mut face_w) = (0usize, 0usize);
-    for (f, &dup) in duplicate.iter().enumerate() {
-        // Offsets f and f + 1 are still the originals here: writes go to `face_w` ≤ f, or to
-        // f + 1 with its own value when nothing was dropped yet.
-        let (s, e) = (
-            out.face_offsets[f] as usize,
-            out.face_offsets[f + 1] as usize,
-        );
-        if dup {
-            continue;
-        }
-        out.face_indices.copy_within(s..e, corner_w);
-        if corners {
-            out.source_corner.copy_within(s..e, corner_w);
-        }
-        out.source_face[face_w] = out.source_face[f];
-        corner_w += e - s;
-        face_w += 1;
-        out.face_offsets[face_w] = corner_w as u32;
-    }
-    out.face_indices.truncate(corner_w);
-    out.source_corner
-        .truncate(if corners { corner_w } else { 0 });
-    out.source_face.truncate(face_w);
-    out.face_offsets.truncate(face_w + 1);
-    out
+    used.into_iter()
+        .filter(|u| u.load(Ordering::Relaxed))
+        .count()
 }
 
-/// The blocks' faces one after the other.
-fn join(mut parts: Vec<Eliminated>) -> Eliminated {
-    if parts.len() == 1 {
-        return parts.pop().expect("one part");
-    }
-    let faces: usize = parts.iter().map(|p| p.source_face.len()).sum();
-    let corners: usize = parts.iter().map(|p| p.face_indices.len()).sum();
-    let mut out = Eliminated {
-        face_offsets: Vec::with_capacity(faces + 1),
-        face_indices: Vec::with_capacity(corners),
-        source_face: Vec::with_capacity(faces),
-        ..Eliminated::default()
-    };
-    out.face_offsets.push(0);
-    for p in parts {
-        let base = out.face_indices.len() as u32;
-        out.face_offsets
-            .extend(p.face_offsets[1..].iter().map(|&o| o + base));
-        out.face_indices.extend_from_slice(&p.face_indices);
-        out.source_face.extend_from_slice(&p.source_face);
-        out.source_corner.extend_from_slice(&p.source_corner);
-        out.collapsed.extend_from_slice(&p.collapsed);
-        out.degenerate += p.degenerate;
-        out.flattened += p.flattened;
-    }
-    out
+/// A face's image under the clustering.
+enum Image {
+    /// An output face with this many corners.
+    Face(usize),
+    /// A collapsed face; `distinct`: it has 3 distinct clusters (or a ring of 3 or more)
+    /// whose representatives are collinear.
+    Collapsed { distinct: bool },
 }
 
-/// Maps the faces in `range` to clusters and drops those that collapse (no duplicate check).
-fn collapse_faces(
+/// The image of face `f`; `ring` is scratch for polygons.
+fn image(
     mesh: &Mesh,
     cluster_of: &[u32],
     reps: &[[f32; 3]],
-    range: std::ops::Range<usize>,
-    corners: bool,
-) -> Eliminated {
-    let mut out = Eliminated {
-        face_offsets: Vec::with_capacity(range.len() + 1),
-        face_indices: Vec::with_capacity(
-            (mesh.face_offsets[range.end] - mesh.face_offsets[range.start]) as usize,
-        ),
-        source_face: Vec::with_capacity(range.len()),
-        ..Eliminated::default()
-    };
-    out.face_offsets.push(0);
-    let mut ring: Vec<(u32, u32)> = Vec::with_capacity(16);
-    for f in range {
-        let (s, e) = (mesh.face_offsets[f], mesh.face_offsets[f + 1]);
-        if e - s == 3 {
-            // Triangles, the common case: no ring to collapse, only three ids to compare.
-            let v = [0, 1, 2].map(|k| cluster_of[mesh.face_indices[s as usize + k] as usize]);
-            let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
-            if !distinct || zero_area_triangle(v, reps) {
-                out.degenerate += 1;
-                out.flattened += u64::from(distinct);
-                out.collapsed.push(f as u32);
-                continue;
-            }
-            out.face_indices.extend_from_slice(&v);
-            if corners {
-                out.source_corner.extend([s, s + 1, s + 2]);
-            }
-        } else {
-            ring.clear();
-            for corner in s..e {
-                let c = cluster_of[mesh.face_indices[corner as usize] as usize];
-                debug_assert_ne!(c, UNUSED);
-                ring.push((c, corner));
-            }
-            collapse_ring(&mut ring);
-            if ring.len() < 3 || zero_area(&ring, reps) {
-                out.degenerate += 1;
-                out.flattened += u64::from(ring.len() >= 3);
-                out.collapsed.push(f as u32);
-                continue;
-            }
-            out.face_indices.extend(ring.iter().map(|r| r.0));
-            if corners {
-                out.source_corner.extend(ring.iter().map(|r| r.1));
-            }
+    f: usize,
+    ring: &mut Vec<(u32, u32)>,
+) -> Image {
+    let (s, e) = (mesh.face_offsets[f], mesh.face_offsets[f + 1]);
+    if e - s == 3 {
+        // Triangles, the common case: no ring to collapse, only three ids to compare.
+        let v = [0, 1, 2].map(|k| cluster_of[mesh.face_indices[s as usize + k] as usize]);
+        let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
+        if !distinct || zero_area_triangle(v, reps) {
+            return Image::Collapsed { distinct };
         }
-        out.face_offsets.push(out.face_indices.len() as u32);
-        out.source_face.push(f as u32);
+        return Image::Face(3);
     }
-    out
+    polygon_ring(mesh, cluster_of, s..e, ring);
+    if ring.len() < 3 || zero_area(ring, reps) {
+        return Image::Collapsed {
+            distinct: ring.len() >= 3,
+        };
+    }
+    Image::Face(ring.len())
 }
 
-/// Marks every face that repeats an earlier one (same cluster cycle up to rotation and
-/// reversal).
+/// The collapsed ring of (cluster, input corner) of the polygon whose corners are `corners`.
+fn polygon_ring(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    corners: std::ops::Range<u32>,
+    ring: &mut Vec<(u32, u32)>,
+) {
+    ring.clear();
+    for corner in corners {
+        let c = cluster_of[mesh.face_indices[corner as usize] as usize];
+        debug_assert_ne!(c, UNUSED);
+        ring.push((c, corner));
+    }
+    collapse_ring(ring);
+}
+
+/// Writes the kept faces of `range` (by `fate`) into a block's slices of the outputs: their
+/// offsets (shifted by `base`, the corners before the block), cluster ids and, when `sources`
+/// is not empty, input corners.
+#[allow(clippy::too_many_arguments)]
+fn write_faces(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    fate: &[Fate],
+    range: std::ops::Range<usize>,
+    base: u32,
+    offsets: &mut [u32],
+    indices: &mut [u32],
+    sources: &mut [u32],
+) {
+    let corners = !sources.is_empty();
+    let (mut face, mut at) = (0usize, 0usize);
+    let mut ring = Vec::new();
+    for f in range {
+        if fate[f] != Fate::Kept {
+            continue;
+        }
+        let (s, e) = (mesh.face_offsets[f], mesh.face_offsets[f + 1]);
+        if e - s == 3 {
+            for k in 0..3 {
+                indices[at + k] = cluster_of[mesh.face_indices[s as usize + k] as usize];
+                if corners {
+                    sources[at + k] = s + k as u32;
+                }
+            }
+            at += 3;
+        } else {
+            polygon_ring(mesh, cluster_of, s..e, &mut ring);
+            for (k, &(c, corner)) in ring.iter().enumerate() {
+                indices[at + k] = c;
+                if corners {
+                    sources[at + k] = corner;
+                }
+            }
+            at += ring.len();
+        }
+        offsets[face] = base + at as u32;
+        face += 1;
+    }
+}
+
+/// The output faces that repeat an earlier one (same cluster cycle up to rotation and
+/// reversal), sorted.
 ///
 /// Duplicates share their smallest cluster, so faces are bucketed by it (a counting sort: two
-/// linear passes) and only faces within a bucket are compared; a bucket is the fan of faces
-/// around one output vertex, a handful of faces, and the few large ones are sorted instead of
-/// compared pairwise.
-fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<bool> {
+/// linear passes, one array of bucket starts) and only faces within a bucket are compared; a
+/// bucket is the fan of faces around one output vertex, a handful of faces, and the few large
+/// ones are sorted instead of compared pairwise.
+fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<u32> {
     let n = faces.face_offsets.len() - 1;
     let face = |f: usize| {
         &faces.face_indices[faces.face_offsets[f] as usize..faces.face_offsets[f + 1] as usize]
     };
     let smallest = |f: usize| *face(f).iter().min().expect("faces have corners") as usize;
+    // Bucket ends, then (filling each bucket from its end, faces in decreasing order) starts.
     let mut start = vec![0u32; clusters + 1];
     for f in 0..n {
-        start[smallest(f) + 1] += 1;
+        start[smallest(f)] += 1;
     }
-    for c in 0..clusters {
-        start[c + 1] += start[c];
+    for c in 1..=clusters {
+        start[c] += start[c - 1];
     }
     let mut bucketed = vec![0u32; n];
-    let mut cursor = start.clone();
-    for f in 0..n {
+    for f in (0..n).rev() {
         let c = smallest(f);
-        bucketed[cursor[c] as usize] = f as u32;
-        cursor[c] += 1;
+        start[c] -= 1;
+        bucketed[start[c] as usize] = f as u32;
     }
-    drop(cursor);
     let canonical = |f: u32| -> Vec<u32> {
         let fc = face(f as usize);
         if fc.len() == 3 {
@@ -256,10 +428,8 @@ fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<bool> {
         }
         marked
     });
-    let mut dup = vec![false; n];
-    for f in marked.into_iter().flatten() {
-        dup[f as usize] = true;
-    }
+    let mut dup: Vec<u32> = marked.into_iter().flatten().collect();
+    dup.sort_unstable();
     dup
 }
 
@@ -353,9 +523,10 @@ mod tests {
         m.push_face(&[0, 0, 1]); // collapsed
         let ids: Vec<u32> = (0..4).collect();
         let e = eliminate(&m, &ids, &m.positions, true);
-        assert_eq!(e.source_face, vec![0, 3]);
+        assert_eq!(e.source_faces().collect::<Vec<_>>(), vec![0, 3]);
         assert_eq!((e.duplicates, e.degenerate), (3, 1));
-        assert_eq!(e.collapsed, vec![5]);
+        assert_eq!(e.collapsed().collect::<Vec<_>>(), vec![5]);
+        assert_eq!(count_used(&m, &ids, &m.positions), 4);
     }
 
     #[test]

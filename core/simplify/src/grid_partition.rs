@@ -4,7 +4,6 @@
 
 use crate::blocks;
 use crate::cell_table::CellTable;
-use crate::cluster_stats::{BlockStats, Stats};
 use crate::options::GridSize;
 use crate::partition::{Cell, Partition, UNUSED};
 use rayon::prelude::*;
@@ -13,7 +12,7 @@ use rayon::prelude::*;
 pub const MAX_CELLS_PER_AXIS: u64 = 1 << 20;
 
 /// Blocks binned per wave (see [`grid_partition`]): enough for every core, few enough that
-/// a wave's partial statistics stay a fraction of the mesh.
+/// a wave's block-local tables stay a fraction of the mesh.
 const WAVE_BLOCKS: usize = 8;
 
 /// Cells per axis and cell sides for a grid of `size` over `bounds`.
@@ -41,17 +40,18 @@ pub(crate) fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
     (dims, side)
 }
 
-/// Assigns every vertex with non-zero weight to the grid cell containing it, and sums the
-/// cells' statistics in the same pass. With `classes`, vertices of different classes never
-/// share a cluster (boundary preservation). Cluster ids follow the order in which cells are
-/// first met, so the output is deterministic.
+/// Assigns every vertex with non-zero weight to the grid cell containing it. With `classes`,
+/// vertices of different classes never share a cluster (boundary preservation). Cluster ids
+/// follow the order in which cells are first met, so the output is deterministic.
 ///
 /// Every core bins (see [`crate::blocks`]): each block of vertices finds its cells in a small
 /// table of its own (in cache, where one table for the whole mesh would miss on almost every
-/// vertex), numbering them in the order it meets them and summing their statistics; the
-/// blocks' cells are then numbered in block order — which is the order in which the whole
-/// vertex sequence meets them — and their partial sums added in that order, a wave of blocks
-/// at a time; a last parallel pass turns each vertex's block-local id into its cluster id.
+/// vertex), numbering them in the order it meets them; the blocks' cells are then numbered in
+/// block order — which is the order in which the whole vertex sequence meets them — a wave of
+/// blocks at a time; a last parallel pass turns each vertex's block-local id into its cluster
+/// id. The cells' statistics are summed afterwards, cluster by cluster, in the same block
+/// order (`cluster_stats::of_members`): holding them for every cell while binning took more
+/// memory than the mesh.
 pub(crate) fn grid_partition(
     positions: &[[f32; 3]],
     weights: &[f32],
@@ -59,7 +59,7 @@ pub(crate) fn grid_partition(
     bounds: &Cell,
     size: GridSize,
     keep_cells: bool,
-) -> (Partition, Vec<Stats>) {
+) -> Partition {
     let (dims, side) = grid_dims(bounds, size);
     let inv: [f64; 3] = std::array::from_fn(|k| 1.0 / side[k]);
     let lo: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.min[k]));
@@ -79,56 +79,51 @@ pub(crate) fn grid_partition(
         }
     };
     let mut table = CellTable::with_capacity(blocks::BLOCK);
-    let mut stats: Vec<Stats> = Vec::new();
     let mut cells = Vec::new();
     let mut maps: Vec<Vec<u32>> = Vec::with_capacity(positions.len().div_ceil(blocks::BLOCK));
-    // The blocks go in waves of WAVE_BLOCKS, so that only one wave's partials are held at
-    // once (they are as large as the cells' statistics); the wave size does not depend on the
-    // thread count, and neither does the order in which partials are merged (block order).
+    // The blocks go in waves of WAVE_BLOCKS, so that only one wave's tables are held at once;
+    // the wave size does not depend on the thread count, and neither does the order in which
+    // the blocks' cells are numbered (block order).
     for (wave, chunk) in cluster_of
         .chunks_mut(WAVE_BLOCKS * blocks::BLOCK)
         .enumerate()
     {
-        // Pass 1 (parallel): local ids and partial statistics per block.
-        let partials: Vec<BlockStats> = chunk
+        // Pass 1 (parallel): local ids, and the cell key of each, per block.
+        let local: Vec<Vec<u64>> = chunk
             .par_chunks_mut(blocks::BLOCK)
             .enumerate()
             .map(|(b, out)| {
                 let start = (wave * WAVE_BLOCKS + b) * blocks::BLOCK;
-                let (mut acc, mut table) = BlockStats::new(out.len());
+                let mut table = CellTable::with_capacity(out.len());
+                let mut keys = Vec::new();
                 for (i, slot) in out.iter_mut().enumerate() {
                     let v = start + i;
-                    let w = weights[v];
-                    if w <= 0.0 {
+                    if weights[v] <= 0.0 {
                         continue;
                     }
                     let class = classes.map_or(0, |c| u64::from(c[v]));
                     let key = key_of(&positions[v], class);
-                    *slot = acc.add(&mut table, key, v as u32, &positions[v], w);
+                    let id = table.id(key);
+                    if id as usize == keys.len() {
+                        keys.push(key);
+                    }
+                    *slot = id;
                 }
-                acc
+                keys
             })
             .collect();
-        // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order
-        // and the partial sums added in block order.
-        for b in &partials {
-            let map = b
-                .keys
+        // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order.
+        for keys in &local {
+            let map = keys
                 .iter()
-                .zip(&b.stats)
                 .enumerate()
-                .map(|(i, (&key, s))| {
-                    if let Some(&ahead) = b.keys.get(i + 8) {
+                .map(|(i, &key)| {
+                    if let Some(&ahead) = keys.get(i + 8) {
                         table.prefetch(ahead);
                     }
                     let id = table.id(key);
-                    if id as usize == stats.len() {
-                        stats.push(*s);
-                        if keep_cells {
-                            cells.push(cell_box(key));
-                        }
-                    } else {
-                        stats[id as usize].merge(s);
+                    if keep_cells && id as usize == cells.len() {
+                        cells.push(cell_box(key));
                     }
                     id
                 })
@@ -145,12 +140,11 @@ pub(crate) fn grid_partition(
                 *c = map[*c as usize];
             }
         });
-    let partition = Partition {
+    Partition {
         cluster_of,
         clusters: table.len() as usize,
         cells,
-    };
-    (partition, stats)
+    }
 }
 
 #[cfg(test)]
@@ -169,7 +163,7 @@ mod tests {
             min: [0.0; 3],
             max: [1.0, 1.0, 0.0],
         };
-        let (p, _) = grid_partition(&positions, &w, None, &b, GridSize::CellsPerAxis(5), true);
+        let p = grid_partition(&positions, &w, None, &b, GridSize::CellsPerAxis(5), true);
         assert_eq!(p.clusters, 25);
         // Points 0 and 1 (x = 0, 0.1) share the first cell; point 2 (x = 0.2) starts the second.
         assert_eq!(p.cluster_of[0], p.cluster_of[1]);
@@ -190,7 +184,7 @@ mod tests {
             min: [0.0; 3],
             max: [1.0; 3],
         };
-        let (p, _) = grid_partition(
+        let p = grid_partition(
             &positions,
             &[1.0, 1.0],
             Some(&[0, 1]),

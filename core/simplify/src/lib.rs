@@ -15,13 +15,14 @@
 //!    3–5);
 //! 4. a representative per cell — weighted barycentre or heaviest vertex (the paper), or the
 //!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000), from per-cell
-//!    statistics (`cluster_stats.rs`) that the grid sums while it bins;
+//!    statistics (`cluster_stats.rs`) summed cluster by cluster as each is placed, so that no
+//!    statistics or quadrics are held for every cluster at once (docs/simplify.md, "Memory");
 //! 5. elimination of what collapsed (`elimination.rs`);
 //! 6. beyond the paper, for the quality goal: cells split further until every collapsed face's
 //!    image lies on the output (`coverage.rs`), so the tolerance bounds the distance between the
 //!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`);
 //!
-//! The passes over vertices, faces and clusters (weights, bounds, binning with its statistics,
+//! The passes over vertices, faces and clusters (weights, bounds, binning, statistics,
 //! quadrics, representatives, elimination) run on every core of rayon's pool (`--threads` /
 //! `RAYON_NUM_THREADS`) in blocks of a fixed size combined in block order (`blocks.rs`), so the
 //! output is the same bytes whatever the thread count.
@@ -75,9 +76,10 @@ pub use options::{
 pub use partition::{Cell, Partition};
 pub use quadric::Quadric;
 
-use adaptive_partition::{Adaptive, Stop};
+use adaptive_partition::{Adaptive, LeafView, Stop};
 use partition::{UNUSED, weighted_bounds};
 use rayon::prelude::*;
+use representative::Source::{Leaves, Members};
 use std::borrow::Cow;
 use std::sync::atomic::Ordering;
 use tessd_mesh::{Domain, Mesh};
@@ -218,12 +220,21 @@ impl<'a> Prepared<'a> {
             ..Report::default()
         };
         step(0.1, "partition")?;
-        let adaptive = Adaptive::new(&work.positions, weights, options.representative, cancel);
+        let adaptive = Adaptive::new(
+            &work.positions,
+            weights,
+            options.representative,
+            options.keep_partition,
+            cancel,
+        );
         let stopped = |_: Stop| SimplifyError::Cancelled;
         // The quality goal's refinement, kept for the coverage rounds below.
         let mut refinable = None;
-        // The grid partition sums its cells' statistics while it bins.
-        let mut grid_stats = None;
+        // The grid's clusters' vertices, listed for placing their representatives.
+        let mut members = None;
+        // The complexity goal places the representatives of its last partition to count what
+        // survives: they are kept for the output.
+        let mut placed = None;
         let (mut partition, tolerance) = match options.method {
             Method::Grid(grid) => {
                 let ok = match grid {
@@ -235,7 +246,7 @@ impl<'a> Prepared<'a> {
                         "grid size {grid:?} must be positive"
                     )));
                 }
-                let (p, stats) = grid_partition::grid_partition(
+                let p = grid_partition::grid_partition(
                     &work.positions,
                     weights,
                     classes,
@@ -243,7 +254,7 @@ impl<'a> Prepared<'a> {
                     grid,
                     options.keep_partition,
                 );
-                grid_stats = Some(stats);
+                members = Some(p.members());
                 (p, None)
             }
             Method::Quality(length) => {
@@ -272,7 +283,7 @@ impl<'a> Prepared<'a> {
                 let r = adaptive
                     .quality(classes, bounds, inner.max(tol * 0.5))
                     .map_err(stopped)?;
-                let p = adaptive.partition(&r, options.keep_partition);
+                let p = adaptive.partition(&r);
                 refinable = Some(r);
                 (p, Some(tol))
             }
@@ -286,13 +297,18 @@ impl<'a> Prepared<'a> {
                 }
                 report.target_vertices = Some(target);
                 let rep = options.representative;
-                let more = |p: &Partition| {
-                    // The output loses clusters whose faces all collapsed: count what survives.
-                    let reps = representative::place(work, weights, p, None, rep, None);
-                    let kept = elimination::eliminate(work, &p.cluster_of, &reps, false);
-                    target.saturating_sub(used_clusters(&kept, p.clusters).1 as u64)
+                let more = |p: &Partition, leaves: LeafView| {
+                    // The output loses clusters whose faces all collapsed: count what survives
+                    // (the last partition's representatives go first).
+                    placed = None;
+                    let (cluster_of, n) = (&p.cluster_of, p.clusters);
+                    let reps =
+                        representative::place(work, cluster_of, n, Leaves(leaves), rep, None);
+                    let used = elimination::count_used(work, cluster_of, &reps);
+                    placed = Some(reps);
+                    target.saturating_sub(used as u64)
                 };
-                let p = adaptive.complexity(classes, bounds, target, options.keep_partition, more);
+                let p = adaptive.complexity(classes, bounds, target, more);
                 (p.map_err(stopped)?, None)
             }
         };
@@ -308,6 +324,7 @@ impl<'a> Prepared<'a> {
         // again only where that can differ: faces whose representatives came out collinear.
         // The adaptive goals work on triangles (`needs_triangles`) and bound the surfaces.
         let bounded = needs_triangles(options.method);
+        let quality = refinable.is_some();
         let mut stuck = false;
         let (reps, kept, gaps) = loop {
             if let Some(r) = refinable.as_mut() {
@@ -328,22 +345,37 @@ impl<'a> Prepared<'a> {
                         stuck = true;
                         break;
                     }
-                    partition = adaptive.partition(r, options.keep_partition);
+                    partition = adaptive.partition(r);
                     report.refinement_rounds += 1;
                 }
             }
-            // The grid's statistics hold for its one partition; refinement rounds gather anew.
-            let reps = representative::place(
-                work,
-                weights,
-                &partition,
-                grid_stats.take().as_deref(),
-                options.representative,
-                tolerance,
-            );
-            let kept = elimination::eliminate(work, &partition.cluster_of, &reps, attributes);
+            // The complexity goal placed its last partition already.
+            let reps = placed.take().unwrap_or_else(|| {
+                let source = match (&members, &refinable) {
+                    (Some(m), _) => Members(m, &work.positions, weights),
+                    (None, Some(r)) => Leaves(r.view()),
+                    (None, None) => unreachable!("the complexity goal places its clusters"),
+                };
+                let (cluster_of, n) = (&partition.cluster_of, partition.clusters);
+                representative::place(
+                    work,
+                    cluster_of,
+                    n,
+                    source,
+                    options.representative,
+                    tolerance,
+                )
+            });
+            members = None;
+            let fates = elimination::fates(work, &partition.cluster_of, &reps);
+            if refinable.is_some() && !stuck && fates.flattened() == 0 {
+                // The clusters alone decided the coverage (above): this is the last round,
+                // and the partition's vertex order can go before the faces are written.
+                refinable = None;
+            }
+            let kept = fates.eliminate(work, &partition.cluster_of, &reps, attributes);
             // The grid goal is the fast path: it reports no surface bound.
-            let check = bounded && (refinable.is_none() || stuck || kept.flattened > 0);
+            let check = bounded && (!quality || stuck || kept.flattened > 0);
             let gaps = if check {
                 coverage::find_gaps(work, &partition.cluster_of, &kept, partition.clusters)
             } else {
@@ -360,9 +392,11 @@ impl<'a> Prepared<'a> {
             {
                 break (reps, kept, gaps);
             }
-            partition = adaptive.partition(r, options.keep_partition);
+            partition = adaptive.partition(r);
             report.refinement_rounds += 1;
         };
+        // The partition's vertex order is not needed any more.
+        drop(refinable);
         step(0.75, "eliminate")?;
         let (new_id, used) = used_clusters(&kept, partition.clusters);
         step(0.9, "attributes")?;

@@ -23,6 +23,43 @@ pub struct Partition {
     pub cells: Vec<Cell>,
 }
 
+impl Partition {
+    /// The vertices of each cluster, in increasing index order: a counting sort of
+    /// `cluster_of` (4 bytes a vertex and 4 a cluster).
+    pub(crate) fn members(&self) -> Members {
+        let mut start = vec![0u32; self.clusters + 1];
+        for &c in self.cluster_of.iter().filter(|&&c| c != UNUSED) {
+            start[c as usize] += 1;
+        }
+        for c in 1..=self.clusters {
+            start[c] += start[c - 1];
+        }
+        // Filled from each list's end, vertices in decreasing order: the lists come out in
+        // increasing order and `start` ends as their starts.
+        let mut ids = vec![0u32; start[self.clusters] as usize];
+        for (v, &c) in self.cluster_of.iter().enumerate().rev() {
+            if c != UNUSED {
+                start[c as usize] -= 1;
+                ids[start[c as usize] as usize] = v as u32;
+            }
+        }
+        Members { start, ids }
+    }
+}
+
+/// The vertices of every cluster (see [`Partition::members`]).
+pub(crate) struct Members {
+    start: Vec<u32>,
+    ids: Vec<u32>,
+}
+
+impl Members {
+    /// The vertices of cluster `c`, in increasing order.
+    pub(crate) fn of(&self, c: usize) -> &[u32] {
+        &self.ids[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+}
+
 /// Bounds of the vertices with non-zero weight (the referenced ones), or `None` if there are
 /// none. Minima and maxima do not depend on the order they are taken in: every core takes them.
 pub(crate) fn weighted_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Option<Cell> {
