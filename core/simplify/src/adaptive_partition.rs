@@ -15,6 +15,7 @@
 //! The vertices of a cell are a range of one index array that each split partitions in place
 //! (like a k-d tree build), so the whole partition costs one `u32` per vertex.
 
+use crate::feature_priority::{PackedNormal, plane_distance2, priority};
 use crate::options::Representative;
 use crate::partition::{Cell, Partition, UNUSED};
 use std::cmp::Ordering;
@@ -24,12 +25,14 @@ use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 /// Cells with more vertices than this are refined in parallel (quality goal).
 const PARALLEL_CELL: usize = 1 << 15;
 
-/// A cell's vertices summarised: largest displacement to the representative, inner bounding
-/// box.
+/// A cell's vertices summarised: largest displacement to the representative (or, with vertex
+/// normals, the complexity goal's split priority), inner bounding box.
 #[derive(Clone, Copy, Debug)]
 struct Eval {
     /// The largest squared displacement, as measured (in f32): the displacement is its root in
-    /// f64 ([`Eval::err`]), which orders exactly as it does, and it takes half the room.
+    /// f64 ([`Eval::err`]), which orders exactly as it does, and it takes half the room. For
+    /// the complexity goal with vertex normals, the square of the cell's
+    /// `feature_priority::priority` instead: zero exactly when the displacement is.
     err2: f32,
     lo: [f32; 3],
     hi: [f32; 3],
@@ -99,12 +102,16 @@ impl Node {
 }
 
 /// The inputs shared by every step.
+#[derive(Clone)]
 pub(crate) struct Adaptive<'a> {
     positions: &'a [[f32; 3]],
     weights: &'a [f32],
     heaviest: bool,
     keep_cells: bool,
     cancel: Option<&'a AtomicBool>,
+    /// Whether cells are keyed by the complexity goal's surface-error priority (the points
+    /// then carry their normals) instead of their displacement.
+    surface_priority: bool,
 }
 
 /// Why refinement stopped early.
@@ -132,6 +139,7 @@ impl<'a> Adaptive<'a> {
             heaviest: rep == Representative::Heaviest,
             keep_cells,
             cancel,
+            surface_priority: false,
         }
     }
 
@@ -141,15 +149,23 @@ impl<'a> Adaptive<'a> {
 
     /// The referenced vertices, grouped by class (one root cell per class), and the root cells.
     /// Vertices are copied with their weights so that every later pass reads memory in order.
-    fn roots(&self, classes: Option<&[u8]>) -> (Vec<Point>, Vec<Node>) {
+    /// `normals` (one per vertex) go into the points and are freed.
+    fn roots(
+        &self,
+        classes: Option<&[u8]>,
+        normals: Option<Vec<PackedNormal>>,
+    ) -> (Vec<Point>, Vec<Node>) {
+        let normal = |v: usize| normals.as_ref().map_or(PackedNormal::NONE, |n| n[v]);
         let mut order: Vec<Point> = (0..self.positions.len())
             .filter(|&v| self.weights[v] > 0.0)
             .map(|v| Point {
                 p: self.positions[v],
                 w: self.weights[v],
                 id: v as u32,
+                n: normal(v),
             })
             .collect();
+        drop(normals);
         let mut ranges = vec![(0, order.len())];
         if let Some(classes) = classes {
             order.sort_by_key(|q| classes[q.id as usize]);
@@ -190,9 +206,22 @@ impl<'a> Adaptive<'a> {
             acc.sum.map(|s| (s / acc.wsum) as f32)
         };
         let mut err2 = 0f32;
-        for q in verts {
-            let d = [q.p[0] - rep[0], q.p[1] - rep[1], q.p[2] - rep[2]];
-            err2 = err2.max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        let delta = |p: [f32; 3]| {
+            let d = [rep[0] - p[0], rep[1] - p[1], rep[2] - p[2]];
+            (d, d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        };
+        if self.surface_priority {
+            let mut surface2 = 0f32;
+            for q in verts {
+                let (d, dd) = delta(q.p);
+                err2 = err2.max(dd);
+                surface2 = surface2.max(plane_distance2(d, dd, q.n.direction()));
+            }
+            err2 = priority(surface2.sqrt(), err2.sqrt()).powi(2);
+        } else {
+            for q in verts {
+                err2 = err2.max(delta(q.p).1);
+            }
         }
         Eval {
             err2,
@@ -254,7 +283,7 @@ impl<'a> Adaptive<'a> {
         bounds: &Cell,
         tolerance: f64,
     ) -> Result<Refinable, Stop> {
-        let (mut order, roots) = self.roots(classes);
+        let (mut order, roots) = self.roots(classes, None);
         let roots: Vec<(Node, Cell)> = roots.into_iter().map(|n| (n, *bounds)).collect();
         let mut leaves = self.refine_all(&mut order, &roots, tolerance)?;
         leaves.start.push(order.len() as u32);
@@ -448,26 +477,35 @@ impl<'a> Adaptive<'a> {
     /// after elimination (cells whose faces all collapse are lost) and asks for that many
     /// further splits; it is given the partition and its leaves (over [`Adaptive::order`]).
     /// Stops early when no cell can be split (all remaining cells hold coincident vertices).
+    ///
+    /// With `normals` (one per vertex, `feature_priority::vertex_normals`), cells are split by
+    /// their surface-error estimate (`feature_priority.rs`) instead of their displacement.
     pub(crate) fn complexity(
         &self,
         classes: Option<&[u8]>,
         bounds: &Cell,
         target: u64,
+        normals: Option<Vec<PackedNormal>>,
         mut more: impl FnMut(&Partition, LeafView) -> u64,
     ) -> Result<Partition, Stop> {
+        let keyed = Adaptive {
+            surface_priority: normals.is_some(),
+            ..self.clone()
+        };
+        let this = &keyed;
         // The leaves live in an arena (`live`, a split cell hands its slot to its left child;
         // `cells` beside it when they are kept); `by_start` lists them in the order of their
         // ranges.
-        let (mut order, mut live) = self.roots(classes);
-        let mut cells = if self.keep_cells {
+        let (mut order, mut live) = this.roots(classes, normals);
+        let mut cells = if this.keep_cells {
             vec![*bounds; live.len()]
         } else {
             Vec::new()
         };
         let mut goal = target as usize;
         loop {
-            let mut by_start = self.approach(&mut order, &mut live, &mut cells, goal)?;
-            let leaf_cells = if self.keep_cells {
+            let mut by_start = this.approach(&mut order, &mut live, &mut cells, goal)?;
+            let leaf_cells = if this.keep_cells {
                 by_start.iter().map(|&i| cells[i as usize]).collect()
             } else {
                 Vec::new()
@@ -477,7 +515,7 @@ impl<'a> Adaptive<'a> {
                 .iter_mut()
                 .for_each(|i| *i = live[*i as usize].start);
             by_start.push(order.len() as u32);
-            let partition = self.finish(&order, &by_start, leaf_cells);
+            let partition = this.finish(&order, &by_start, leaf_cells);
             let view = LeafView {
                 order: &order,
                 start: &by_start,
@@ -711,6 +749,8 @@ pub(crate) struct Point {
     pub w: f32,
     /// Vertex index.
     pub id: u32,
+    /// Its normal, for the complexity goal's surface priority (none otherwise).
+    pub n: PackedNormal,
 }
 
 /// Running sums of a cell: inner box, weighted position sum, heaviest vertex.
@@ -872,7 +912,7 @@ mod tests {
     fn complexity_hits_the_target_exactly() {
         let (p, w, b) = line(1000);
         let a = Adaptive::new(&p, &w, Representative::Barycenter, false, None);
-        let part = a.complexity(None, &b, 137, |_, _| 0).unwrap();
+        let part = a.complexity(None, &b, 137, None, |_, _| 0).unwrap();
         assert_eq!(part.clusters, 137);
     }
 
@@ -888,7 +928,10 @@ mod tests {
         let mut r = a.quality(None, &b, 1e-9).unwrap();
         assert_eq!(a.partition(&r).clusters, 1);
         assert_eq!(a.split_clusters(&mut r, &[0]).unwrap(), 0);
-        assert_eq!(a.complexity(None, &b, 5, |_, _| 1).unwrap().clusters, 1);
+        assert_eq!(
+            a.complexity(None, &b, 5, None, |_, _| 1).unwrap().clusters,
+            1
+        );
     }
 
     #[test]
@@ -898,6 +941,7 @@ mod tests {
                 p: [(9 - i) as f32, 0.0, 0.0],
                 w: 1.0,
                 id: i,
+                n: PackedNormal::NONE,
             })
             .collect();
         let (mut l, mut r) = (Acc::default(), Acc::default());

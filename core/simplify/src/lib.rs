@@ -57,6 +57,7 @@ mod coverage;
 mod edges;
 mod elimination;
 mod error;
+mod feature_priority;
 pub mod features;
 mod grid_partition;
 pub mod lod;
@@ -296,6 +297,9 @@ impl<'a> Prepared<'a> {
                     )));
                 }
                 report.target_vertices = Some(target);
+                // Cells are split by their surface-error estimate, not their displacement
+                // alone (feature_priority.rs): CAD creases and curved strips get the vertices.
+                let normals = feature_priority::vertex_normals(work, weights);
                 let rep = options.representative;
                 let more = |p: &Partition, leaves: LeafView| {
                     // The output loses clusters whose faces all collapsed: count what survives
@@ -308,7 +312,7 @@ impl<'a> Prepared<'a> {
                     placed = Some(reps);
                     target.saturating_sub(used as u64)
                 };
-                let p = adaptive.complexity(classes, bounds, target, more);
+                let p = adaptive.complexity(classes, bounds, target, Some(normals), more);
                 (p.map_err(stopped)?, None)
             }
         };

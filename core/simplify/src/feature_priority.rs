@@ -1,0 +1,261 @@
+//! A surface-error estimate of a cell, for the complexity goal's choice of the cell to split
+//! (beyond paper 004, whose section 4 splits the cell with the largest vertex displacement).
+//!
+//! Displacement sees size, not error: a large flat cell has a large displacement and no surface
+//! error, while a cell across a sharp CAD edge or a curved strip has surface error its
+//! displacement does not rank. Here each vertex stands for its tangent plane (its
+//! area-weighted normal through it, as Lindstrom 2000's quadrics stand for the planes of a
+//! cell's faces), and a cell's estimate is the largest distance from its representative (the
+//! barycentre the split loop already computes) to its vertices' tangent planes: zero on a flat
+//! cell, the sagitta on a curved one, the gap across a crease, half the thickness of two
+//! sheets. Border vertices count with their whole displacement ([`vertex_normals`]).
+//!
+//! Used by the complexity goal only (the quality goal's guarantee is on the displacement and
+//! keeps it): the normals of [`vertex_normals`] travel with the vertices through the split
+//! (packed in four bytes, [`PackedNormal`]), and the pass of `Adaptive::finish_eval` that
+//! measures a cell's largest displacement `d` also takes `s = max plane_distance(rep, q.p,
+//! q.n)` (squared, unnormalised: [`plane_distance2`]); the cell's split key becomes [`priority`]`(s, d)` in place of `d`.
+
+use tessd_mesh::Mesh;
+
+/// The share of the displacement added to the surface estimate: it orders the cells the
+/// estimate cannot tell apart (flat ones) by size, and keeps every cell that can still be
+/// split (distinct vertices) above zero, so the complexity goal can always reach its count.
+pub(crate) const DISPLACEMENT_SHARE: f32 = 1.0 / 256.0;
+
+/// The unit area-weighted normal of every vertex (the sum of its faces' area vectors), packed,
+/// or none for a vertex on an open border or a non-manifold fan, and for one no face of
+/// non-zero area uses: the estimate then takes its whole displacement, since its tangent plane
+/// does not say how far the border moves within it. `weights` are the vertices' longest
+/// incident edges (`weights.rs`), the scale of the border test.
+///
+/// A border is found without adjacency: around an interior vertex of a closed fan the edges
+/// opposite the vertex form a closed loop, so their vectors sum to zero; on a border they sum
+/// to the chord between the fan's two ends. Two passes over the faces share one accumulator
+/// of 12 bytes a vertex (the area vectors, then the opposite edges), so the goal's working
+/// memory stays small. Faces are visited in order, so the sums do not depend on the thread
+/// count.
+pub(crate) fn vertex_normals(mesh: &Mesh, weights: &[f32]) -> Vec<PackedNormal> {
+    let mut acc = vec![[0f32; 3]; mesh.vertex_count()];
+    for face in mesh.faces() {
+        let m = face.len();
+        let p = |i: usize| mesh.positions[face[i % m] as usize];
+        // Newell's area vector (twice the area), exact for triangles.
+        let mut a = [0f32; 3];
+        for i in 0..m {
+            let (u, v) = (p(i), p(i + 1));
+            a[0] += (u[1] - v[1]) * (u[2] + v[2]);
+            a[1] += (u[2] - v[2]) * (u[0] + v[0]);
+            a[2] += (u[0] - v[0]) * (u[1] + v[1]);
+        }
+        for &v in face {
+            let s = &mut acc[v as usize];
+            (0..3).for_each(|k| s[k] += a[k]);
+        }
+    }
+    let mut normals: Vec<PackedNormal> = acc
+        .iter()
+        .map(|s| {
+            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+            if len > 0.0 && len.is_finite() {
+                PackedNormal::pack([s[0] / len, s[1] / len, s[2] / len])
+            } else {
+                PackedNormal::NONE
+            }
+        })
+        .collect();
+    acc.iter_mut().for_each(|s| *s = [0.0; 3]);
+    for face in mesh.faces() {
+        let m = face.len();
+        let p = |i: usize| mesh.positions[face[i % m] as usize];
+        for i in 0..m {
+            let (prev, next) = (p(i + m - 1), p(i + 1));
+            let s = &mut acc[face[i] as usize];
+            (0..3).for_each(|k| s[k] += next[k] - prev[k]);
+        }
+    }
+    for ((n, s), &w) in normals.iter_mut().zip(&acc).zip(weights) {
+        // The opposite edges of a closed fan cancel up to rounding: a few ulps of the
+        // longest edge; a border's chord is at least an edge long.
+        if (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt() > 1e-3 * w {
+            *n = PackedNormal::NONE;
+        }
+    }
+    normals
+}
+
+/// A unit normal in four bytes — octahedral: the sphere's L1 projection folded onto a square,
+/// 16 bits a side, within 1e-4 rad of the normal — or none (a border vertex, see
+/// [`vertex_normals`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PackedNormal(u32);
+
+impl PackedNormal {
+    /// No normal: the vertex's whole displacement counts.
+    pub(crate) const NONE: PackedNormal = PackedNormal(0x8000_8000);
+
+    /// Packs a unit normal (a zero or non-finite one packs as [`PackedNormal::NONE`]).
+    pub(crate) fn pack(n: [f32; 3]) -> PackedNormal {
+        let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+        if !(l1 > 0.0 && l1.is_finite()) {
+            return PackedNormal::NONE;
+        }
+        let (mut x, mut y) = (n[0] / l1, n[1] / l1);
+        if n[2] < 0.0 {
+            (x, y) = ((1.0 - y.abs()) * x.signum(), (1.0 - x.abs()) * y.signum());
+        }
+        let q = |v: f32| u32::from((v.clamp(-1.0, 1.0) * 32767.0).round() as i16 as u16);
+        PackedNormal(q(x) | (q(y) << 16))
+    }
+
+    /// The unit normal, or zero for [`PackedNormal::NONE`].
+    #[cfg(test)]
+    fn unpack(self) -> [f32; 3] {
+        let [x, y, z] = self.direction();
+        let len = (x * x + y * y + z * z).sqrt();
+        if len > 0.0 {
+            [x / len, y / len, z / len]
+        } else {
+            [0.0; 3]
+        }
+    }
+
+    /// The normal's direction at some length between 1/√3 and 1 (the octahedron's point), or
+    /// zero for [`PackedNormal::NONE`]: what a plane distance needs, without a root.
+    #[inline]
+    pub(crate) fn direction(self) -> [f32; 3] {
+        if self == PackedNormal::NONE {
+            return [0.0; 3];
+        }
+        let x = f32::from(self.0 as u16 as i16) / 32767.0;
+        let y = f32::from((self.0 >> 16) as u16 as i16) / 32767.0;
+        let z = 1.0 - x.abs() - y.abs();
+        let (x, y) = if z < 0.0 {
+            ((1.0 - y.abs()) * x.signum(), (1.0 - x.abs()) * y.signum())
+        } else {
+            (x, y)
+        };
+        [x, y, z]
+    }
+}
+
+/// The squared distance from a point to the tangent plane of a vertex, from `d` (the point
+/// minus the vertex), `dd` = |d|² and `n`, the vertex's normal at any length
+/// ([`PackedNormal::direction`]); `dd` itself when `n` is zero (a border vertex, see
+/// [`vertex_normals`]). Squared and unnormalised: no root in the split's inner loop.
+#[inline]
+pub(crate) fn plane_distance2(d: [f32; 3], dd: f32, n: [f32; 3]) -> f32 {
+    let nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    let t = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+    if nn > 0.0 { t * t / nn } else { dd }
+}
+
+/// The distance from `x` to the tangent plane of the vertex at `p` with normal `n`; to `p`
+/// itself when `n` is zero.
+#[cfg(test)]
+fn plane_distance(x: [f32; 3], p: [f32; 3], n: [f32; 3]) -> f32 {
+    let d = [x[0] - p[0], x[1] - p[1], x[2] - p[2]];
+    plane_distance2(d, d[0] * d[0] + d[1] * d[1] + d[2] * d[2], n).sqrt()
+}
+
+/// The split priority of a cell whose largest distance to its vertices' tangent planes is
+/// `surface` and largest vertex displacement `displacement`.
+#[inline]
+pub(crate) fn priority(surface: f32, displacement: f32) -> f32 {
+    surface + DISPLACEMENT_SHARE * displacement
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cell's estimate: the largest distance from the barycentre to the tangent planes.
+    fn estimate(points: &[([f32; 3], [f32; 3])]) -> f32 {
+        let mut c = [0f32; 3];
+        for (p, _) in points {
+            (0..3).for_each(|k| c[k] += p[k] / points.len() as f32);
+        }
+        points
+            .iter()
+            .map(|&(p, n)| plane_distance(c, p, n))
+            .fold(0.0, f32::max)
+    }
+
+    #[test]
+    fn flat_cells_have_no_error_and_creases_are_found() {
+        let up = [0.0, 0.0, 1.0];
+        let flat: Vec<_> = (0..9)
+            .map(|i| ([(i % 3) as f32, (i / 3) as f32, 2.0], up))
+            .collect();
+        assert!(estimate(&flat) < 1e-6);
+        // A roof: two slopes meeting at x = 0 (a 90° crease); the barycentre lies 2 below the
+        // ridge, √2 off both slopes, though its displacement to the eaves is larger.
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        let mut roof = Vec::new();
+        for i in 1..4 {
+            let x = i as f32;
+            roof.push(([-x, 0.0, -x], [-s, 0.0, s]));
+            roof.push(([x, 0.0, -x], [s, 0.0, s]));
+        }
+        assert!(
+            (estimate(&roof) - 2f32.sqrt()).abs() < 1e-5,
+            "{}",
+            estimate(&roof)
+        );
+        // Two parallel sheets 1 apart: half the gap.
+        let mut sheets = Vec::new();
+        for i in 0..4 {
+            sheets.push(([i as f32, 0.0, 0.0], up));
+            sheets.push(([i as f32, 1.0, 1.0], up));
+        }
+        assert!((estimate(&sheets) - 0.5).abs() < 1e-5);
+        assert_eq!(priority(0.0, 256.0), 1.0);
+    }
+
+    #[test]
+    fn normals_of_a_closed_and_an_open_mesh() {
+        // A closed tetrahedron, faces outwards.
+        let mut m = Mesh {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            ..Mesh::default()
+        };
+        for f in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+            m.push_face(&f);
+        }
+        let w = crate::weights::vertex_weights(&m, crate::options::Weighting::LongestEdge);
+        let n: Vec<[f32; 3]> = vertex_normals(&m, &w).iter().map(|n| n.unpack()).collect();
+        assert_eq!(n[1], [1.0, 0.0, 0.0]);
+        let s = -(1.0f32 / 3.0).sqrt();
+        assert!(n[0].iter().all(|&x| (x - s).abs() < 1e-4), "{:?}", n[0]);
+        // Without its slanted face, vertices 1–3 are on the open border (whole displacement);
+        // vertex 0's fan is still closed.
+        m.face_offsets.pop();
+        m.face_indices.truncate(9);
+        let open: Vec<[f32; 3]> = vertex_normals(&m, &w).iter().map(|n| n.unpack()).collect();
+        assert_eq!(open[0], n[0]);
+        assert_eq!(open[1..], [[0.0; 3]; 3]);
+        assert_eq!(plane_distance([3.0, 4.0, 0.0], [0.0; 3], [0.0; 3]), 5.0);
+    }
+
+    #[test]
+    fn packed_normals_round_trip_within_1e_4() {
+        let mut worst = 0f32;
+        for i in 0..200 {
+            // A spiral over the whole sphere, poles and octant seams included.
+            let z = 1.0 - 2.0 * i as f32 / 199.0;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = i as f32 * 2.399_963;
+            let n = [r * a.cos(), r * a.sin(), z];
+            let u = PackedNormal::pack(n).unpack();
+            let d = ((n[0] - u[0]).powi(2) + (n[1] - u[1]).powi(2) + (n[2] - u[2]).powi(2)).sqrt();
+            worst = worst.max(d);
+        }
+        assert!(worst < 1e-4, "{worst}");
+        assert_eq!(PackedNormal::pack([0.0; 3]), PackedNormal::NONE);
+        assert_eq!(PackedNormal::NONE.unpack(), [0.0; 3]);
+        assert_eq!(
+            PackedNormal::pack([0.0, 0.0, -1.0]).unpack(),
+            [0.0, 0.0, -1.0]
+        );
+    }
+}
