@@ -66,8 +66,10 @@ impl<P: Vector> Curve<P> {
         let span = (t1 - t0).abs();
         let n = match self {
             Curve::Line { .. } => 1.0,
+            // A slack of 1e-9 segment: a full turn rounded up in a file's last digit
+            // (OCCT writes 6.28318530717959) must not count a 33rd segment.
             Curve::Circle { .. } | Curve::Ellipse { .. } => {
-                (span / (std::f64::consts::TAU / 32.0)).ceil()
+                (span / (std::f64::consts::TAU / 32.0) - 1e-9).ceil()
             }
             Curve::Bspline(b) => match b.knot_vector() {
                 Ok(kv) => (kv.pieces(t0, t1) * 4 * b.degree) as f64,

@@ -59,12 +59,17 @@ pub fn sample_chordal(
 /// of a conic, two per polynomial piece of a B-spline (a cubic piece bends at most twice), one
 /// for a line. Refinement tests the chord's midpoint and quarter points, so a floor this low
 /// cannot hide a bend; where the coarse polylines of two curves cross in a face's (u, v),
-/// [`crate::crossings`] splits them.
+/// [`crate::crossings`] splits them. A conic's count is taken with a slack of 1e-9 quarter
+/// turn: files write a full turn rounded to 15 digits (OCCT's `6.28318530717959`, 4e-15 above
+/// 2π), which must not start from five segments where 2π starts from four (every segment is
+/// then halved alike, so the edge would end with 25 % more points).
 pub fn min_segments<P: Vector>(curve: &Curve<P>, t0: f64, t1: f64) -> usize {
     let span = (t1 - t0).abs();
     let n = match curve {
         Curve::Line { .. } => 1.0,
-        Curve::Circle { .. } | Curve::Ellipse { .. } => (span / std::f64::consts::FRAC_PI_2).ceil(),
+        Curve::Circle { .. } | Curve::Ellipse { .. } => {
+            (span / std::f64::consts::FRAC_PI_2 - 1e-9).ceil()
+        }
         Curve::Bspline(b) => match b.knot_vector() {
             Ok(kv) => (2 * kv.pieces(t0, t1)) as f64,
             Err(_) => 1.0,
@@ -403,4 +408,22 @@ pub fn discretise_with_stats(doc: &Document, options: &Options) -> (EdgeTable, M
         }
     }
     (table, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_full_turn_written_to_15_digits_starts_from_four_segments() {
+        let circle: Curve3 = Curve::Circle {
+            center: [0.0; 3],
+            x_dir: [1.0, 0.0, 0.0],
+            y_dir: [0.0, 1.0, 0.0],
+            radius: 5.0,
+        };
+        assert_eq!(min_segments(&circle, 0.0, std::f64::consts::TAU), 4);
+        assert_eq!(min_segments(&circle, 0.0, 6.28318530717959), 4);
+        assert_eq!(min_segments(&circle, 0.0, 6.2832), 5);
+    }
 }
