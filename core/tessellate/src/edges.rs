@@ -415,6 +415,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::approx_constant)] // the very digits OCCT writes for 2π, and one turn above
     fn a_full_turn_written_to_15_digits_starts_from_four_segments() {
         let circle: Curve3 = Curve::Circle {
             center: [0.0; 3],
