@@ -79,9 +79,14 @@ def median(xs):
 
 
 def main():
-    from freecad.tessd import api, meshes, task, tessellation
+    from freecad.tessd import api, daemon_link, meshes, task, tessellation
 
     tmp = tempfile.mkdtemp(prefix="tessd_fc_bench_")
+    # A private socket: the workbench starts its own daemon from $TESSD_BIN, never one that
+    # some earlier session left running on the default socket (another build).
+    prefs = FreeCAD.ParamGet(daemon_link.PARAM_PATH)
+    prefs.SetString("Socket", os.path.join(tmp, "d.sock"))
+    prefs.SetString("BinaryPath", "")
     step = os.path.join(tmp, "assembly.step")
     build_assembly(step)
     doc = FreeCAD.newDocument("bench")
@@ -214,6 +219,7 @@ def main():
         "decimate": {k: med(decimate, k) for k in decimate[0]},
         "input_vertices": sum(f.Mesh.CountPoints for f in feats),
     }
+    daemon_link.release_all()
     os.makedirs(os.path.dirname(OUT), exist_ok=True)
     with open(OUT, "w") as fh:
         json.dump(report, fh, indent=1)
