@@ -55,6 +55,20 @@ pub enum Units {
 }
 
 impl Units {
+    /// Every unit, in the order of their names in messages ("mm", "cm", "m", "in").
+    pub const ALL: [Units; 4] = [
+        Units::Millimetres,
+        Units::Centimetres,
+        Units::Metres,
+        Units::Inches,
+    ];
+
+    /// The unit of a name as written in documents and parameters (`"mm"`, `"cm"`, `"m"`,
+    /// `"in"`), `None` for any other.
+    pub fn from_name(name: &str) -> Option<Units> {
+        Units::ALL.into_iter().find(|u| u.name() == name)
+    }
+
     /// The name as written in the document.
     pub fn name(self) -> &'static str {
         match self {

@@ -86,7 +86,8 @@ pub fn request_brep(request: &mut Request) -> Result<Document, OpError> {
             })?;
             let name = path.display().to_string();
             if is_occt_path(&path) || occt::is_occt_brep(&text) {
-                return read_occt(&text, units, &name, stem_of(&path));
+                let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+                return read_occt(&text, units, &name, file_name);
             }
             let value = serde_json::from_str(&text).map_err(|e| {
                 OpError::new(ErrorCode::InvalidBrep, format!("{name}: not JSON: {e}"))
@@ -140,25 +141,12 @@ pub fn is_brep_path(path: &Path) -> bool {
             .is_some_and(|e| e.eq_ignore_ascii_case("json"))
 }
 
-fn stem_of(path: &Path) -> Option<String> {
-    path.file_name().map(|n| n.to_string_lossy().into_owned())
-}
-
 /// The `units` parameter, `None` when absent.
 fn occt_units(request: &Request) -> Result<Option<Units>, OpError> {
     let Some(name) = request.str_param("units")? else {
         return Ok(None);
     };
-    [
-        Units::Millimetres,
-        Units::Centimetres,
-        Units::Metres,
-        Units::Inches,
-    ]
-    .into_iter()
-    .find(|u| u.name() == name)
-    .map(Some)
-    .ok_or_else(|| {
+    Units::from_name(name).map(Some).ok_or_else(|| {
         OpError::request(format!(
             "`units` must be \"mm\", \"cm\", \"m\" or \"in\", got {name:?}"
         ))

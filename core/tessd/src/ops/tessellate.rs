@@ -48,11 +48,7 @@ pub fn parse_length(what: &str, v: &Value, units: Units) -> Result<f64, OpError>
             let x = plain_number(digits).ok_or_else(bad)?;
             let metres = match unit {
                 "" => units.meters_per_unit(),
-                "mm" => Units::Millimetres.meters_per_unit(),
-                "cm" => Units::Centimetres.meters_per_unit(),
-                "m" => Units::Metres.meters_per_unit(),
-                "in" => Units::Inches.meters_per_unit(),
-                _ => return Err(bad()),
+                name => Units::from_name(name).ok_or_else(bad)?.meters_per_unit(),
             };
             x * metres / units.meters_per_unit()
         }
