@@ -66,10 +66,8 @@ impl<P: Vector> Curve<P> {
         let span = (t1 - t0).abs();
         let n = match self {
             Curve::Line { .. } => 1.0,
-            // A slack of 1e-9 segment: a full turn rounded up in a file's last digit
-            // (OCCT writes 6.28318530717959) must not count a 33rd segment.
             Curve::Circle { .. } | Curve::Ellipse { .. } => {
-                (span / (std::f64::consts::TAU / 32.0) - 1e-9).ceil()
+                conic_segments(span, std::f64::consts::TAU / 32.0)
             }
             Curve::Bspline(b) => match b.knot_vector() {
                 Ok(kv) => (kv.pieces(t0, t1) * 4 * b.degree) as f64,
@@ -82,4 +80,12 @@ impl<P: Vector> Curve<P> {
             1
         }
     }
+}
+
+/// The segments of at most `step` radians a conic's parameter span `span` is cut into:
+/// `ceil(span / step)` with a slack of 1e-9 segment, so that a full turn rounded up in a file's
+/// last digit (OCCT writes 2π as `6.28318530717959`, 4e-15 above it) counts the segments 2π
+/// does, not one more.
+pub fn conic_segments(span: f64, step: f64) -> f64 {
+    (span / step - 1e-9).ceil()
 }

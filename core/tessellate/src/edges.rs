@@ -59,16 +59,15 @@ pub fn sample_chordal(
 /// of a conic, two per polynomial piece of a B-spline (a cubic piece bends at most twice), one
 /// for a line. Refinement tests the chord's midpoint and quarter points, so a floor this low
 /// cannot hide a bend; where the coarse polylines of two curves cross in a face's (u, v),
-/// [`crate::crossings`] splits them. A conic's count is taken with a slack of 1e-9 quarter
-/// turn: files write a full turn rounded to 15 digits (OCCT's `6.28318530717959`, 4e-15 above
-/// 2π), which must not start from five segments where 2π starts from four (every segment is
-/// then halved alike, so the edge would end with 25 % more points).
+/// [`crate::crossings`] splits them. A conic's count allows for a full turn written to 15
+/// digits (`tessd_brep::curve::conic_segments`): five starting segments where 2π gives four
+/// would end, every segment halved alike, with 25 % more points on the edge.
 pub fn min_segments<P: Vector>(curve: &Curve<P>, t0: f64, t1: f64) -> usize {
     let span = (t1 - t0).abs();
     let n = match curve {
         Curve::Line { .. } => 1.0,
         Curve::Circle { .. } | Curve::Ellipse { .. } => {
-            (span / std::f64::consts::FRAC_PI_2 - 1e-9).ceil()
+            tessd_brep::curve::conic_segments(span, std::f64::consts::FRAC_PI_2)
         }
         Curve::Bspline(b) => match b.knot_vector() {
             Ok(kv) => (2 * kv.pieces(t0, t1)) as f64,
