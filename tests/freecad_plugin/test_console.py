@@ -232,6 +232,9 @@ class Tessellate(DocCase):
             [m] = api.tessellate(offset, tolerance=tol)
             self.assert_faithful(offset, m, tol, closed=False)
             self.assertEqual(walked, [1])  # refused by the reader, walked in Python
+            png = api.render(offset, str(TMP / "offset.png"), size=(160, 120))
+            self.assertTrue(os.path.getsize(png) > 0)
+            self.assertEqual(walked, [1, 1])  # the render's fallback walks it too
         finally:
             tessellation.export_shape = original
 

@@ -14,7 +14,6 @@ from typing import Any, Dict, List, Optional
 
 import numpy as np
 import Part
-from tessd.brep.freecad import export_shape
 from tessd.client import TessdError
 
 from . import tessellation
@@ -55,17 +54,17 @@ class RenderTask(Task):
         if isinstance(self.inputs[0], PartInput):
             shapes = [p.shape for p in self.inputs]
             shape = shapes[0] if len(shapes) == 1 else Part.makeCompound(shapes)
+            label = ", ".join(p.label for p in self.inputs)
             self.report(0.0, "exporting the B-Rep")
-            params["brep"], params["units"] = tessellation.brep_text(shape), "mm"
             try:
-                result, _ = self.call(client, "render", params, span=(0.1, 1.0))
+                result, _ = self.call(client, "render",
+                                      {**params, **tessellation.brep_params(shape, label)},
+                                      span=(0.1, 1.0))
             except TessdError as e:
                 if e.code != "unsupported":
                     raise
                 # geometry the daemon's BREP reader has no exact type for: the Part API walk
-                del params["units"]
-                params["brep"] = export_shape(shape, units="mm",
-                                              source=", ".join(p.label for p in self.inputs))
+                params.update(tessellation.brep_params(shape, label, native=False))
                 result, _ = self.call(client, "render", params, span=(0.1, 1.0))
         else:
             result, _ = self.call(client, "render", params, self._mesh_arrays(),

@@ -86,14 +86,9 @@ def tessellate_parts(task: Any, client: Any, parts: List[PartInput], tolerance: 
     def submit(i: int, native: bool) -> Any:
         part = parts[i]
         task.report(part_span(i)[0], "%s: exporting the B-Rep" % part.label)
-        if native:
-            brep: Any = brep_text(part.shape)
-        else:
-            brep = export_shape(part.shape, units="mm", source=part.label)
+        params = brep_params(part.shape, part.label, native)
         task.check_cancel()
-        params = {"brep": brep, "tolerance": tol, "angle": float(angle), "positions": "f64"}
-        if native:
-            params["units"] = "mm"
+        params.update(tolerance=tol, angle=float(angle), positions="f64")
         return task.submit(client, "tessellate", params, span=part_span(i), label=part.label)
 
     def finish() -> None:
@@ -142,10 +137,19 @@ def brep_text(shape: Any) -> str:
     return shape.exportBrepToString()
 
 
+def brep_params(shape: Any, label: str, native: bool = True) -> Dict[str, Any]:
+    """The request parameters carrying ``shape`` (FreeCAD's millimetres): its BREP text, or —
+    ``native`` false, the fallback where the daemon's reader answered ``unsupported`` — the
+    Part API walk's `tessd-brep` document (named ``label``)."""
+    if native:
+        return {"brep": brep_text(shape), "units": "mm"}
+    return {"brep": export_shape(shape, units="mm", source=label)}
+
+
 def clear_cache() -> None:
     """Forgets the kept tessellations."""
     with _cache_lock:
         _cache.clear()
 
 
-__all__ = ["Tessellation", "brep_text", "clear_cache", "tessellate_part", "tessellate_parts"]
+__all__ = ["Tessellation", "brep_params", "brep_text", "clear_cache", "tessellate_part", "tessellate_parts"]
