@@ -103,6 +103,16 @@ impl Mesh {
         &self.face_indices[s..e]
     }
 
+    /// The faces as index triples when every face is a triangle (`None` otherwise): the hot
+    /// loops of simplification walk this flat view instead of the offsets.
+    ///
+    /// Decided by the corner count alone (`3 × faces`), which means "all triangles" only for
+    /// offsets that [`Mesh::validate`] accepted (every face has ≥ 3 corners).
+    pub fn triangles(&self) -> Option<&[[u32; 3]]> {
+        (self.face_indices.len() == 3 * self.face_count())
+            .then(|| bytemuck::cast_slice(&self.face_indices))
+    }
+
     /// Iterates over the faces as slices of vertex indices.
     pub fn faces(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
         self.face_offsets

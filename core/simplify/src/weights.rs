@@ -76,12 +76,12 @@ fn longest_edges(mesh: &Mesh, floor: f32) -> Vec<f32> {
     let raise = |v: u32, bits: u32| {
         let slot = &longest[v as usize];
         let old = slot.load(Relaxed);
-        if bits > old {
-            if single {
-                slot.store(bits, Relaxed);
-            } else {
-                slot.fetch_max(bits, Relaxed);
-            }
+        if single {
+            // Branch-free: whether an edge raises the maximum is a coin toss the predictor
+            // loses half the time.
+            slot.store(old.max(bits), Relaxed);
+        } else if bits > old {
+            slot.fetch_max(bits, Relaxed);
         }
     };
     let edge = |a: u32, b: u32| {
@@ -89,20 +89,29 @@ fn longest_edges(mesh: &Mesh, floor: f32) -> Vec<f32> {
         raise(a, bits);
         raise(b, bits);
     };
-    blocks::ranges(mesh.face_count()).for_each(|r| {
-        for f in r {
-            let face = mesh.face(f);
-            if let [a, b, c] = *face {
-                edge(a, b);
-                edge(b, c);
-                edge(c, a);
-            } else {
+    if let Some(triangles) = mesh.triangles() {
+        // Each corner takes the longer of its two edges: three raises a triangle, not six.
+        blocks::ranges(triangles.len()).for_each(|r| {
+            for &[a, b, c] in &triangles[r] {
+                let (pa, pb, pc) = (p[a as usize], p[b as usize], p[c as usize]);
+                let ab = dist2(pa, pb).to_bits() + 1;
+                let bc = dist2(pb, pc).to_bits() + 1;
+                let ca = dist2(pc, pa).to_bits() + 1;
+                raise(a, ab.max(ca));
+                raise(b, ab.max(bc));
+                raise(c, bc.max(ca));
+            }
+        });
+    } else {
+        blocks::ranges(mesh.face_count()).for_each(|r| {
+            for f in r {
+                let face = mesh.face(f);
                 for (i, &a) in face.iter().enumerate() {
                     edge(a, face[(i + 1) % face.len()]);
                 }
             }
-        }
-    });
+        });
+    }
     longest
         .into_par_iter()
         .map(|b| match b.into_inner() {
@@ -178,6 +187,36 @@ mod tests {
         assert_eq!(w[3], 0.0);
         let u = vertex_weights(&two_triangles(), Weighting::Uniform);
         assert_eq!(u, vec![1.0, 1.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn triangles_and_polygons_take_every_incident_edge() {
+        // A unit square as two triangles (the diagonal is every corner's longest edge but for
+        // the two corners it misses) and as one quad (no diagonal: every longest edge is 1);
+        // vertex 4 is used by neither.
+        let square = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let mut tris = Mesh {
+            positions: [&square[..], &[[9.0, 9.0, 9.0]]].concat(),
+            ..Mesh::default()
+        };
+        tris.push_face(&[0, 1, 2]);
+        tris.push_face(&[0, 2, 3]);
+        assert!(tris.triangles().is_some());
+        let d = 2f32.sqrt();
+        assert_eq!(
+            vertex_weights(&tris, Weighting::LongestEdge),
+            vec![d, 1.0, d, 1.0, 0.0]
+        );
+        let mut quad = Mesh {
+            positions: tris.positions.clone(),
+            ..Mesh::default()
+        };
+        quad.push_face(&[0, 1, 2, 3]);
+        assert!(quad.triangles().is_none());
+        assert_eq!(
+            vertex_weights(&quad, Weighting::LongestEdge),
+            vec![1.0, 1.0, 1.0, 1.0, 0.0]
+        );
     }
 
     #[test]
