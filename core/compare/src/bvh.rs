@@ -17,7 +17,7 @@
 //! distance is not below the best distance so far; the caller may seed the search with a
 //! triangle (the previous sample's answer), which makes coherent query streams much cheaper.
 
-use crate::geom::{V3, closest_on_triangle, norm2, sub, v64};
+use crate::geom::{V3, closest_on_triangle, v64};
 use rayon::prelude::*;
 
 /// Most triangles in a leaf (the SAH may stop earlier).
@@ -274,7 +274,7 @@ impl Bvh {
     fn tri_closest(&self, p: V3, i: u32) -> (f64, V3) {
         let t = &self.tris[i as usize];
         let q = closest_on_triangle(p, v64(t[0]), v64(t[1]), v64(t[2]));
-        (norm2(sub(p, q)), q)
+        (p.distance_squared(q), q)
     }
 
     /// Tests the triangles of leaf child `c` of `node` (but `skip`), updating `best`.
@@ -652,7 +652,7 @@ mod tests {
                     v64(pos[t[1] as usize]),
                     v64(pos[t[2] as usize]),
                 );
-                norm2(sub(p, q))
+                p.distance_squared(q)
             })
             .fold(f64::INFINITY, f64::min)
     }
@@ -667,15 +667,15 @@ mod tests {
         let mut seed = None;
         let mut stack = Vec::new();
         for _ in 0..200 {
-            let p = [
+            let p = V3::new(
                 r.f64() * 1.6 - 0.3,
                 r.f64() * 1.6 - 0.3,
                 r.f64() * 1.6 - 0.3,
-            ];
+            );
             let h = bvh.nearest(p, seed, &mut stack);
             let b = brute(&pos, &tris, p);
             assert_eq!(h.d2, b, "bvh {} vs brute {}", h.d2, b);
-            assert_eq!(norm2(sub(p, h.point)), h.d2);
+            assert_eq!(p.distance_squared(h.point), h.d2);
             // A seed never changes the answer.
             assert_eq!(bvh.nearest(p, None, &mut stack).d2, h.d2);
             seed = Some(h.tri);
@@ -689,9 +689,12 @@ mod tests {
         let tris = vec![[0u32, 1, 2]; 100];
         let bvh = Bvh::build(&pos, &tris);
         let mut stack = Vec::new();
-        let h = bvh.nearest([0.25, 0.25, 2.0], None, &mut stack);
+        let h = bvh.nearest(V3::new(0.25, 0.25, 2.0), None, &mut stack);
         assert_eq!(h.d2, 4.0);
         let bvh = Bvh::build(&pos, &tris[..1]);
-        assert_eq!(bvh.nearest([2.0, 0.0, 0.0], None, &mut stack).d2, 1.0);
+        assert_eq!(
+            bvh.nearest(V3::new(2.0, 0.0, 0.0), None, &mut stack).d2,
+            1.0
+        );
     }
 }

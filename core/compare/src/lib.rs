@@ -62,7 +62,7 @@ mod geom;
 mod sample;
 
 use bvh::{Bvh, Hit};
-use geom::{V3, add, norm2, scale, sub, v64};
+use geom::{V3, v64};
 use rayon::prelude::*;
 use sample::{Rng, point_in_triangle, stratified};
 use tessd_mesh::{Mesh, MeshError};
@@ -327,9 +327,9 @@ impl SurfaceIndex {
     pub fn closest_point(&self, p: [f64; 3]) -> ClosestPoint {
         let h = self
             .bvh
-            .nearest(p, None, &mut Vec::with_capacity(bvh::STACK));
+            .nearest(V3::from_array(p), None, &mut Vec::with_capacity(bvh::STACK));
         ClosestPoint {
-            point: h.point,
+            point: h.point.to_array(),
             distance: h.d2.sqrt(),
         }
     }
@@ -343,7 +343,7 @@ impl SurfaceIndex {
                 let mut seed = None;
                 let mut stack = Vec::with_capacity(bvh::STACK);
                 c.iter().map(move |&p| {
-                    let h = self.bvh.nearest(p, seed, &mut stack);
+                    let h = self.bvh.nearest(V3::from_array(p), seed, &mut stack);
                     seed = Some(h.tri);
                     h.d2.sqrt()
                 })
@@ -429,7 +429,7 @@ pub fn bbox_diagonal(a: &Mesh, b: &Mesh) -> f64 {
         (Some(b), None) | (None, Some(b)) => b,
         (None, None) => return 0.0,
     };
-    norm2(sub(v64(hi), v64(lo))).sqrt()
+    v64(hi).distance(v64(lo))
 }
 
 fn check(mesh: &Mesh, which: &'static str) -> Result<(), CompareError> {
@@ -516,7 +516,7 @@ impl Plan {
         let pos = &from.positions;
         let order = sample::morton_order(t.tris.len(), |i| {
             let [a, b, c] = t.tris[i].map(|v| v64(pos[v as usize]));
-            scale(add(add(a, b), c), 1.0 / 3.0)
+            (a + b + c) * (1.0 / 3.0)
         });
         let tris: Vec<[u32; 3]> = order.par_iter().map(|&i| t.tris[i as usize]).collect();
         let areas: Vec<f64> = order.par_iter().map(|&i| t.areas[i as usize]).collect();
@@ -549,7 +549,7 @@ impl Plan {
         let (edges, edge_cum, edge_samples) = if options.include_edges && face_samples > 0 {
             let (e, len) = sample::polygon_edges(from);
             let order = sample::morton_order(e.len(), |i| {
-                add(v64(pos[e[i][0] as usize]), v64(pos[e[i][1] as usize]))
+                v64(pos[e[i][0] as usize]) + v64(pos[e[i][1] as usize])
             });
             let e: Vec<[u32; 2]> = order.iter().map(|&i| e[i as usize]).collect();
             let len: Vec<f64> = order.iter().map(|&i| len[i as usize]).collect();
@@ -611,8 +611,8 @@ impl Plan {
             mean: total.sum / n,
             rms: (total.sum2 / n).sqrt(),
             samples: total.n,
-            argmax_point: total.argmax,
-            argmax_closest: total.argmax_closest,
+            argmax_point: total.argmax.to_array(),
+            argmax_closest: total.argmax_closest.to_array(),
             area: self.area,
         }
     }
@@ -643,7 +643,7 @@ impl Plan {
                 |j, f, _| {
                     let e = self.edges[j];
                     let (a, b) = (v64(pos[e[0] as usize]), v64(pos[e[1] as usize]));
-                    measure(add(a, scale(sub(b, a), f)));
+                    measure(a + (b - a) * f);
                 },
             ),
             Kind::Face => stratified(
@@ -686,8 +686,8 @@ impl Stats {
             sum: 0.0,
             sum2: 0.0,
             max: f64::NEG_INFINITY,
-            argmax: [0.0; 3],
-            argmax_closest: [0.0; 3],
+            argmax: V3::ZERO,
+            argmax_closest: V3::ZERO,
         }
     }
 

@@ -1,7 +1,7 @@
 //! Fan triangulation, the deterministic random generator, and stratified area- and
 //! length-weighted sample placement.
 
-use crate::geom::{V3, add, norm2, scale, sub, triangle_area, v64};
+use crate::geom::{V3, triangle_area, v64};
 use rayon::prelude::*;
 use tessd_mesh::Mesh;
 
@@ -200,7 +200,7 @@ pub(crate) fn polygon_edges(mesh: &Mesh) -> (Vec<[u32; 2]>, Vec<f64>) {
     let pairs: Vec<([u32; 2], f64)> = edges
         .par_iter()
         .filter_map(|e| {
-            let l = norm2(sub(v64(pos[e[0] as usize]), v64(pos[e[1] as usize]))).sqrt();
+            let l = v64(pos[e[0] as usize]).distance(v64(pos[e[1] as usize]));
             (l > 0.0 && l.is_finite()).then_some((*e, l))
         })
         .collect();
@@ -248,10 +248,7 @@ pub(crate) fn stratified(
 #[inline(always)]
 pub(crate) fn point_in_triangle(a: V3, b: V3, c: V3, r1: f64, r2: f64) -> V3 {
     let s = r1.sqrt();
-    add(
-        scale(a, 1.0 - s),
-        add(scale(b, s * (1.0 - r2)), scale(c, s * r2)),
-    )
+    a * (1.0 - s) + (b * (s * (1.0 - r2)) + c * (s * r2))
 }
 
 #[cfg(test)]
@@ -290,7 +287,7 @@ mod tests {
     fn morton_order_follows_the_curve() {
         // A 4 × 4 grid in the plane, given in a scrambled order.
         let pts: Vec<V3> = (0..16)
-            .map(|i| [((i * 7) % 4) as f64, ((i * 7) / 4 % 4) as f64, 0.0])
+            .map(|i| V3::new(((i * 7) % 4) as f64, ((i * 7) / 4 % 4) as f64, 0.0))
             .collect();
         let order = morton_order(pts.len(), |i| pts[i]);
         let xy: Vec<(f64, f64)> = order
@@ -302,7 +299,7 @@ mod tests {
         sorted.sort_unstable();
         assert_eq!(sorted, (0..16).collect::<Vec<u32>>());
         assert_eq!(spread3(0b111), 0b1001001);
-        assert_eq!(morton_order(0, |_| [0.0; 3]), Vec::<u32>::new());
+        assert_eq!(morton_order(0, |_| V3::ZERO), Vec::<u32>::new());
     }
 
     #[test]

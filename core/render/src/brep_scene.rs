@@ -12,7 +12,7 @@
 
 use crate::RenderError;
 use crate::bindings;
-use crate::camera::Bounds;
+use crate::camera::{Bounds, Vec3};
 use crate::ray_cast::RaySeeds;
 use crate::surface_pack::SurfacePack;
 use crate::triangle_classification::classification_level;
@@ -106,10 +106,10 @@ impl BrepScene {
             .bounding_box()
             .ok_or_else(|| RenderError::Camera("the part has no finite point to look at".into()))?;
         let bounds = Bounds {
-            min: b.min,
-            max: b.max,
+            min: b.min.into(),
+            max: b.max.into(),
         };
-        let origin = bounds.center();
+        let origin = bounds.center().to_array();
         let diagonal = 2.0 * bounds.radius();
         let eps = trim_tolerance.unwrap_or(TRIM_TOLERANCE * diagonal.max(f64::MIN_POSITIVE));
         let mut scene = BrepScene {
@@ -133,8 +133,8 @@ impl BrepScene {
                     scene.trims.push(&empty_trim(face, eps), face.bounds);
                     scene.faces.push(FaceInfo {
                         bounds: Bounds {
-                            min: origin,
-                            max: origin,
+                            min: origin.into(),
+                            max: origin.into(),
                         },
                         curvature: [0.0; 3],
                         k_i: None,
@@ -224,8 +224,8 @@ fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds, k_i: Option<u32>)
                     .fold(0.0, |s, x| s + x * x)
                     .sqrt();
             Bounds {
-                min: b.min.map(|x| x - grow),
-                max: b.max.map(|x| x + grow),
+                min: Vec3::from(b.min) - grow,
+                max: Vec3::from(b.max) + grow,
             }
         }
         None => *part,

@@ -19,7 +19,7 @@
 use crate::RenderError;
 
 /// 3-vector in f64.
-pub type Vec3 = [f64; 3];
+pub type Vec3 = glam::DVec3;
 
 /// The default vertical field of view, degrees.
 pub const DEFAULT_FOV: f64 = 30.0;
@@ -93,15 +93,15 @@ impl View {
 
     /// Direction from the target to the eye, and the up hint.
     fn direction(self) -> (Vec3, Vec3) {
-        let z = [0.0, 0.0, 1.0];
+        let z = Vec3::Z;
         match self {
-            View::Iso => ([1.0, -1.0, 1.0], z),
-            View::Front => ([0.0, -1.0, 0.0], z),
-            View::Back => ([0.0, 1.0, 0.0], z),
-            View::Left => ([-1.0, 0.0, 0.0], z),
-            View::Right => ([1.0, 0.0, 0.0], z),
-            View::Top => ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
-            View::Bottom => ([0.0, 0.0, -1.0], [0.0, -1.0, 0.0]),
+            View::Iso => (Vec3::new(1.0, -1.0, 1.0), z),
+            View::Front => (Vec3::NEG_Y, z),
+            View::Back => (Vec3::Y, z),
+            View::Left => (Vec3::NEG_X, z),
+            View::Right => (Vec3::X, z),
+            View::Top => (Vec3::Z, Vec3::Y),
+            View::Bottom => (Vec3::NEG_Z, Vec3::NEG_Y),
         }
     }
 }
@@ -118,32 +118,32 @@ pub struct Bounds {
 impl Bounds {
     /// The centre.
     pub fn center(&self) -> Vec3 {
-        [0, 1, 2].map(|k| 0.5 * (self.min[k] + self.max[k]))
+        (self.min + self.max) * 0.5
     }
 
     /// Half the diagonal: the radius of the sphere around the box.
     pub fn radius(&self) -> f64 {
-        0.5 * norm(sub(self.max, self.min))
+        0.5 * self.max.distance(self.min)
     }
 
     /// The smallest box holding both.
     pub fn union(&self, other: &Bounds) -> Bounds {
         Bounds {
-            min: [0, 1, 2].map(|k| self.min[k].min(other.min[k])),
-            max: [0, 1, 2].map(|k| self.max[k].max(other.max[k])),
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
         }
     }
 
     /// The eight corners.
     pub fn corners(&self) -> [Vec3; 8] {
         std::array::from_fn(|i| {
-            [0, 1, 2].map(|k| {
+            Vec3::from_array(std::array::from_fn(|k| {
                 if i >> k & 1 == 0 {
                     self.min[k]
                 } else {
                     self.max[k]
                 }
-            })
+            }))
         })
     }
 }
@@ -160,17 +160,22 @@ impl Camera {
         let radius = bounds.radius().max(f64::MIN_POSITIVE);
         let distance = radius / half.sin();
         let target = bounds.center();
-        let eye = add(target, scale(normalize(dir), distance));
+        let eye = target + normalize(dir) * distance;
         Camera::new(eye, target, up, fov).clipped_to(bounds)
     }
 
     /// A camera at `eye` looking at `target`, clipping planes not yet set (see
     /// [`clipped_to`](Self::clipped_to)).
-    pub fn new(eye: Vec3, target: Vec3, up: Vec3, fov: f64) -> Camera {
+    pub fn new(
+        eye: impl Into<Vec3>,
+        target: impl Into<Vec3>,
+        up: impl Into<Vec3>,
+        fov: f64,
+    ) -> Camera {
         Camera {
-            eye,
-            target,
-            up,
+            eye: eye.into(),
+            target: target.into(),
+            up: up.into(),
             fov,
             near: 0.01,
             far: 100.0,
@@ -183,8 +188,10 @@ impl Camera {
     /// # Errors
     /// [`RenderError::Camera`] naming what is wrong.
     pub fn check(&self) -> Result<(), RenderError> {
-        let all = [self.eye, self.target, self.up].concat();
-        if all.iter().any(|x| !x.is_finite()) {
+        if ![self.eye, self.target, self.up]
+            .iter()
+            .all(|v| v.is_finite())
+        {
             return Err(RenderError::Camera(format!(
                 "eye {:?}, target {:?} and up {:?} must be finite",
                 self.eye, self.target, self.up
@@ -196,8 +203,8 @@ impl Camera {
                 self.fov
             )));
         }
-        let d = sub(self.target, self.eye);
-        if norm(d) == 0.0 {
+        let d = self.target - self.eye;
+        if d.length() == 0.0 {
             return Err(RenderError::Camera(format!(
                 "eye and target are the same point {:?}",
                 self.eye
@@ -205,7 +212,7 @@ impl Camera {
         }
         let f = normalize(d);
         let u = self.up;
-        if norm(u) == 0.0 || norm(cross(f, normalize(u))) < 1e-9 {
+        if u.length() == 0.0 || f.cross(normalize(u)).length() < 1e-9 {
             return Err(RenderError::Camera(format!(
                 "up {:?} is parallel to the view direction {:?} (or zero)",
                 self.up, f
@@ -219,7 +226,7 @@ impl Camera {
     /// an eye inside the box still gets a usable depth range).
     pub fn clipped_to(mut self, bounds: &Bounds) -> Camera {
         let (f, _, _) = self.basis();
-        let ds = bounds.corners().map(|c| dot(sub(c, self.eye), f));
+        let ds = bounds.corners().map(|c| (c - self.eye).dot(f));
         let dmin = ds.iter().copied().fold(f64::INFINITY, f64::min);
         let dmax = ds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let span = (dmax - dmin).max(bounds.radius()).max(1e-30);
@@ -232,9 +239,9 @@ impl Camera {
 
     /// `forward`, `right`, `up'` of the convention (module docs).
     pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
-        let forward = normalize(sub(self.target, self.eye));
-        let right = normalize(cross(forward, self.up));
-        let up = cross(right, forward);
+        let forward = normalize(self.target - self.eye);
+        let right = normalize(forward.cross(self.up));
+        let up = right.cross(forward);
         (forward, right, up)
     }
 
@@ -246,7 +253,7 @@ impl Camera {
         let (w, h) = (width as f64, height as f64);
         let sx = (2.0 * (x as f64 + 0.5) / w - 1.0) * t * w / h;
         let sy = (1.0 - 2.0 * (y as f64 + 0.5) / h) * t;
-        add(f, add(scale(r, sx), scale(u, sy)))
+        f + (r * sx + u * sy)
     }
 
     /// The clip-space transform (column-major, as WGSL's `mat4x4<f32>`) of points given
@@ -260,11 +267,11 @@ impl Camera {
         let a = fa / (fa - n);
         let b = -fa * n / (fa - n);
         // Rows of the 4 × 4 matrix acting on (q − e, 1), e the eye relative to the origin.
-        let e = sub(self.eye, origin);
+        let e = self.eye - origin;
         let rows: [(Vec3, f64); 4] = [
-            (scale(r, 1.0 / tx), 0.0),
-            (scale(u, 1.0 / ty), 0.0),
-            (scale(f, a), b),
+            (r * (1.0 / tx), 0.0),
+            (u * (1.0 / ty), 0.0),
+            (f * a, b),
             (f, 0.0),
         ];
         let mut m = [[0f32; 4]; 4];
@@ -272,7 +279,7 @@ impl Camera {
             for k in 0..3 {
                 m[k][i] = row[k] as f32;
             }
-            m[3][i] = (c - dot(*row, e)) as f32;
+            m[3][i] = (c - row.dot(e)) as f32;
         }
         m
     }
@@ -294,58 +301,22 @@ impl Camera {
     /// the target (right-handed: positive turns counter-clockwise seen from above).
     pub fn orbit(&self, angle: f64) -> Camera {
         let k = normalize(self.up);
-        let v = sub(self.eye, self.target);
+        let v = self.eye - self.target;
         let (s, c) = angle.sin_cos();
         // Rodrigues: v cos + (k × v) sin + k (k·v)(1 − cos).
-        let rotated = add(
-            add(scale(v, c), scale(cross(k, v), s)),
-            scale(k, dot(k, v) * (1.0 - c)),
-        );
+        let rotated = (v * c + k.cross(v) * s) + k * (k.dot(v) * (1.0 - c));
         Camera {
-            eye: add(self.target, rotated),
+            eye: self.target + rotated,
             ..*self
         }
     }
 }
 
-/// a − b.
-pub fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// a + b.
-pub fn add(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-/// s·a.
-pub fn scale(a: Vec3, s: f64) -> Vec3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-/// a·b.
-pub fn dot(a: Vec3, b: Vec3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// a × b.
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// |a|.
-pub fn norm(a: Vec3) -> f64 {
-    dot(a, a).sqrt()
-}
-
-/// a / |a| (a itself when zero).
+/// a / |a| (a itself when zero: a degenerate view is reported by [`Camera::check`], not
+/// turned into NaNs, as glam's `normalize` would).
 pub fn normalize(a: Vec3) -> Vec3 {
-    let n = norm(a);
-    if n > 0.0 { scale(a, 1.0 / n) } else { a }
+    let n = a.length();
+    if n > 0.0 { a * (1.0 / n) } else { a }
 }
 
 #[cfg(test)]
@@ -354,14 +325,14 @@ mod tests {
 
     fn unit_box() -> Bounds {
         Bounds {
-            min: [-1.0; 3],
-            max: [1.0; 3],
+            min: Vec3::splat(-1.0),
+            max: Vec3::ONE,
         }
     }
 
     /// Projects `p` with the matrix and returns pixel coordinates.
     fn project(c: &Camera, p: Vec3, w: u32, h: u32) -> (f64, f64, f64) {
-        let m = c.clip_from_world([0.0; 3], w, h);
+        let m = c.clip_from_world(Vec3::ZERO, w, h);
         let clip: [f64; 4] = std::array::from_fn(|i| {
             (0..3).map(|k| m[k][i] as f64 * p[k]).sum::<f64>() + m[3][i] as f64
         });
@@ -374,7 +345,7 @@ mod tests {
         let c = Camera::fit(View::Iso, &unit_box(), 30.0, 160.0 / 120.0);
         for (x, y) in [(0, 0), (159, 119), (80, 60), (17, 93)] {
             let d = c.ray(x, y, 160, 120);
-            let p = add(c.eye, scale(d, 5.0));
+            let p = c.eye + d * 5.0;
             let (px, py, _) = project(&c, p, 160, 120);
             assert!((px - (x as f64 + 0.5)).abs() < 1e-4, "{px} vs {x}");
             assert!((py - (y as f64 + 0.5)).abs() < 1e-4, "{py} vs {y}");
@@ -385,7 +356,7 @@ mod tests {
     fn depth_round_trips_and_spans_the_box() {
         let c = Camera::fit(View::Front, &unit_box(), 30.0, 1.0);
         for d in [c.near, 0.5 * (c.near + c.far), c.far] {
-            let p = add(c.eye, scale(c.basis().0, d));
+            let p = c.eye + c.basis().0 * d;
             let (_, _, z) = project(&c, p, 10, 10);
             assert!((c.linear_depth(z as f32) as f64 - d).abs() < 1e-4 * d);
         }
@@ -424,7 +395,7 @@ mod tests {
     fn orbit_keeps_distance_and_height() {
         let c = Camera::fit(View::Iso, &unit_box(), 30.0, 1.0);
         let o = c.orbit(std::f64::consts::FRAC_PI_2);
-        assert!((norm(sub(o.eye, o.target)) - norm(sub(c.eye, c.target))).abs() < 1e-9);
+        assert!((o.eye.distance(o.target) - c.eye.distance(c.target)).abs() < 1e-9);
         assert!((o.eye[2] - c.eye[2]).abs() < 1e-9);
         // A quarter turn counter-clockwise about +Z: (x, y) → (−y, x).
         assert!((o.eye[0] + c.eye[1]).abs() < 1e-9 && (o.eye[1] - c.eye[0]).abs() < 1e-9);

@@ -412,7 +412,7 @@ impl Renderer {
         Ok(GpuScene {
             vertices,
             vertex_count: scene.vertices.len() as u32,
-            origin: scene.origin,
+            origin: scene.origin.to_array(),
         })
     }
 
@@ -497,13 +497,12 @@ impl Renderer {
 /// Finer than a pixel, the facets of the CPU tessellation stay invisible until GPU trimming
 /// (issue 21 step 2) evaluates the surfaces per pixel.
 pub fn pixel_tolerance(camera: &Camera, bounds: &Bounds, height: u32) -> f64 {
-    use camera::{dot, sub};
     let (forward, _, _) = camera.basis();
-    let center = dot(sub(bounds.center(), camera.eye), forward);
+    let center = (bounds.center() - camera.eye).dot(forward);
     let nearest = bounds
         .corners()
         .iter()
-        .map(|c| dot(sub(*c, camera.eye), forward))
+        .map(|c| (*c - camera.eye).dot(forward))
         .fold(f64::INFINITY, f64::min);
     let distance = nearest.max(0.1 * center.abs()).max(f64::MIN_POSITIVE);
     let tolerance = 0.5 * camera.pixel_size(distance, height);
@@ -529,15 +528,15 @@ mod tests {
     #[test]
     fn tolerance_follows_the_pixel_footprint() {
         let b = Bounds {
-            min: [-1.0; 3],
-            max: [1.0; 3],
+            min: camera::Vec3::splat(-1.0),
+            max: camera::Vec3::ONE,
         };
         let c = Camera::fit(View::Front, &b, 30.0, 1.0);
         let t720 = pixel_tolerance(&c, &b, 720);
         let t360 = pixel_tolerance(&c, &b, 360);
         assert!((t360 / t720 - 2.0).abs() < 1e-9);
         // Half a pixel at the box's near face, which is 1 unit in front of the centre.
-        let near = camera::norm(camera::sub(c.eye, b.center())) - 1.0;
+        let near = c.eye.distance(b.center()) - 1.0;
         assert!((t720 - 0.5 * c.pixel_size(near, 720)).abs() < 1e-12);
     }
 }

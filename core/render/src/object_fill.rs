@@ -8,6 +8,7 @@
 //! the winning faces' fragments writes the winners' (u, v), depth and colour.
 
 use crate::brep_render::{StepTimings, step};
+use crate::camera::Vec3;
 use crate::frame_buffers::FrameBuffers;
 use crate::patch_tessellation::GpuTessellation;
 use crate::surface::Params;
@@ -308,7 +309,7 @@ impl ObjectFillPass {
         let (forward, right, up) = camera.basis();
         let ty = (0.5 * camera.fov.to_radians()).tan();
         let tx = ty * width as f64 / height.max(1) as f64;
-        let f32s = |v: [f64; 3], s: f64| v.map(|x| (x * s) as f32);
+        let f32s = |v: Vec3, s: f64| (v * s).as_vec3().to_array();
         let fill = FillParams {
             eye: [0, 1, 2].map(|k| (camera.eye[k] - origin[k]) as f32),
             width,

@@ -21,7 +21,7 @@
 
 use crate::bindings::{self, dispatch_1d};
 use crate::brep_scene::{BrepScene, GpuBrep, MAX_LEVEL};
-use crate::camera::{Camera, dot, sub};
+use crate::camera::{Camera, Vec3};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
@@ -97,8 +97,8 @@ impl FrameTessellation {
         let (mut vertices, mut cells) = (0u64, 0u64);
         for (face, info) in scene.faces.iter().enumerate() {
             let corners = info.bounds.corners();
-            let rel: Vec<[f64; 3]> = corners.iter().map(|c| sub(*c, camera.eye)).collect();
-            let depths: Vec<f64> = rel.iter().map(|r| dot(*r, forward)).collect();
+            let rel: Vec<Vec3> = corners.iter().map(|c| *c - camera.eye).collect();
+            let depths: Vec<f64> = rel.iter().map(|r| r.dot(forward)).collect();
             let nearest = depths.iter().cloned().fold(f64::INFINITY, f64::min);
             let farthest = depths.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
             if info.bounds.min == info.bounds.max || farthest < camera.near || nearest > camera.far
@@ -107,10 +107,10 @@ impl FrameTessellation {
             }
             // Outside one side plane of the frustum with all eight corners: culled.
             let tx = ty * width as f64 / height.max(1) as f64;
-            let outside = |axis: [f64; 3], t: f64, sign: f64| {
+            let outside = |axis: Vec3, t: f64, sign: f64| {
                 rel.iter().all(|r| {
-                    let z = dot(*r, forward);
-                    z > 0.0 && sign * dot(*r, axis) > t * z
+                    let z = r.dot(forward);
+                    z > 0.0 && sign * r.dot(axis) > t * z
                 })
             };
             if outside(right, tx, 1.0)

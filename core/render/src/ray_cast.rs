@@ -19,6 +19,7 @@
 //! frame's buffers), group 1 the part's shared buffers ([`crate::bindings::brep_layout`],
 //! `shaders/brep_bindings.wgsl`). Run by [`crate::brep_render::BrepPasses::ray_cast`].
 
+use crate::camera::Vec3;
 use bytemuck::{Pod, Zeroable};
 use tessd_brep::{Curve, Curve3, Face, Surface};
 use wgpu::util::DeviceExt;
@@ -378,9 +379,9 @@ impl RayCastPass {
         let (forward, right, up) = camera.basis();
         let lit = crate::surface::Params::new(camera, scene.origin, width, height, settings);
         let tan_y = (0.5 * camera.fov.to_radians()).tan();
-        let f32s = |v: [f64; 3]| v.map(|x| x as f32);
+        let f32s = |v: Vec3| v.as_vec3().to_array();
         let params = Params {
-            eye: f32s([0, 1, 2].map(|k| camera.eye[k] - scene.origin[k])),
+            eye: f32s(camera.eye - Vec3::from(scene.origin)),
             tol: (NEWTON_TOLERANCE * 2.0 * scene.bounds.radius()) as f32,
             forward: f32s(forward),
             width,

@@ -125,7 +125,7 @@ impl Scene {
                 ids.push(id);
             }
         }
-        let mut scene = Scene::from_triangles([0.0; 3], &mesh.positions, &triangles, &ids, None);
+        let mut scene = Scene::from_triangles(Vec3::ZERO, &mesh.positions, &triangles, &ids, None);
         // Face-varying attributes go per corner.
         for (t, cs) in corners.iter().enumerate() {
             for (k, &c) in cs.iter().enumerate() {
@@ -155,7 +155,7 @@ impl Scene {
         let ids: Vec<u32> = mesh.face_groups.iter().map(|g| g + 1).collect();
         let uvs: Vec<[f32; 2]> = t.uvs.iter().map(|u| u.map(|x| x as f32)).collect();
         Scene::from_triangles(
-            t.placement.origin,
+            t.placement.origin.into(),
             &mesh.positions,
             &triangles,
             &ids,
@@ -172,22 +172,14 @@ impl Scene {
 /// The world box of the vertices.
 fn bounds_of(vertices: &[Vertex], origin: Vec3) -> Option<Bounds> {
     let first = vertices.first()?;
-    let mut b = Bounds {
-        min: [0, 1, 2].map(|k| first.position[k] as f64),
-        max: [0, 1, 2].map(|k| first.position[k] as f64),
-    };
-    for v in vertices {
-        for k in 0..3 {
-            let x = v.position[k] as f64;
-            b.min[k] = b.min[k].min(x);
-            b.max[k] = b.max[k].max(x);
-        }
-    }
-    for (k, o) in origin.iter().enumerate() {
-        b.min[k] += o;
-        b.max[k] += o;
-    }
-    Some(b)
+    let at = |v: &Vertex| glam::Vec3::from_array(v.position).as_dvec3();
+    let (min, max) = vertices.iter().fold((at(first), at(first)), |(lo, hi), v| {
+        (lo.min(at(v)), hi.max(at(v)))
+    });
+    Some(Bounds {
+        min: min + origin,
+        max: max + origin,
+    })
 }
 
 fn sub3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
@@ -242,7 +234,10 @@ mod tests {
         assert_eq!(ids, [5, 5, 5, 5, 5, 5, 1, 1, 1]);
         assert_eq!(s.max_id, 5);
         let b = s.bounds.unwrap();
-        assert_eq!((b.min, b.max), ([0.0; 3], [1.0, 1.0, 0.0]));
+        assert_eq!(
+            (b.min.to_array(), b.max.to_array()),
+            ([0.0; 3], [1.0, 1.0, 0.0])
+        );
     }
 
     #[test]
@@ -255,7 +250,7 @@ mod tests {
             [0.0, 1.0, 0.0],
             [0.0, 1.0, 0.2],
         ];
-        let s = Scene::from_triangles([0.0; 3], &p, &[[0, 1, 2], [1, 0, 3]], &[1, 2], None);
+        let s = Scene::from_triangles(Vec3::ZERO, &p, &[[0, 1, 2], [1, 0, 3]], &[1, 2], None);
         assert_eq!(s.vertices[0].normal, [0.0, 0.0, 1.0]);
         assert!(s.vertices[3].normal[2] < -0.9, "{:?}", s.vertices[3].normal);
     }

@@ -41,11 +41,9 @@ impl Params {
         settings: &RenderSettings,
     ) -> Params {
         let (forward, right, up) = camera.basis();
-        let light = crate::camera::normalize(
-            [0, 1, 2].map(|k| 0.55 * up[k] - 0.35 * right[k] - 0.75 * forward[k]),
-        );
+        let light = crate::camera::normalize(up * 0.55 - right * 0.35 - forward * 0.75);
         Params {
-            clip_from_world: camera.clip_from_world(origin, width, height),
+            clip_from_world: camera.clip_from_world(origin.into(), width, height),
             eye: [0, 1, 2].map(|k| (camera.eye[k] - origin[k]) as f32),
             shading: match settings.shading {
                 Shading::Lit => 0,
@@ -53,7 +51,7 @@ impl Params {
                 Shading::Toon => 2,
                 Shading::FaceIds => 3,
             },
-            light: light.map(|x| x as f32),
+            light: light.as_vec3().to_array(),
             edges: settings.edges as u32,
         }
     }

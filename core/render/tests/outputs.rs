@@ -6,7 +6,6 @@ mod common;
 
 use common::renderer;
 
-use tessd_render::camera::{add, scale};
 use tessd_render::{Bounds, Camera, RenderSettings, Scene, Shading, View};
 /// A plate of three faces side by side: x in [0, 10], [10, 20], [20, 30], y in [0, 8], z = 0.
 fn plate_doc() -> tessd_brep::Document {
@@ -30,8 +29,8 @@ fn face_id_png_decodes_to_the_array() {
     let doc = plate_doc();
     let b = doc.bounding_box().unwrap();
     let bounds = Bounds {
-        min: b.min,
-        max: b.max,
+        min: b.min.into(),
+        max: b.max.into(),
     };
     let (w, h) = (97, 61); // odd sizes: rows need padding to 256 bytes
     let camera = Camera::fit(View::Iso, &bounds, 30.0, w as f64 / h as f64);
@@ -73,8 +72,8 @@ fn brep_uv_matches_the_analytic_plane() {
     let doc = plate_doc();
     let b = doc.bounding_box().unwrap();
     let bounds = Bounds {
-        min: b.min,
-        max: b.max,
+        min: b.min.into(),
+        max: b.max.into(),
     };
     let (w, h) = (160, 120);
     let camera = Camera::new([12.0, -9.0, 20.0], [15.0, 4.0, 0.0], [0.0, 0.0, 1.0], 35.0)
@@ -91,7 +90,7 @@ fn brep_uv_matches_the_analytic_plane() {
             // The ray hits z = 0 at eye + s·d, s = −eye.z / d.z.
             let d = camera.ray(x, y, w, h);
             let s = -camera.eye[2] / d[2];
-            let p = add(camera.eye, scale(d, s));
+            let p = camera.eye + (d * s);
             let face = (p[0] / 10.0).floor();
             let inside = (0.0..30.0).contains(&p[0]) && (0.0..8.0).contains(&p[1]);
             let i = (y * w + x) as usize;

@@ -15,7 +15,7 @@ mod common;
 use common::renderer;
 
 use tessd_brep::Document;
-use tessd_render::camera::{add, dot, scale, sub};
+use tessd_render::camera::Vec3;
 use tessd_render::{Bounds, BrepScene, Camera, Frame, RenderSettings, View};
 use tessd_trim::TrimStructure;
 
@@ -25,8 +25,8 @@ const H: u32 = 64;
 fn bounds(doc: &Document) -> Bounds {
     let b = doc.bounding_box().unwrap();
     Bounds {
-        min: b.min,
-        max: b.max,
+        min: b.min.into(),
+        max: b.max.into(),
     }
 }
 
@@ -64,12 +64,12 @@ fn cast(doc: &Document, camera: &Camera) -> (Frame, Part) {
 }
 
 /// The pixel's ray direction, written out from the convention (not `Camera::ray`).
-fn ray(camera: &Camera, x: u32, y: u32) -> [f64; 3] {
+fn ray(camera: &Camera, x: u32, y: u32) -> Vec3 {
     let (f, r, u) = camera.basis();
     let t = (0.5 * camera.fov.to_radians()).tan();
     let sx = (2.0 * (x as f64 + 0.5) / W as f64 - 1.0) * t * W as f64 / H as f64;
     let sy = (1.0 - 2.0 * (y as f64 + 0.5) / H as f64) * t;
-    add(f, add(scale(r, sx), scale(u, sy)))
+    f + ((r * sx) + (u * sy))
 }
 
 /// Whether every pixel of the 3 × 3 neighbourhood of (x, y) gives `f` the same answer.
@@ -100,10 +100,10 @@ fn sphere_depths_match_the_analytic_intersection() {
     // Nearest t > 0 of |eye + t·d − c| = r.
     let hit = |x: u32, y: u32| {
         let d = ray(&camera, x, y);
-        let o = sub(camera.eye, c);
-        let (a, b, cc) = (dot(d, d), dot(o, d), dot(o, o) - r * r);
+        let o = camera.eye - Vec3::from(c);
+        let (a, b, cc) = (d.dot(d), o.dot(d), o.dot(o) - r * r);
         let disc = b * b - a * cc;
-        (disc >= 0.0).then(|| (-b - disc.sqrt()) / a * dot(d, forward))
+        (disc >= 0.0).then(|| (-b - disc.sqrt()) / a * d.dot(forward))
     };
     let (mut worst, mut checked, mut silhouette) = (0.0f64, 0, 0);
     for y in 0..H {
@@ -194,15 +194,15 @@ fn check_hits(doc: &Document, camera: &Camera, frame: &Frame, part: &Part) {
             );
             let p = doc.faces[f].surface.point(u, v);
             let d = ray(camera, x, y);
-            let q = sub(p, camera.eye);
-            let t = dot(q, d) / dot(d, d);
-            let off = sub(q, scale(d, t));
-            let dist = dot(off, off).sqrt();
+            let q = Vec3::from(p) - camera.eye;
+            let t = q.dot(d) / d.dot(d);
+            let off = q - (d * t);
+            let dist = off.dot(off).sqrt();
             assert!(
                 dist <= tol,
                 "pixel ({x}, {y}): S(u, v) is {dist:e} from the ray"
             );
-            let depth_err = (frame.depth[i] as f64 - t * dot(d, forward)).abs();
+            let depth_err = (frame.depth[i] as f64 - t * d.dot(forward)).abs();
             assert!(
                 depth_err <= tol,
                 "pixel ({x}, {y}): depth off by {depth_err:e}"
@@ -228,7 +228,7 @@ fn plate_hole_is_background_and_hits_are_on_the_face() {
     let plane = |x: u32, y: u32| {
         let d = ray(&camera, x, y);
         let t = -camera.eye[2] / d[2];
-        let p = add(camera.eye, scale(d, t));
+        let p = camera.eye + (d * t);
         [p[0] - 1000.0, p[1]]
     };
     let in_hole = |x: u32, y: u32| {

@@ -12,7 +12,7 @@ mod common;
 
 use common::renderer;
 use tessd_mesh::Mesh;
-use tessd_render::camera::{Vec3, add, cross, dot, scale, sub};
+use tessd_render::camera::Vec3;
 use tessd_render::{Camera, Frame, RenderSettings, Scene, Shading, View};
 
 fn bunny() -> Mesh {
@@ -54,21 +54,21 @@ fn ray_cast(mesh: &Mesh, camera: &Camera, w: u32, h: u32) -> (Vec<u32>, Vec<f64>
     for f in 0..mesh.face_count() {
         let c = mesh.face(f);
         let id = if grouped { mesh.face_groups[f] + 1 } else { 1 };
-        let p = |i: u32| mesh.positions[i as usize].map(|x| x as f64);
+        let p = |i: u32| Vec3::from_array(mesh.positions[i as usize].map(|x| x as f64));
         for k in 1..c.len() - 1 {
             tris.push(([p(c[0]), p(c[k]), p(c[k + 1])], id));
         }
     }
     // The convention, written out here rather than taken from the crate.
     let forward = {
-        let d = sub(camera.target, camera.eye);
-        scale(d, 1.0 / dot(d, d).sqrt())
+        let d = camera.target - camera.eye;
+        d * (1.0 / d.dot(d).sqrt())
     };
     let right = {
-        let r = cross(forward, camera.up);
-        scale(r, 1.0 / dot(r, r).sqrt())
+        let r = forward.cross(camera.up);
+        r * (1.0 / r.dot(r).sqrt())
     };
-    let up = cross(right, forward);
+    let up = right.cross(forward);
     let t = (camera.fov.to_radians() / 2.0).tan();
     let (wf, hf) = (w as f64, h as f64);
     // Bin each triangle into the pixels its projected box covers (one pixel of margin), so a
@@ -78,11 +78,11 @@ fn ray_cast(mesh: &Mesh, camera: &Camera, w: u32, h: u32) -> (Vec<u32>, Vec<f64>
     for (k, (tri, _)) in tris.iter().enumerate() {
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         for p in tri {
-            let v = sub(*p, camera.eye);
-            let z = dot(v, forward);
+            let v = *p - camera.eye;
+            let z = v.dot(forward);
             assert!(z > 0.0, "test scenes lie in front of the eye");
-            let sx = dot(v, right) / z;
-            let sy = dot(v, up) / z;
+            let sx = v.dot(right) / z;
+            let sy = v.dot(up) / z;
             let px = (sx / (t * wf / hf) + 1.0) * wf / 2.0 - 0.5;
             let py = (1.0 - sy / t) * hf / 2.0 - 0.5;
             (x0, x1, y0, y1) = (x0.min(px), x1.max(px), y0.min(py), y1.max(py));
@@ -104,7 +104,7 @@ fn ray_cast(mesh: &Mesh, camera: &Camera, w: u32, h: u32) -> (Vec<u32>, Vec<f64>
         for x in 0..w {
             let sx = (2.0 * (x as f64 + 0.5) / wf - 1.0) * t * wf / hf;
             let sy = (1.0 - 2.0 * (y as f64 + 0.5) / hf) * t;
-            let dir = add(forward, add(scale(right, sx), scale(up, sy)));
+            let dir = forward + ((right * sx) + (up * sy));
             let i = (y * w + x) as usize;
             let mut best = f64::INFINITY;
             let mut best_id = 0;
@@ -127,25 +127,25 @@ fn ray_cast(mesh: &Mesh, camera: &Camera, w: u32, h: u32) -> (Vec<u32>, Vec<f64>
 
 /// Ray parameter of the hit of `o + s·d` with the triangle, if any (s > 0).
 fn hit(o: Vec3, d: Vec3, [a, b, c]: &[Vec3; 3]) -> Option<f64> {
-    let e1 = sub(*b, *a);
-    let e2 = sub(*c, *a);
-    let p = cross(d, e2);
-    let det = dot(e1, p);
+    let e1 = *b - *a;
+    let e2 = *c - *a;
+    let p = d.cross(e2);
+    let det = e1.dot(p);
     if det.abs() < 1e-300 {
         return None;
     }
     let inv = 1.0 / det;
-    let t = sub(o, *a);
-    let u = dot(t, p) * inv;
+    let t = o - *a;
+    let u = t.dot(p) * inv;
     if !(0.0..=1.0).contains(&u) {
         return None;
     }
-    let q = cross(t, e1);
-    let v = dot(d, q) * inv;
+    let q = t.cross(e1);
+    let v = d.dot(q) * inv;
     if v < 0.0 || u + v > 1.0 {
         return None;
     }
-    let s = dot(e2, q) * inv;
+    let s = e2.dot(q) * inv;
     (s > 0.0).then_some(s)
 }
 
@@ -212,8 +212,8 @@ fn compare(name: &str, frame: &Frame, reference: &(Vec<u32>, Vec<f64>)) -> f64 {
 fn cube_face_ids_match_the_ray_caster() {
     let mesh = cube();
     let b = tessd_render::Bounds {
-        min: [0.0; 3],
-        max: [1.0; 3],
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
     };
     let (w, h) = (160, 120);
     // With the sides each camera sees: x = 1 (id 6), y = 0 (id 3), z = 1 (id 2); z = 0 (id 1).
@@ -287,8 +287,8 @@ fn bunny_triangle_ids_match_the_ray_caster() {
 fn a_shifted_camera_is_caught() {
     let mesh = cube();
     let b = tessd_render::Bounds {
-        min: [0.0; 3],
-        max: [1.0; 3],
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
     };
     let (w, h) = (160, 120);
     let camera = Camera::fit(View::Iso, &b, 30.0, w as f64 / h as f64);

@@ -2,27 +2,27 @@
 //! product for a triangle, Newell's method for a polygon. Elimination tests it for zero
 //! (zero-area faces); the quadric representative normalises it into a plane.
 
+use glam::DVec3;
+
 /// `(b − a) × (c − a)`.
-pub(crate) fn triangle(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    [
-        u[1] * w[2] - u[2] * w[1],
-        u[2] * w[0] - u[0] * w[2],
-        u[0] * w[1] - u[1] * w[0],
-    ]
+pub(crate) fn triangle(a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    (b - a).cross(c - a)
 }
 
 /// Newell's sum over the `n` corners `point(0..n)` of a polygon.
-pub(crate) fn polygon(n: usize, point: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
-    let mut s = [0f64; 3];
+pub(crate) fn polygon(n: usize, point: impl Fn(usize) -> DVec3) -> DVec3 {
+    let mut s = DVec3::ZERO;
     for i in 0..n {
         let (p, q) = (point(i), point((i + 1) % n));
-        s[0] += (p[1] - q[1]) * (p[2] + q[2]);
-        s[1] += (p[2] - q[2]) * (p[0] + q[0]);
-        s[2] += (p[0] - q[0]) * (p[1] + q[1]);
+        let (d, e) = (p - q, p + q);
+        s += DVec3::new(d.y * e.z, d.z * e.x, d.x * e.y);
     }
     s
+}
+
+/// A mesh position in f64.
+pub(crate) fn f64_point(p: [f32; 3]) -> DVec3 {
+    glam::Vec3::from_array(p).as_dvec3()
 }
 
 #[cfg(test)]
@@ -31,8 +31,12 @@ mod tests {
 
     #[test]
     fn triangle_and_polygon_agree() {
-        let p = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 3.0, 0.0]];
-        assert_eq!(triangle(p[0], p[1], p[2]), [0.0, 0.0, 6.0]);
-        assert_eq!(polygon(3, |i| p[i]), [0.0, 0.0, 6.0]);
+        let p = [
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 3.0, 0.0),
+        ];
+        assert_eq!(triangle(p[0], p[1], p[2]), DVec3::new(0.0, 0.0, 6.0));
+        assert_eq!(polygon(3, |i| p[i]), DVec3::new(0.0, 0.0, 6.0));
     }
 }

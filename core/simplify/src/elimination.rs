@@ -462,13 +462,14 @@ fn collapse_ring(ring: &mut Vec<(u32, u32)>) {
 
 /// Whether the triangle over the cluster positions has exactly zero area.
 fn zero_area_triangle(v: [u32; 3], reps: &[[f32; 3]]) -> bool {
-    let [a, b, c] = v.map(|i| reps[i as usize].map(f64::from));
-    area_vector::triangle(a, b, c) == [0.0; 3]
+    let [a, b, c] = v.map(|i| area_vector::f64_point(reps[i as usize]));
+    area_vector::triangle(a, b, c) == glam::DVec3::ZERO
 }
 
 /// Whether the polygon over the cluster positions has exactly zero area.
 fn zero_area(ring: &[(u32, u32)], reps: &[[f32; 3]]) -> bool {
-    area_vector::polygon(ring.len(), |i| reps[ring[i].0 as usize].map(f64::from)) == [0.0; 3]
+    let corner = |i: usize| area_vector::f64_point(reps[ring[i].0 as usize]);
+    area_vector::polygon(ring.len(), corner) == glam::DVec3::ZERO
 }
 
 /// The polygon's cluster sequence, rotated to start at its smallest id and read in the

@@ -2,6 +2,8 @@
 //! simplification of large polygonal models", section 3.2): the point that minimises the summed
 //! squared distances to the planes of a cluster's faces.
 
+use glam::DVec3;
+
 /// The quadric `E(x) = xᵀAx + 2bᵀx + c` of a set of planes, A symmetric (xx, xy, xz, yy, yz, zz).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Quadric {
@@ -75,12 +77,7 @@ impl Quadric {
     /// rotations ([`eigen_symmetric`]).
     pub fn minimizer(&self, x0: [f64; 3]) -> [f64; 3] {
         let a = self.a;
-        let ax0 = self.mul(x0);
-        let r = [
-            -(self.b[0] + ax0[0]),
-            -(self.b[1] + ax0[1]),
-            -(self.b[2] + ax0[2]),
-        ];
+        let r = -(DVec3::from_array(self.b) + DVec3::from_array(self.mul(x0)));
         let Some([l1, l2, l3]) = eigenvalues(a) else {
             return self.minimizer_jacobi(x0);
         };
@@ -94,8 +91,7 @@ impl Quadric {
             // Crease: drop the direction of λ3 by raising its eigenvalue to λ1 and solving
             // for the part of r across it.
             eigenvector(a, l3, l1).and_then(|w| {
-                let wr = dot(w, r);
-                let pr = [r[0] - wr * w[0], r[1] - wr * w[1], r[2] - wr * w[2]];
+                let pr = r - w * w.dot(r);
                 let s = l1 - l3;
                 let b = [
                     a[0] + s * w[0] * w[0],
@@ -109,13 +105,10 @@ impl Quadric {
             })
         } else {
             // Flat: move along the one kept direction.
-            eigenvector(a, l1, l1).map(|u| {
-                let t = dot(u, r) / l1;
-                u.map(|x| x * t)
-            })
+            eigenvector(a, l1, l1).map(|u| u * (u.dot(r) / l1))
         };
         match step {
-            Some(d) => [x0[0] + d[0], x0[1] + d[1], x0[2] + d[2]],
+            Some(d) => (DVec3::from_array(x0) + d).to_array(),
             None => self.minimizer_jacobi(x0),
         }
     }
@@ -128,12 +121,7 @@ impl Quadric {
         if max <= 0.0 || !max.is_finite() {
             return x0;
         }
-        let ax0 = self.mul(x0);
-        let r = [
-            -(self.b[0] + ax0[0]),
-            -(self.b[1] + ax0[1]),
-            -(self.b[2] + ax0[2]),
-        ];
+        let r = -(DVec3::from_array(self.b) + DVec3::from_array(self.mul(x0)));
         let mut x = x0;
         for i in 0..3 {
             if vals[i] > 1e-3 * max {
@@ -146,18 +134,6 @@ impl Quadric {
         }
         x
     }
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// Eigenvalues of a symmetric 3×3 matrix (upper triangle), largest first, by the
@@ -187,23 +163,22 @@ fn eigenvalues(a: [f64; 6]) -> Option<[f64; 3]> {
 /// The unit eigenvector of the eigenvalue `l` of `a` (upper triangle), `scale` the largest
 /// eigenvalue: the largest cross product of two rows of `A − lI`, or `None` when every one is
 /// too small to give a direction (`l` nearly repeated).
-fn eigenvector(a: [f64; 6], l: f64, scale: f64) -> Option<[f64; 3]> {
-    let r0 = [a[0] - l, a[1], a[2]];
-    let r1 = [a[1], a[3] - l, a[4]];
-    let r2 = [a[2], a[4], a[5] - l];
-    let c = [cross(r0, r1), cross(r0, r2), cross(r1, r2)];
-    let n = c.map(|v| dot(v, v));
+fn eigenvector(a: [f64; 6], l: f64, scale: f64) -> Option<DVec3> {
+    let r0 = DVec3::new(a[0] - l, a[1], a[2]);
+    let r1 = DVec3::new(a[1], a[3] - l, a[4]);
+    let r2 = DVec3::new(a[2], a[4], a[5] - l);
+    let c = [r0.cross(r1), r0.cross(r2), r1.cross(r2)];
+    let n = c.map(DVec3::length_squared);
     let best = (0..3).fold(0, |b, i| if n[i] > n[b] { i } else { b });
     // (A NaN fails the comparison too.)
     if n[best].partial_cmp(&(1e-18 * scale.powi(4))) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
-    let len = n[best].sqrt();
-    Some(c[best].map(|x| x / len))
+    Some(c[best] / n[best].sqrt())
 }
 
 /// `A⁻¹ r` by the adjugate, `None` when A is singular to working precision.
-fn solve(a: [f64; 6], r: [f64; 3]) -> Option<[f64; 3]> {
+fn solve(a: [f64; 6], r: DVec3) -> Option<DVec3> {
     let c00 = a[3] * a[5] - a[4] * a[4];
     let c01 = a[2] * a[4] - a[1] * a[5];
     let c02 = a[1] * a[4] - a[2] * a[3];
@@ -215,11 +190,11 @@ fn solve(a: [f64; 6], r: [f64; 3]) -> Option<[f64; 3]> {
         return None;
     }
     let inv = 1.0 / det;
-    Some([
-        (c00 * r[0] + c01 * r[1] + c02 * r[2]) * inv,
-        (c01 * r[0] + c11 * r[1] + c12 * r[2]) * inv,
-        (c02 * r[0] + c12 * r[1] + c22 * r[2]) * inv,
-    ])
+    Some(DVec3::new(
+        (c00 * r.x + c01 * r.y + c02 * r.z) * inv,
+        (c01 * r.x + c11 * r.y + c12 * r.z) * inv,
+        (c02 * r.x + c12 * r.y + c22 * r.z) * inv,
+    ))
 }
 
 /// Eigenvalues and unit eigenvectors of a symmetric 3×3 matrix (upper triangle xx, xy, xz, yy,
@@ -301,8 +276,8 @@ mod tests {
             ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         let unit = |v: [f64; 3]| {
-            let l = dot(v, v).sqrt();
-            v.map(|x| x / l)
+            let v = DVec3::from_array(v);
+            (v / v.length()).to_array()
         };
         for case in 0..300 {
             let mut q = Quadric::default();

@@ -218,24 +218,19 @@ fn chunk_quadrics(
 /// Unit normal, area and a point of the plane of a face (the first corner of a triangle, the
 /// centroid of a polygon).
 fn plane_of(mesh: &Mesh, face: &[u32]) -> ([f64; 3], f64, [f64; 3]) {
-    let p = |i: usize| mesh.positions[face[i] as usize].map(f64::from);
+    let p = |i: usize| area_vector::f64_point(mesh.positions[face[i] as usize]);
     let (n, at) = match face.len() {
         3 => (area_vector::triangle(p(0), p(1), p(2)), p(0)),
         m => {
-            let mut c = [0f64; 3];
-            for i in 0..m {
-                let q = p(i);
-                (0..3).for_each(|k| c[k] += q[k]);
-            }
-            let c = c.map(|x| x / m as f64);
-            (area_vector::polygon(m, p), c)
+            let c = (0..m).map(p).fold(glam::DVec3::ZERO, |c, q| c + q);
+            (area_vector::polygon(m, p), c / m as f64)
         }
     };
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let len = n.length();
     if len == 0.0 {
-        return ([0.0; 3], 0.0, at);
+        return ([0.0; 3], 0.0, at.to_array());
     }
-    (n.map(|x| x / len), 0.5 * len, at)
+    ((n / len).to_array(), 0.5 * len, at.to_array())
 }
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {

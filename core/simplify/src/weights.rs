@@ -4,6 +4,7 @@
 
 use crate::blocks;
 use crate::options::Weighting;
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 use std::sync::atomic::Ordering::Relaxed;
@@ -32,20 +33,21 @@ pub fn vertex_weights(mesh: &Mesh, weighting: Weighting) -> Vec<f32> {
             .map(|&l| if l > 0.0 { 1.0 } else { 0.0 })
             .collect(),
         Weighting::Curvature => {
-            let normals: Vec<[f32; 3]> = mesh.faces().map(|f| face_normal(mesh, f)).collect();
-            let mut avg = vec![[0f32; 3]; mesh.vertex_count()];
+            let normals: Vec<Vec3> = mesh
+                .faces()
+                .map(|f| Vec3::from_array(face_normal(mesh, f)))
+                .collect();
+            let mut avg = vec![Vec3::ZERO; mesh.vertex_count()];
             for (f, face) in mesh.faces().enumerate() {
                 for &v in face {
-                    for k in 0..3 {
-                        avg[v as usize][k] += normals[f][k];
-                    }
+                    avg[v as usize] += normals[f];
                 }
             }
             let mut min_cos = vec![1f32; mesh.vertex_count()];
             for (f, face) in mesh.faces().enumerate() {
                 for &v in face {
-                    let a = normalize(avg[v as usize]);
-                    let c = dot(a, normals[f]);
+                    let a = unit(avg[v as usize]);
+                    let c = a.dot(normals[f]);
                     min_cos[v as usize] = min_cos[v as usize].min(c);
                 }
             }
@@ -131,33 +133,25 @@ fn mark_referenced(mesh: &Mesh, w: &mut [f32], floor: f32) {
 
 /// The unit normal of a polygon (Newell's method; zero for a degenerate face).
 pub(crate) fn face_normal(mesh: &Mesh, face: &[u32]) -> [f32; 3] {
-    let mut n = [0f32; 3];
+    let corner = |i: usize| Vec3::from_array(mesh.positions[face[i % face.len()] as usize]);
+    let mut n = Vec3::ZERO;
     for i in 0..face.len() {
-        let p = mesh.positions[face[i] as usize];
-        let q = mesh.positions[face[(i + 1) % face.len()] as usize];
-        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+        let (p, q) = (corner(i), corner(i + 1));
+        let (d, e) = (p - q, p + q);
+        n += Vec3::new(d.y * e.z, d.z * e.x, d.x * e.y);
     }
-    normalize(n)
+    unit(n).to_array()
+}
+
+/// `v / |v|`, zero for a zero `v` (divided, not multiplied by the reciprocal: the normals keep
+/// the bits they always had).
+fn unit(v: Vec3) -> Vec3 {
+    let l = v.length();
+    if l > 0.0 { v / l } else { Vec3::ZERO }
 }
 
 fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
-}
-
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn normalize(v: [f32; 3]) -> [f32; 3] {
-    let l = dot(v, v).sqrt();
-    if l > 0.0 {
-        [v[0] / l, v[1] / l, v[2] / l]
-    } else {
-        [0.0; 3]
-    }
+    Vec3::from_array(a).distance_squared(Vec3::from_array(b))
 }
 
 #[cfg(test)]
@@ -194,7 +188,12 @@ mod tests {
         // A unit square as two triangles (the diagonal is every corner's longest edge but for
         // the two corners it misses) and as one quad (no diagonal: every longest edge is 1);
         // vertex 4 is used by neither.
-        let square = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let square = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let mut tris = Mesh {
             positions: [&square[..], &[[9.0, 9.0, 9.0]]].concat(),
             ..Mesh::default()

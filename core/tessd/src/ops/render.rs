@@ -21,7 +21,7 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
 use tessd_mesh::io::ReadOptions;
-use tessd_render::camera::DEFAULT_FOV;
+use tessd_render::camera::{DEFAULT_FOV, Vec3};
 use tessd_render::{
     Bounds, BrepReport, BrepScene, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
     Scene, Shading, StepTimings, View, panels,
@@ -259,16 +259,16 @@ fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
     let base = match p.spec {
         CameraSpec::View(v) => Camera::fit(v, bounds, p.fov, aspect),
         CameraSpec::Explicit { eye, target, up } => {
-            let target = target.unwrap_or_else(|| bounds.center());
-            let up = up.unwrap_or_else(|| {
-                // Z up, unless the view is along Z.
-                let d = tessd_render::camera::normalize(tessd_render::camera::sub(target, eye));
-                if d[2].abs() > 0.999 {
-                    [0.0, 1.0, 0.0]
-                } else {
-                    [0.0, 0.0, 1.0]
-                }
-            });
+            let eye = Vec3::from(eye);
+            let target = target.map_or_else(|| bounds.center(), Vec3::from);
+            let up = up.map_or_else(
+                || {
+                    // Z up, unless the view is along Z.
+                    let d = tessd_render::camera::normalize(target - eye);
+                    if d.z.abs() > 0.999 { Vec3::Y } else { Vec3::Z }
+                },
+                Vec3::from,
+            );
             Camera::new(eye, target, up, p.fov)
         }
     };
@@ -416,8 +416,8 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-fn point(v: [f64; 3]) -> Value {
-    json!(v)
+fn point(v: Vec3) -> Value {
+    json!(v.to_array())
 }
 
 /// The operation.
@@ -452,8 +452,8 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             .bounding_box()
             .ok_or_else(|| OpError::request("the document has no faces to render"))?;
         let bounds = Bounds {
-            min: b.min,
-            max: b.max,
+            min: b.min.into(),
+            max: b.max.into(),
         };
         let cams = cameras(&p, &bounds)?;
         let trim_tolerance = match &asked_tolerance {
