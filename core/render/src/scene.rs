@@ -8,6 +8,7 @@
 
 use crate::camera::{Bounds, Vec3};
 use bytemuck::{Pod, Zeroable};
+use glam::Vec3 as F3;
 use tessd_mesh::Mesh;
 
 /// One triangle corner as the vertex shader reads it (`shaders/render_surface.wgsl`).
@@ -55,25 +56,20 @@ impl Scene {
         ids: &[u32],
         uvs: Option<&[[f32; 2]]>,
     ) -> Scene {
-        let face_normals: Vec<[f32; 3]> = triangles
+        let face_normals: Vec<F3> = triangles
             .iter()
             .map(|t| {
-                let [a, b, c] = t.map(|i| positions[i as usize]);
-                cross3(sub3(b, a), sub3(c, a))
+                let [a, b, c] = t.map(|i| F3::from_array(positions[i as usize]));
+                (b - a).cross(c - a)
             })
             .collect();
-        let mut vertex_normals = vec![[0f32; 3]; positions.len()];
+        let mut vertex_normals = vec![F3::ZERO; positions.len()];
         for (t, n) in triangles.iter().zip(&face_normals) {
             for &i in t {
-                let v = &mut vertex_normals[i as usize];
-                for k in 0..3 {
-                    v[k] += n[k];
-                }
+                vertex_normals[i as usize] += *n;
             }
         }
-        for v in &mut vertex_normals {
-            *v = unit3(*v);
-        }
+        let vertex_normals: Vec<F3> = vertex_normals.into_iter().map(unit3).collect();
         let mut scene = Scene {
             vertices: Vec::with_capacity(triangles.len() * 3),
             origin,
@@ -85,7 +81,7 @@ impl Scene {
             let flat = unit3(*n);
             for (corner, &i) in t.iter().enumerate() {
                 let smooth = vertex_normals[i as usize];
-                let normal = if dot3(smooth, flat) >= CREASE_COS {
+                let normal = if smooth.dot(flat) >= CREASE_COS {
                     smooth
                 } else {
                     flat
@@ -93,7 +89,7 @@ impl Scene {
                 scene.vertices.push(Vertex {
                     position: positions[i as usize],
                     face_id: id,
-                    normal,
+                    normal: normal.to_array(),
                     uv: uvs.map_or([0.0; 2], |u| u[i as usize]),
                     bary: BARY[corner],
                 });
@@ -134,7 +130,8 @@ impl Scene {
                     v.uv = uv.values[uv.indices[c as usize] as usize];
                 }
                 if let Some(n) = &mesh.normals {
-                    v.normal = unit3(n.values[n.indices[c as usize] as usize]);
+                    v.normal =
+                        unit3(F3::from_array(n.values[n.indices[c as usize] as usize])).to_array();
                 }
             }
         }
@@ -182,28 +179,13 @@ fn bounds_of(vertices: &[Vertex], origin: Vec3) -> Option<Bounds> {
     })
 }
 
-fn sub3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn unit3(a: [f32; 3]) -> [f32; 3] {
-    let n = dot3(a, a).sqrt();
+/// `a / |a|`, zero for a zero or non-finite length (divided, as the normals always were).
+fn unit3(a: F3) -> F3 {
+    let n = a.length();
     if n > 0.0 && n.is_finite() {
-        a.map(|x| x / n)
+        a / n
     } else {
-        [0.0; 3]
+        F3::ZERO
     }
 }
 
