@@ -27,3 +27,5 @@ echo "== pytest (B-Rep export from FreeCAD 0.20, system python)"
 PYTHONPATH=python:tests /usr/bin/python3 -m pytest tests/brep_freecad -q -p no:cacheprovider
 echo "== FreeCAD workbench (console and GUI, real FreeCAD 0.20)"
 bash tests/freecad_plugin/run.sh
+echo "== examples (every example of examples/, outputs checked)"
+bash scripts/run_examples.sh

@@ -35,6 +35,7 @@ pub struct Client {
     reader: BufReader<Stream>,
     next_id: u64,
     limits: Limits,
+    last_elapsed_ms: Option<f64>,
 }
 
 impl Client {
@@ -52,6 +53,7 @@ impl Client {
             reader: BufReader::with_capacity(64 << 10, stream),
             next_id: 1,
             limits,
+            last_elapsed_ms: None,
         })
     }
 
@@ -68,6 +70,7 @@ impl Client {
     ) -> Result<(Value, Arrays), ClientError> {
         let id = self.next_id;
         self.next_id += 1;
+        self.last_elapsed_ms = None;
         let Value::Object(msg) = json!({"id": id, "op": op, "params": params}) else {
             unreachable!()
         };
@@ -78,6 +81,7 @@ impl Client {
             match kind {
                 "progress" => on_progress(&parse_progress(&frame.json)),
                 "ok" => {
+                    self.last_elapsed_ms = frame.json.get("elapsed_ms").and_then(Value::as_f64);
                     let result = frame.json.get("result").cloned().unwrap_or(Value::Null);
                     return Ok((result, frame.arrays));
                 }
@@ -94,6 +98,13 @@ impl Client {
                 }
             }
         }
+    }
+
+    /// The `elapsed_ms` of the last `ok` reply: the milliseconds the daemon spent on that
+    /// request (docs/protocol.md, "Replies"); `None` before any, after an error, and for
+    /// `hello` / `ping` / `cancel`, whose replies carry none.
+    pub fn last_elapsed_ms(&self) -> Option<f64> {
+        self.last_elapsed_ms
     }
 }
 

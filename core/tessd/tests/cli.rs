@@ -147,6 +147,11 @@ fn daemon_lifecycle() {
         c.call("ping", json!({"echo": 5}), &[], |_| {}).unwrap().0["echo"],
         5
     );
+    // `elapsed_ms` is on operations' replies only (not `ping`'s).
+    assert_eq!(c.last_elapsed_ms(), None);
+    c.call("debug.sleep", json!({"seconds": 0.01}), &[], |_| {})
+        .unwrap();
+    assert!(c.last_elapsed_ms().is_some_and(|ms| ms >= 10.0));
     // SIGTERM: clean exit, socket removed.
     // SAFETY: kill() with a valid pid and signal number.
     unsafe { libc::kill(daemon.0.id() as i32, libc::SIGTERM) };
