@@ -29,3 +29,5 @@ echo "== FreeCAD workbench (console and GUI, real FreeCAD 0.20)"
 bash tests/freecad_plugin/run.sh
 echo "== examples (every example of examples/, outputs checked)"
 bash scripts/run_examples.sh
+echo "== wheel (pip install ./python: daemon + client in one wheel, fresh venv, cadquery example)"
+bash scripts/wheel_check.sh

@@ -3,17 +3,22 @@
 :func:`ensure_daemon` returns the socket of a running daemon, starting ``tessd serve`` in the
 background first when none answers; :func:`stop_daemon` asks one to shut down (with
 ``only_if_unheld``: unless another program holds it, see :meth:`tessd.Client.hold`).
+:func:`find_binary` says which executable is started: the ``binary`` argument, ``$TESSD_BIN``,
+the one the tessd wheel installed for this Python (its scripts folder, found even when the venv
+is not activated), then ``tessd`` on ``PATH`` (docs/install.md).
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import site
 import subprocess
 import sys
+import sysconfig
 import threading
 import time
-from typing import IO, Optional, Sequence
+from typing import IO, List, Optional, Sequence
 
 from .client import Client, TessdError
 from .frame import ProtocolError
@@ -40,23 +45,90 @@ def ping(socket: Optional[str] = None, timeout: float = 2.0) -> bool:
         return False
 
 
+def _exe_name() -> str:
+    return "tessd.exe" if is_windows() else "tessd"
+
+
+def installed_binary_dirs() -> List[str]:
+    """The folders where ``pip install ./python`` (the tessd wheel, python/pyproject.toml) puts the
+    ``tessd`` binary for this interpreter, in lookup order, without duplicates: the scripts
+    folder of its install scheme (``sysconfig.get_path("scripts")``: a venv's ``bin/`` or
+    ``Scripts\\``), the folder of ``sys.executable`` (the same for a venv; where a system or
+    conda Python keeps its commands), and the user scheme's scripts folder (``pip install
+    --user``, e.g. ``~/.local/bin``). They are looked in whether or not a venv is activated:
+    its ``bin/`` need not be on ``PATH``."""
+    dirs: List[str] = []
+
+    def add(path: Optional[str]) -> None:
+        if path:
+            path = os.path.abspath(path)
+            if path not in dirs:
+                dirs.append(path)
+
+    try:
+        add(sysconfig.get_path("scripts"))
+    except (KeyError, ValueError, OSError):  # pragma: no cover - an odd embedded Python
+        pass
+    if sys.executable:
+        add(os.path.dirname(sys.executable))
+    # `pip install --user`: only where this Python reads the user site (never in a venv that
+    # does not see it), as the client package itself would then be importable from there.
+    if getattr(site, "ENABLE_USER_SITE", False):
+        try:
+            preferred = getattr(sysconfig, "get_preferred_scheme", None)  # Python >= 3.10
+            if preferred:
+                scheme = preferred("user")
+            else:
+                scheme = "nt_user" if os.name == "nt" else "posix_user"
+            add(sysconfig.get_path("scripts", scheme))
+        except (KeyError, ValueError, OSError):  # pragma: no cover
+            pass
+    return dirs
+
+
+def _is_executable(path: str) -> bool:
+    return os.path.isfile(path) and os.access(path, os.X_OK)
+
+
 def find_binary(binary: Optional[str] = None) -> str:
-    """The tessd executable: ``binary``, else ``$TESSD_BIN``, else ``tessd`` on ``PATH``."""
+    """The tessd executable to start, the first of:
+
+    1. ``binary`` (a path, or a command name looked up on ``PATH``);
+    2. ``$TESSD_BIN`` (likewise);
+    3. the binary that installing the tessd wheel (``pip install ./python`` in the tessd
+       repository, or a wheel built by ``pip wheel ./python``) put there for this Python:
+       ``tessd`` (``tessd.exe``) in one of :func:`installed_binary_dirs`, i.e. the scripts
+       folder of the interpreter's install scheme (``sysconfig.get_path("scripts")``), the
+       folder of ``sys.executable``, then the user scheme's scripts folder. So a venv's daemon
+       is found from that venv's Python even when the venv is not activated (its ``bin/`` not
+       on ``PATH``);
+    4. ``tessd`` on ``PATH``.
+
+    A ``binary`` or ``$TESSD_BIN`` that names no executable is an error (no fallback), as is
+    finding none at all: :class:`DaemonStartError` either way.
+    """
     for candidate, origin in ((binary, "the binary argument"),
                               (os.environ.get("TESSD_BIN"), "TESSD_BIN")):
         if candidate:
             path = os.fspath(candidate)
-            if os.path.isfile(path) and os.access(path, os.X_OK):
+            if _is_executable(path):
                 return path
             found = shutil.which(path)
             if found:
                 return found
             raise DaemonStartError("%s names %s, which is not an executable file" % (origin, path))
+    dirs = installed_binary_dirs()
+    for directory in dirs:
+        path = os.path.join(directory, _exe_name())
+        if _is_executable(path):
+            return path
     found = shutil.which("tessd")
     if found:
         return found
     raise DaemonStartError("cannot find the tessd executable: pass binary=..., set TESSD_BIN, "
-                           "or put tessd on PATH")
+                           "install the tessd wheel into this Python (`pip install ./python` in "
+                           "the tessd repository; looked in %s), or put tessd on PATH"
+                           % (", ".join(dirs) or "no scripts folder"))
 
 
 def binary_version(binary: Optional[str] = None, timeout: float = 10.0) -> str:
@@ -214,8 +286,8 @@ def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0, *,
                        % (path, timeout))
 
 
-__all__ = ["DaemonStartError", "binary_version", "ensure_daemon", "find_binary", "ping",
-           "stop_daemon"]
+__all__ = ["DaemonStartError", "binary_version", "ensure_daemon", "find_binary",
+           "installed_binary_dirs", "ping", "stop_daemon"]
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use: python -m tessd.daemon [socket]

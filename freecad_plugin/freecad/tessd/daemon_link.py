@@ -11,8 +11,9 @@ this process started is asked to stop unless another program still holds it (``s
 Preferences live in FreeCAD's parameter tree, ``User parameter:BaseApp/Preferences/Mod/tessd``
 (the workbench's preference page edits them; a macro may set them with ``FreeCAD.ParamGet``):
 
-- ``BinaryPath`` (string): the tessd executable to start; empty: ``$TESSD_BIN``, else ``tessd``
-  on ``PATH`` (:func:`tessd.daemon.find_binary`);
+- ``BinaryPath`` (string): the tessd executable to start; empty: ``$TESSD_BIN``, else the one
+  the tessd wheel installed for this Python, else ``tessd`` on ``PATH``
+  (:func:`tessd.daemon.find_binary`);
 - ``Socket`` (string): the socket path or bare name, as ``tessd serve --socket``; empty: the
   client's default (``$XDG_RUNTIME_DIR/tessd.sock`` or ``/tmp/tessd-<uid>/tessd.sock``);
 - ``StopOnExit`` (bool, default true): stop a daemon this process started when FreeCAD exits

@@ -23,7 +23,7 @@ class PreferencePage:
 
         self.binary = QtWidgets.QLineEdit()
         self.binary.setObjectName("BinaryPath")
-        self.binary.setPlaceholderText("empty: $TESSD_BIN, else tessd on PATH")
+        self.binary.setPlaceholderText("empty: $TESSD_BIN, else the tessd wheel's, else tessd on PATH")
         browse = QtWidgets.QToolButton()
         browse.setText("...")
         browse.clicked.connect(self._browse)
