@@ -128,15 +128,20 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
         path: path.to_path_buf(),
         source,
     };
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(io_err)?;
+    }
+    // Daemons started at the same moment (the workers of one node) take turns: between a
+    // socket file's creation and its `listen` a connect is refused, and without the lock a
+    // second daemon would take that fresh file for stale, delete it and leave the first one
+    // listening where nobody can reach it.
+    let _turn = StartLock::take(path).map_err(io_err)?;
     if std::fs::symlink_metadata(path).is_ok() {
         if connect(path).is_ok() {
             return Err(BindError::InUse(path.to_path_buf()));
         }
         log::info!("removing stale socket {}", path.display());
         std::fs::remove_file(path).map_err(io_err)?;
-    }
-    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(io_err)?;
     }
     let name = path.to_fs_name::<GenericFilePath>().map_err(io_err)?;
     let opts = ListenerOptions::new().name(name).try_overwrite(false);
@@ -152,4 +157,41 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
             io_err(e)
         }
     })
+}
+
+/// An exclusive `flock` on `<socket>.lock`, held while [`bind`] decides whether the socket file
+/// is stale and binds (released on drop). The lock file stays, empty, in the socket's private
+/// folder; on Windows, whose named pipes have no stale files, nothing is locked.
+struct StartLock(#[allow(dead_code)] Option<std::fs::File>);
+
+impl StartLock {
+    fn take(socket: &Path) -> io::Result<StartLock> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::OpenOptionsExt;
+            use std::os::unix::io::AsRawFd;
+            let mut name = socket.as_os_str().to_owned();
+            name.push(".lock");
+            let file = std::fs::OpenOptions::new()
+                .create(true)
+                .truncate(false)
+                .write(true)
+                .mode(0o600)
+                .custom_flags(libc::O_NOFOLLOW)
+                .open(PathBuf::from(name))?;
+            // SAFETY: flock on a descriptor this function owns; it blocks until the lock is ours.
+            while unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } != 0 {
+                let e = io::Error::last_os_error();
+                if e.kind() != io::ErrorKind::Interrupted {
+                    return Err(e);
+                }
+            }
+            Ok(StartLock(Some(file)))
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = socket;
+            Ok(StartLock(None))
+        }
+    }
 }
