@@ -25,7 +25,8 @@ apt_install() {
 #   .venv        tests: usd-core, numpy, bpy, pytest       (python/requirements-test.txt)
 #   .venv-bench  peer tools for cross-checks and benchmarks: pymeshlab, matplotlib
 #                                                          (bench/requirements-bench.txt)
-#   .venv-cad    B-Rep tests (tests/brep) on OCP 7.9: cadquery 2.8 + cadquery-ocp 7.9, pytest
+#   .venv-cad    B-Rep tests (tests/brep) on OCP 7.9: cadquery 2.8 + cadquery-ocp 7.9, pytest,
+#                dask[distributed] (tessd.batch, tests/batch)
 #                                                          (python/requirements-cad.txt)
 #   .venv-b123d  B-Rep tests (tests/brep, tests/brep_build123d) on OCP 8.0: build123d 0.13 +
 #                cadquery-ocp-novtk 8.0, numpy, pytest     (python/requirements-build123d.txt)

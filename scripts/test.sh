@@ -12,13 +12,15 @@ cargo test --workspace --release
 echo "== pytest (daemon, USD, demo, simplification)"
 .venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
   --ignore=tests/brep_build123d --ignore=tests/brep_freecad --ignore=tests/render_reference \
-  --ignore=tests/freecad_plugin
+  --ignore=tests/freecad_plugin --ignore=tests/batch
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
 # tests/brep (the exporter, the daemon's B-Rep ops against OCP, the real-file fixtures) needs
 # nothing but OCP: it runs whole under both OCP releases the exporter supports.
 echo "== pytest (B-Rep export and tessellation on real OpenCASCADE: OCP 7.9, cadquery 2.8's venv)"
 .venv-cad/bin/python -m pytest tests/brep -q -p no:cacheprovider
+echo "== pytest (asset-library batches on Dask: tessd.batch, cadquery 2.8's venv; usd-core from .venv)"
+.venv-cad/bin/python -m pytest tests/batch -q -p no:cacheprovider
 echo "== pytest (renders against the independent reference: OCP BRepMesh + Embree, cadquery 2.8's venv)"
 .venv-cad/bin/python -m pytest tests/render_reference -q -p no:cacheprovider
 echo "== pytest (B-Rep export and tessellation on real OpenCASCADE: OCP 8.0, build123d 0.13's venv)"
