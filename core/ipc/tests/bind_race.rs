@@ -32,14 +32,21 @@ fn simultaneous_starts_leave_one_reachable_daemon() {
                 Err(e) => panic!("round {round}: {e}"),
             }
         }
-        assert_eq!(winners.len(), 1, "round {round}: {} daemons bound", winners.len());
+        assert_eq!(
+            winners.len(),
+            1,
+            "round {round}: {} daemons bound",
+            winners.len()
+        );
         // The socket file reaches the winner: its accept returns our connection.
         let listener = winners.pop().unwrap();
         let client = std::thread::spawn({
             let path = path.clone();
             move || connect(&path).map(|_| ())
         });
-        listener.accept().expect("the winner accepts the connection");
+        listener
+            .accept()
+            .expect("the winner accepts the connection");
         client.join().unwrap().expect("the socket connects");
     }
 }
