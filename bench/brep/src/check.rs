@@ -109,18 +109,18 @@ const PROJECTION_STEPS: usize = 6;
 pub fn distance_to_surface(face: &tessd_brep::Face, c: [f64; 3], uv: [f64; 2]) -> f64 {
     let [u0, u1, v0, v1] = face.bounds;
     let (mut u, mut v) = (uv[0], uv[1]);
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let c = tessd_brep::DVec3::from(c);
     let mut best = f64::INFINITY;
     for _ in 0..=PROJECTION_STEPS {
         let sp = face.surface.eval(u, v);
-        let r = [c[0] - sp.point[0], c[1] - sp.point[1], c[2] - sp.point[2]];
-        best = best.min(dot(r, r).sqrt());
-        let (a, b, d) = (dot(sp.du, sp.du), dot(sp.du, sp.dv), dot(sp.dv, sp.dv));
+        let r = c - sp.point;
+        best = best.min(r.length());
+        let (a, b, d) = (sp.du.dot(sp.du), sp.du.dot(sp.dv), sp.dv.dot(sp.dv));
         let det = a * d - b * b;
         if !(det.abs() > 1e-30 && det.is_finite()) {
             break;
         }
-        let (gu, gv) = (dot(sp.du, r), dot(sp.dv, r));
+        let (gu, gv) = (sp.du.dot(r), sp.dv.dot(r));
         u = (u + (d * gu - b * gv) / det).clamp(u0, u1);
         v = (v + (a * gv - b * gu) / det).clamp(v0, v1);
     }

@@ -6,7 +6,7 @@
 //! its diagonal.
 
 use crate::model::{Curve, Document, Face, Point2, Point3};
-use crate::vector::Vector;
+use crate::vector::Point;
 
 /// Grid intervals per parameter direction over a face's `bounds` (17 × 17 points, those inside
 /// the trims kept).
@@ -33,18 +33,21 @@ impl BoundingBox {
 
     /// Grows the box to hold `p`.
     pub fn add(&mut self, p: Point3) {
-        self.min = std::array::from_fn(|k| self.min[k].min(p[k]));
-        self.max = std::array::from_fn(|k| self.max[k].max(p[k]));
+        // `f64::min` / `max` per coordinate (not glam's `DVec3::min`, a `<` select): the same
+        // choice between equal coordinates of opposite zero sign as ever.
+        let (lo, hi) = (self.min, self.max);
+        self.min = Point3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z));
+        self.max = Point3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z));
     }
 
     /// The side lengths.
     pub fn size(&self) -> Point3 {
-        self.max.sub(self.min)
+        self.max - self.min
     }
 
     /// The length of the diagonal.
     pub fn diagonal(&self) -> f64 {
-        self.size().norm()
+        self.size().length()
     }
 }
 
@@ -61,7 +64,7 @@ fn grow(b: &mut Option<BoundingBox>, p: Point3) {
 }
 
 /// Points along `curve` over `range`, both ends included.
-fn samples<P: Vector>(curve: &Curve<P>, range: [f64; 2]) -> impl Iterator<Item = P> + '_ {
+fn samples<P: Point>(curve: &Curve<P>, range: [f64; 2]) -> impl Iterator<Item = P> + '_ {
     let n = curve.segments(range[0], range[1]).max(CURVE_SEGMENTS);
     (0..=n).map(move |i| curve.point(range[0] + (range[1] - range[0]) * (i as f64 / n as f64)))
 }
@@ -73,9 +76,9 @@ fn inside(loops: &[Vec<Point2>], p: Point2) -> bool {
         let Some(&last) = lp.last() else { continue };
         let mut a = last;
         for &b in lp {
-            if (a[1] > p[1]) != (b[1] > p[1]) {
-                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-                if p[0] < x {
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if p.x < x {
                     odd = !odd;
                 }
             }
@@ -99,15 +102,15 @@ fn face_points(face: &Face, add: &mut impl FnMut(Point3)) {
                 .collect()
         })
         .collect();
-    for &[u, v] in loops.iter().flatten() {
-        add(surface.point(u, v));
+    for &p in loops.iter().flatten() {
+        add(surface.point(p.x, p.y));
     }
     let [u0, u1, v0, v1] = face.bounds;
     for i in 0..=GRID {
         let u = u0 + (u1 - u0) * (i as f64 / GRID as f64);
         for j in 0..=GRID {
             let v = v0 + (v1 - v0) * (j as f64 / GRID as f64);
-            if face.loops.is_empty() || inside(&loops, [u, v]) {
+            if face.loops.is_empty() || inside(&loops, Point2::new(u, v)) {
                 add(surface.point(u, v));
             }
         }
@@ -160,7 +163,7 @@ mod tests {
     }
 
     fn close(a: Point3, b: Point3) -> bool {
-        a.sub(b).norm() < 1e-12
+        (a - b).length() < 1e-12
     }
 
     #[test]
@@ -171,7 +174,7 @@ mod tests {
         );
         let b = d.bounding_box().unwrap();
         assert!(
-            close(b.min, [1.0, 2.0, 2.0]) && close(b.max, [3.0, 2.0, 4.0]),
+            close(b.min, Point3::new(1.0, 2.0, 2.0)) && close(b.max, Point3::new(3.0, 2.0, 4.0)),
             "{b:?}"
         );
         assert!((b.diagonal() - 8f64.sqrt()).abs() < 1e-12);
@@ -200,7 +203,7 @@ mod tests {
         ));
         let b = d.bounding_box().unwrap();
         assert!(
-            close(b.min, [0.0; 3]) && close(b.max, [1.0, 1.0, 0.0]),
+            close(b.min, Point3::ZERO) && close(b.max, Point3::new(1.0, 1.0, 0.0)),
             "{b:?}"
         );
     }
@@ -214,7 +217,10 @@ mod tests {
             "bounds": [0, 6.283185307179586, -1.5707963267948966, 1.5707963267948966]}"#,
         );
         let b = d.bounding_box().unwrap();
-        assert!(close(b.min, [-2.0; 3]) && close(b.max, [2.0; 3]), "{b:?}");
+        assert!(
+            close(b.min, Point3::splat(-2.0)) && close(b.max, Point3::splat(2.0)),
+            "{b:?}"
+        );
     }
 
     #[test]

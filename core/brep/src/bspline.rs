@@ -9,7 +9,8 @@
 //! from `Σ_{j ≤ i} mults_j − m_0` on (modulo n), as a non-periodic curve uses them from
 //! `Σ_{j ≤ i} mults_j − degree − 1`.
 
-use crate::vector::Vector;
+use crate::model::Point3;
+use crate::vector::Point;
 use thiserror::Error;
 
 /// The highest degree accepted (OCP's `Geom_BSplineCurve::MaxDegree`), so that basis values
@@ -382,7 +383,7 @@ impl KnotVector {
 
 /// A point of a (rational) B-spline curve and its first derivative, or `None` when the poles
 /// or weights do not match the knot vector.
-pub fn eval_curve<P: Vector>(
+pub fn eval_curve<P: Point>(
     kv: &KnotVector,
     poles: &[P],
     weights: Option<&[f64]>,
@@ -393,17 +394,17 @@ pub fn eval_curve<P: Vector>(
     }
     let b = kv.basis(t);
     let idx = b.pole_indices();
-    let (mut a, mut da) = (P::zero(), P::zero());
+    let (mut a, mut da) = (P::ZERO, P::ZERO);
     let (mut w, mut dw) = (0.0, 0.0);
     for (k, &i) in idx[..b.count].iter().enumerate() {
         let wi = weights.map_or(1.0, |ws| ws[i]);
-        a = a.add(poles[i].scale(b.values[k] * wi));
-        da = da.add(poles[i].scale(b.derivs[k] * wi));
+        a = a + poles[i] * (b.values[k] * wi);
+        da = da + poles[i] * (b.derivs[k] * wi);
         w += b.values[k] * wi;
         dw += b.derivs[k] * wi;
     }
-    let c = a.scale(1.0 / w);
-    Some((c, da.sub(c.scale(dw)).scale(1.0 / w)))
+    let c = a * (1.0 / w);
+    Some((c, (da - c * dw) * (1.0 / w)))
 }
 
 /// The u and v bases at (u, v) with their pole indices.
@@ -422,35 +423,35 @@ fn tensor_basis(
 pub fn eval_surface_point(
     ku: &KnotVector,
     kv: &KnotVector,
-    poles: &[Vec<[f64; 3]>],
+    poles: &[Vec<Point3>],
     weights: Option<&[Vec<f64>]>,
     u: f64,
     v: f64,
-) -> [f64; 3] {
+) -> Point3 {
     let [(bu, iu), (bv, iv)] = tensor_basis(ku, kv, u, v, false);
-    let mut a = [0.0; 3];
+    let mut a = Point3::ZERO;
     let mut w = 0.0;
     for (ku_, &i) in iu[..bu.count].iter().enumerate() {
         let row = &poles[i];
         let wrow = weights.map(|ws| &ws[i]);
-        let mut ra = [0.0; 3];
+        let mut ra = Point3::ZERO;
         let mut rw = 0.0;
         for (kv_, &j) in iv[..bv.count].iter().enumerate() {
             let n = bv.values[kv_] * wrow.map_or(1.0, |r| r[j]);
-            ra = ra.add(row[j].scale(n));
+            ra += row[j] * n;
             rw += n;
         }
-        a = a.add(ra.scale(bu.values[ku_]));
+        a += ra * bu.values[ku_];
         w += rw * bu.values[ku_];
     }
-    a.scale(1.0 / w)
+    a * (1.0 / w)
 }
 
 /// Whether the poles (and weights) match the knot vectors' pole counts.
 pub fn surface_fits(
     ku: &KnotVector,
     kv: &KnotVector,
-    poles: &[Vec<[f64; 3]>],
+    poles: &[Vec<Point3>],
     weights: Option<&[Vec<f64>]>,
 ) -> bool {
     poles.len() == ku.pole_count()
@@ -466,13 +467,13 @@ pub fn surface_fits(
 pub fn eval_surface(
     ku: &KnotVector,
     kv: &KnotVector,
-    poles: &[Vec<[f64; 3]>],
+    poles: &[Vec<Point3>],
     weights: Option<&[Vec<f64>]>,
     u: f64,
     v: f64,
-) -> ([f64; 3], [f64; 3], [f64; 3]) {
+) -> (Point3, Point3, Point3) {
     let [(bu, iu), (bv, iv)] = tensor_basis(ku, kv, u, v, true);
-    let zero = [0.0; 3];
+    let zero = Point3::ZERO;
     let (mut a, mut au, mut av) = (zero, zero, zero);
     let (mut w, mut wu, mut wv) = (0.0, 0.0, 0.0);
     for (ku_, &i) in iu[..bu.count].iter().enumerate() {
@@ -484,18 +485,14 @@ pub fn eval_surface(
             let n = bu.values[ku_] * bv.values[kv_] * wij;
             let nu = bu.derivs[ku_] * bv.values[kv_] * wij;
             let nv = bu.values[ku_] * bv.derivs[kv_] * wij;
-            a = a.add(p.scale(n));
-            au = au.add(p.scale(nu));
-            av = av.add(p.scale(nv));
+            a += p * n;
+            au += p * nu;
+            av += p * nv;
             w += n;
             wu += nu;
             wv += nv;
         }
     }
-    let s = a.scale(1.0 / w);
-    (
-        s,
-        au.sub(s.scale(wu)).scale(1.0 / w),
-        av.sub(s.scale(wv)).scale(1.0 / w),
-    )
+    let s = a * (1.0 / w);
+    (s, (au - s * wu) * (1.0 / w), (av - s * wv) * (1.0 / w))
 }

@@ -4,9 +4,9 @@
 
 use crate::bspline::{KnotError, KnotVector, eval_curve};
 use crate::model::{BSplineCurve, Curve};
-use crate::vector::{Vector, combine};
+use crate::vector::{Point, combine};
 
-impl<P: Vector> BSplineCurve<P> {
+impl<P: Point> BSplineCurve<P> {
     /// The curve's checked knot vector.
     ///
     /// # Errors
@@ -22,19 +22,19 @@ impl<P: Vector> BSplineCurve<P> {
     }
 }
 
-impl<P: Vector> Curve<P> {
+impl<P: Point> Curve<P> {
     /// `(C(t), C'(t))`; NaN coordinates for a B-spline that does not validate.
     pub fn eval(&self, t: f64) -> (P, P) {
         let (c, s) = (t.cos(), t.sin());
         match self {
-            Curve::Line { origin, dir } => (origin.add(dir.scale(t)), *dir),
+            Curve::Line { origin, dir } => (*origin + *dir * t, *dir),
             Curve::Circle {
                 center,
                 x_dir,
                 y_dir,
                 radius,
             } => (
-                center.add(combine(&[(radius * c, *x_dir), (radius * s, *y_dir)])),
+                *center + combine(&[(radius * c, *x_dir), (radius * s, *y_dir)]),
                 combine(&[(-radius * s, *x_dir), (radius * c, *y_dir)]),
             ),
             Curve::Ellipse {
@@ -44,13 +44,10 @@ impl<P: Vector> Curve<P> {
                 major_radius: a,
                 minor_radius: b,
             } => (
-                center.add(combine(&[(a * c, *x_dir), (b * s, *y_dir)])),
+                *center + combine(&[(a * c, *x_dir), (b * s, *y_dir)]),
                 combine(&[(-a * s, *x_dir), (b * c, *y_dir)]),
             ),
-            Curve::Bspline(b) => b.eval(t).unwrap_or_else(|| {
-                let nan = P::zero().scale(f64::NAN);
-                (nan, nan)
-            }),
+            Curve::Bspline(b) => b.eval(t).unwrap_or((P::NAN, P::NAN)),
         }
     }
 

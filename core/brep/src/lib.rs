@@ -10,7 +10,7 @@
 //!                "x_dir": [1, 0, 0], "y_dir": [0, 1, 0]}, "bounds": [0, 1, 0, 1]}]
 //! }"#).unwrap();
 //! doc.validate().unwrap();
-//! assert_eq!(doc.faces[0].surface.point(0.5, 0.25), [0.5, 0.25, 0.0]);
+//! assert_eq!(doc.faces[0].surface.point(0.5, 0.25).to_array(), [0.5, 0.25, 0.0]);
 //! assert_eq!(doc.stats().faces_by_surface["plane"], 1);
 //! ```
 //!
@@ -31,6 +31,9 @@ pub mod validate;
 pub mod vector;
 
 pub use bounds::BoundingBox;
+/// The point / vector types of the model ([`model::Point2`], [`model::Point3`]), and glam itself,
+/// so dependents use the very version the document types are made of.
+pub use glam::{self, DVec2, DVec3};
 pub use model::{
     BSplineCurve, BSplineSurface, Curve, Curve2, Curve3, Document, Edge, FORMAT, Face, Frame, Loop,
     Surface, Trim, Units, VERSION,

@@ -1,7 +1,9 @@
 //! The document as serde reads it (docs/brep-format.md): faces with their surface and trim
 //! loops, shared edges, and the surface / curve types, tagged on `type`. The types are plain
 //! data mirroring the JSON one to one, so what the exporter writes is what the evaluators use;
-//! invariants are checked by [`crate::validate`], not by the types.
+//! invariants are checked by [`crate::validate`], not by the types. Points and vectors are
+//! glam's [`glam::DVec2`] / [`glam::DVec3`] ([`Point2`], [`Point3`]), which glam's `serde`
+//! feature reads and writes as the plain `[u, v]` / `[x, y, z]` arrays of the format.
 
 use serde::{Deserialize, Serialize};
 
@@ -11,11 +13,11 @@ pub const FORMAT: &str = "tessd-brep";
 /// The format version this crate reads and writes.
 pub const VERSION: u64 = 1;
 
-/// A point of the parameter plane, (u, v) or a 2D curve's point.
-pub type Point2 = [f64; 2];
+/// A point of the parameter plane, (u, v) or a 2D curve's point; written `[u, v]` in JSON.
+pub type Point2 = glam::DVec2;
 
-/// A point or vector of space, in the document's units.
-pub type Point3 = [f64; 3];
+/// A point or vector of space, in the document's units; written `[x, y, z]` in JSON.
+pub type Point3 = glam::DVec3;
 
 /// A whole exchange document: a list of faces and, when the source has topology, the edges
 /// they share.
@@ -171,7 +173,7 @@ pub struct Frame {
 impl Frame {
     /// `x_dir × y_dir`.
     pub fn z_dir(&self) -> Point3 {
-        crate::vector::cross(self.x_dir, self.y_dir)
+        self.x_dir.cross(self.y_dir)
     }
 }
 
@@ -312,7 +314,7 @@ pub type Curve3 = Curve<Point3>;
 #[serde(tag = "type", rename_all = "snake_case")]
 #[serde(bound(
     serialize = "P: Serialize",
-    deserialize = "P: Deserialize<'de> + crate::vector::Vector"
+    deserialize = "P: Deserialize<'de> + crate::vector::Point"
 ))]
 pub enum Curve<P> {
     /// `origin + t·dir`.
@@ -370,7 +372,7 @@ impl<P> Curve<P> {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(bound(
     serialize = "P: Serialize",
-    deserialize = "P: Deserialize<'de> + crate::vector::Vector"
+    deserialize = "P: Deserialize<'de> + crate::vector::Point"
 ))]
 pub struct BSplineCurve<P> {
     /// The degree (≥ 1).

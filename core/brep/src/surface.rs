@@ -3,33 +3,34 @@
 //! a face's normal is the surface's turned over when the face is `reversed`.
 
 use crate::bspline::{KnotVector, eval_surface, eval_surface_point, surface_fits};
+use crate::model::Point3;
 use crate::model::{BSplineSurface, Face, Frame, Surface};
-use crate::vector::{Vector, combine, cross};
+use crate::vector::combine;
 
 /// A surface point with its first partial derivatives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
     /// S(u, v).
-    pub point: [f64; 3],
+    pub point: Point3,
     /// ∂S/∂u.
-    pub du: [f64; 3],
+    pub du: Point3,
     /// ∂S/∂v.
-    pub dv: [f64; 3],
+    pub dv: Point3,
 }
 
 impl SurfacePoint {
     /// `∂S/∂u × ∂S/∂v` normalised, or `None` where the parametrisation degenerates (a sphere's
     /// pole, a cone's apex) and the cross product vanishes.
-    pub fn normal(&self) -> Option<[f64; 3]> {
-        let n = cross(self.du, self.dv);
-        let len = n.norm();
-        let scale = self.du.norm() * self.dv.norm();
-        (len > 1e-12 * scale && len.is_finite()).then(|| n.scale(1.0 / len))
+    pub fn normal(&self) -> Option<Point3> {
+        let n = self.du.cross(self.dv);
+        let len = n.length();
+        let scale = self.du.length() * self.dv.length();
+        (len > 1e-12 * scale && len.is_finite()).then(|| n * (1.0 / len))
     }
 }
 
 /// `cos u·x + sin u·y` and its derivative in u, the circle every rotational surface sweeps.
-fn radial(frame: &Frame, u: f64) -> ([f64; 3], [f64; 3]) {
+fn radial(frame: &Frame, u: f64) -> (Point3, Point3) {
     let (c, s) = (u.cos(), u.sin());
     (
         combine(&[(c, frame.x_dir), (s, frame.y_dir)]),
@@ -84,7 +85,7 @@ impl BSplineSurface {
     }
 
     /// `S(u, v)` alone (no derivatives), or `None` for a surface [`crate::validate`] refuses.
-    pub fn point(&self, u: f64, v: f64) -> Option<[f64; 3]> {
+    pub fn point(&self, u: f64, v: f64) -> Option<Point3> {
         let (ku, kv) = self.knot_vectors()?;
         Some(eval_surface_point(
             ku,
@@ -123,7 +124,7 @@ impl Surface {
                 let z = frame.z_dir();
                 SurfacePoint {
                     point: combine(&[(1.0, frame.origin), (*radius, e), (v, z)]),
-                    du: de.scale(*radius),
+                    du: de * *radius,
                     dv: z,
                 }
             }
@@ -138,7 +139,7 @@ impl Surface {
                 let r = radius + v * sa;
                 SurfacePoint {
                     point: combine(&[(1.0, frame.origin), (r, e), (v * ca, z)]),
-                    du: de.scale(r),
+                    du: de * r,
                     dv: combine(&[(sa, e), (ca, z)]),
                 }
             }
@@ -148,7 +149,7 @@ impl Surface {
                 let (cv, sv) = (v.cos(), v.sin());
                 SurfacePoint {
                     point: combine(&[(1.0, frame.origin), (radius * cv, e), (radius * sv, z)]),
-                    du: de.scale(radius * cv),
+                    du: de * (radius * cv),
                     dv: combine(&[(-radius * sv, e), (radius * cv, z)]),
                 }
             }
@@ -163,7 +164,7 @@ impl Surface {
                 let r = major_radius + minor_radius * cv;
                 SurfacePoint {
                     point: combine(&[(1.0, frame.origin), (r, e), (minor_radius * sv, z)]),
-                    du: de.scale(r),
+                    du: de * r,
                     dv: combine(&[(-minor_radius * sv, e), (minor_radius * cv, z)]),
                 }
             }
@@ -175,19 +176,19 @@ impl Surface {
                 // Rodrigues: R(u)q = q cos u + (a × q) sin u + a (a·q)(1 − cos u).
                 let (c, dc) = curve.eval(v);
                 let a = *axis_dir;
-                let rotate = |q: [f64; 3]| {
+                let rotate = |q: Point3| {
                     combine(&[
                         (u.cos(), q),
-                        (u.sin(), cross(a, q)),
+                        (u.sin(), a.cross(q)),
                         (a.dot(q) * (1.0 - u.cos()), a),
                     ])
                 };
-                let q = c.sub(*axis_origin);
+                let q = c - *axis_origin;
                 SurfacePoint {
-                    point: axis_origin.add(rotate(q)),
+                    point: *axis_origin + rotate(q),
                     du: combine(&[
                         (-u.sin(), q),
-                        (u.cos(), cross(a, q)),
+                        (u.cos(), a.cross(q)),
                         (a.dot(q) * u.sin(), a),
                     ]),
                     dv: rotate(dc),
@@ -196,38 +197,33 @@ impl Surface {
             Surface::Extrusion { direction, curve } => {
                 let (c, dc) = curve.eval(u);
                 SurfacePoint {
-                    point: c.add(direction.scale(v)),
+                    point: c + *direction * v,
                     du: dc,
                     dv: *direction,
                 }
             }
-            Surface::Bspline(b) => b.eval(u, v).unwrap_or_else(|| {
-                let nan = [f64::NAN; 3];
-                SurfacePoint {
-                    point: nan,
-                    du: nan,
-                    dv: nan,
-                }
+            Surface::Bspline(b) => b.eval(u, v).unwrap_or(SurfacePoint {
+                point: Point3::NAN,
+                du: Point3::NAN,
+                dv: Point3::NAN,
             }),
         }
     }
 
     /// S(u, v).
-    pub fn point(&self, u: f64, v: f64) -> [f64; 3] {
+    pub fn point(&self, u: f64, v: f64) -> Point3 {
         match self {
-            Surface::Bspline(b) => b.point(u, v).unwrap_or([f64::NAN; 3]),
+            Surface::Bspline(b) => b.point(u, v).unwrap_or(Point3::NAN),
             _ => self.eval(u, v).point,
         }
     }
 
     /// The unit normal `∂S/∂u × ∂S/∂v`; at a sphere's poles, where that vanishes, the
     /// outward radial direction; `None` at other degenerate points (a cone's apex).
-    pub fn normal(&self, u: f64, v: f64) -> Option<[f64; 3]> {
+    pub fn normal(&self, u: f64, v: f64) -> Option<Point3> {
         let sp = self.eval(u, v);
         sp.normal().or_else(|| match self {
-            Surface::Sphere { frame, radius } => {
-                Some(sp.point.sub(frame.origin).scale(1.0 / radius))
-            }
+            Surface::Sphere { frame, radius } => Some((sp.point - frame.origin) * (1.0 / radius)),
             _ => None,
         })
     }
@@ -235,8 +231,8 @@ impl Surface {
 
 impl Face {
     /// The face's outward unit normal at (u, v): the surface's, negated when `reversed`.
-    pub fn normal(&self, u: f64, v: f64) -> Option<[f64; 3]> {
+    pub fn normal(&self, u: f64, v: f64) -> Option<Point3> {
         let n = self.surface.normal(u, v)?;
-        Some(if self.reversed { n.scale(-1.0) } else { n })
+        Some(if self.reversed { n * -1.0 } else { n })
     }
 }

@@ -3,19 +3,16 @@
 //! far from the origin, where single-precision output loses the tolerance (issue 20, point 5),
 //! without changing anything else about it.
 
-use crate::model::{Curve, Curve3, Document, Surface};
-use crate::vector::Vector;
+use crate::model::{Curve, Curve3, Document, Point3, Surface};
 
 impl Document {
     /// The document moved by `d` (model units).
-    pub fn translated(&self, d: [f64; 3]) -> Document {
-        fn curve(c: &mut Curve3, d: [f64; 3]) {
+    pub fn translated(&self, d: Point3) -> Document {
+        fn curve(c: &mut Curve3, d: Point3) {
             match c {
-                Curve::Line { origin, .. } => *origin = origin.add(d),
-                Curve::Circle { center, .. } | Curve::Ellipse { center, .. } => {
-                    *center = center.add(d)
-                }
-                Curve::Bspline(b) => b.poles.iter_mut().for_each(|p| *p = p.add(d)),
+                Curve::Line { origin, .. } => *origin += d,
+                Curve::Circle { center, .. } | Curve::Ellipse { center, .. } => *center += d,
+                Curve::Bspline(b) => b.poles.iter_mut().for_each(|p| *p += d),
             }
         }
         let mut doc = self.clone();
@@ -25,19 +22,19 @@ impl Document {
                 | Surface::Cylinder { frame, .. }
                 | Surface::Cone { frame, .. }
                 | Surface::Sphere { frame, .. }
-                | Surface::Torus { frame, .. } => frame.origin = frame.origin.add(d),
+                | Surface::Torus { frame, .. } => frame.origin += d,
                 Surface::Revolution {
                     axis_origin,
                     curve: c,
                     ..
                 } => {
-                    *axis_origin = axis_origin.add(d);
+                    *axis_origin += d;
                     curve(c, d);
                 }
                 Surface::Extrusion { curve: c, .. } => curve(c, d),
                 Surface::Bspline(b) => {
                     for row in &mut b.poles {
-                        row.iter_mut().for_each(|p| *p = p.add(d));
+                        row.iter_mut().for_each(|p| *p += d);
                     }
                 }
             }

@@ -4,9 +4,9 @@
 
 use crate::bspline::{KnotError, KnotVector};
 use crate::model::{
-    BSplineCurve, BSplineSurface, Curve, Document, FORMAT, Frame, Surface, VERSION,
+    BSplineCurve, BSplineSurface, Curve, Document, FORMAT, Frame, Point2, Surface, VERSION,
 };
-use crate::vector::Vector;
+use crate::vector::Point;
 use std::collections::{HashMap, HashSet};
 use std::fmt;
 use thiserror::Error;
@@ -305,7 +305,7 @@ pub enum ValidationError {
         /// The trim's parameter there.
         t: f64,
         /// The point in (u, v).
-        point: [f64; 2],
+        point: Point2,
         /// The face's bounds.
         bounds: [f64; 4],
     },
@@ -424,18 +424,18 @@ impl Checker {
         !bad
     }
 
-    fn finite<V: Vector>(&mut self, v: &V, at: &Place, field: impl Into<String>) -> bool {
-        self.check(!v.is_finite(), || ValidationError::NonFinite {
+    fn finite<V: Finite>(&mut self, v: &V, at: &Place, field: impl Into<String>) -> bool {
+        self.check(!v.all_finite(), || ValidationError::NonFinite {
             at: at.clone(),
             field: field.into(),
         })
     }
 
-    fn unit<V: Vector>(&mut self, v: &V, at: &Place, field: &'static str) -> bool {
+    fn unit<V: Point>(&mut self, v: &V, at: &Place, field: &'static str) -> bool {
         if !self.finite(v, at, field) {
             return false;
         }
-        let length = v.norm();
+        let length = v.length();
         self.check((length - 1.0).abs() > DIRECTION_TOLERANCE, || {
             ValidationError::NotUnit {
                 at: at.clone(),
@@ -445,7 +445,7 @@ impl Checker {
         })
     }
 
-    fn axes<V: Vector>(&mut self, x: &V, y: &V, at: &Place) -> bool {
+    fn axes<V: Point>(&mut self, x: &V, y: &V, at: &Place) -> bool {
         let ok = self.unit(x, at, "x_dir") & self.unit(y, at, "y_dir");
         if !ok {
             return false;
@@ -551,7 +551,7 @@ impl Checker {
         }
     }
 
-    fn bspline_curve<P: Vector>(&mut self, b: &BSplineCurve<P>, at: &Place) -> bool {
+    fn bspline_curve<P: Point>(&mut self, b: &BSplineCurve<P>, at: &Place) -> bool {
         let Some(kv) = self.knots(b.degree, &b.knots, &b.mults, b.periodic, at, "") else {
             return false;
         };
@@ -621,7 +621,7 @@ impl Checker {
         self.errors.len() == before
     }
 
-    fn curve<P: Vector>(&mut self, curve: &Curve<P>, at: &Place) -> bool {
+    fn curve<P: Point>(&mut self, curve: &Curve<P>, at: &Place) -> bool {
         match curve {
             Curve::Line { origin, dir } => {
                 self.finite(origin, at, "origin") & self.unit(dir, at, "dir")
@@ -653,7 +653,7 @@ impl Checker {
     }
 
     /// A curve's range: finite, not empty, within a non-periodic B-spline's knots.
-    fn range<P: Vector>(&mut self, curve: &Curve<P>, range: [f64; 2], at: &Place) -> bool {
+    fn range<P: Point>(&mut self, curve: &Curve<P>, range: [f64; 2], at: &Place) -> bool {
         if !self.finite(&range, at, "range") {
             return false;
         }
@@ -790,7 +790,7 @@ impl Checker {
         let b = face.bounds;
         let trims = &face.loops[l].trims;
         let slack = BOUNDS_TOLERANCE * size;
-        let mut polyline: Vec<[f64; 2]> = Vec::new();
+        let mut polyline: Vec<Point2> = Vec::new();
         for (t, trim) in trims.iter().enumerate() {
             let [t0, t1] = trim.range;
             let n = trim.curve.segments(t0, t1);
@@ -823,7 +823,7 @@ impl Checker {
             let next = (t + 1) % trims.len();
             let end = trim.curve.point(trim.range[1]);
             let start = trims[next].curve.point(trims[next].range[0]);
-            let gap = end.sub(start).norm();
+            let gap = (end - start).length();
             if gap > tolerance {
                 self.push(ValidationError::OpenLoop {
                     face: id,
@@ -855,16 +855,34 @@ impl Checker {
     }
 }
 
+/// What [`Checker::finite`] checks: a point (glam's `is_finite`) or a few plain numbers
+/// (a range, a radius).
+trait Finite {
+    fn all_finite(&self) -> bool;
+}
+
+impl<P: Point> Finite for P {
+    fn all_finite(&self) -> bool {
+        self.is_finite()
+    }
+}
+
+impl<const N: usize> Finite for [f64; N] {
+    fn all_finite(&self) -> bool {
+        self.iter().all(|c| c.is_finite())
+    }
+}
+
 /// The signed area of a closed polygon (shoelace; positive when counter-clockwise).
-pub fn signed_area(points: &[[f64; 2]]) -> f64 {
+pub fn signed_area(points: &[Point2]) -> f64 {
     let Some(&o) = points.first() else {
         return 0.0;
     };
     // Relative to the first point, so large parameter offsets do not cost precision.
     let mut twice = 0.0;
     for w in 0..points.len() {
-        let a = points[w].sub(o);
-        let b = points[(w + 1) % points.len()].sub(o);
+        let a = points[w] - o;
+        let b = points[(w + 1) % points.len()] - o;
         twice += a[0] * b[1] - a[1] * b[0];
     }
     twice / 2.0

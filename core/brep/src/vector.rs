@@ -1,16 +1,41 @@
-//! The little vector algebra the evaluators need, over plain `[f64; 2]` and `[f64; 3]`, so
-//! that 2D trim curves and 3D edge curves share one curve evaluator and the document types
-//! stay plain arrays (what serde reads and the exporter writes).
+//! The point and vector types of the B-Rep model: [`glam::DVec2`] for the parameter plane
+//! (2D trim curves, `(u, v)`) and [`glam::DVec3`] for space (3D edge curves, surface points,
+//! derivatives and normals, frames, poles), with glam's arithmetic (`+ - *`, `dot`, `cross`,
+//! `length`, `is_finite`). With glam's `serde` feature they read and write the same JSON as
+//! plain arrays (`[x, y]`, `[x, y, z]`), so the document types hold them directly.
+//!
+//! The only thing kept here is [`Point`], the small trait that lets one curve evaluator (and
+//! the OCCT reader, validation and bounds sampling) serve both dimensions: it is implemented
+//! for `DVec2` and `DVec3` by delegating to glam, and adds nothing glam does not have but the
+//! coordinate count and slice access. [`combine`] is `Σ cᵢ·vᵢ` folded from zero in term order,
+//! the exact sequence of IEEE operations the surfaces were written with (results are
+//! bit-identical to the former `[f64; N]` code, which did the same operations per coordinate).
 
+use glam::{DVec2, DVec3};
 use std::fmt::Debug;
+use std::ops::{Add, Mul, Sub};
 
-/// A point or vector of the parameter plane (`[f64; 2]`) or of space (`[f64; 3]`).
-pub trait Vector: Copy + Debug + PartialEq + Send + Sync + 'static {
+/// A point or vector of the parameter plane ([`DVec2`]) or of space ([`DVec3`]): glam's
+/// operators, plus what a dimension-generic evaluator needs.
+pub trait Point:
+    Copy
+    + Debug
+    + PartialEq
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<f64, Output = Self>
+{
     /// The number of coordinates.
     const DIM: usize;
 
     /// The zero vector.
-    fn zero() -> Self;
+    const ZERO: Self;
+
+    /// Every coordinate NaN (what an evaluator returns for geometry that does not validate).
+    const NAN: Self;
 
     /// The coordinates.
     fn coords(&self) -> &[f64];
@@ -18,87 +43,50 @@ pub trait Vector: Copy + Debug + PartialEq + Send + Sync + 'static {
     /// The coordinates, mutably.
     fn coords_mut(&mut self) -> &mut [f64];
 
-    /// `self + o`.
-    fn add(self, o: Self) -> Self {
-        let mut r = self;
-        for (a, b) in r.coords_mut().iter_mut().zip(o.coords()) {
-            *a += b;
+    /// The dot product (glam's `dot`).
+    fn dot(self, o: Self) -> f64;
+
+    /// The Euclidean length (glam's `length`, `dot(self, self).sqrt()`).
+    fn length(self) -> f64;
+
+    /// Whether every coordinate is finite (glam's `is_finite`).
+    fn is_finite(self) -> bool;
+}
+
+macro_rules! impl_point {
+    ($t:ty, $n:literal) => {
+        impl Point for $t {
+            const DIM: usize = $n;
+            const ZERO: Self = <$t>::ZERO;
+            const NAN: Self = <$t>::NAN;
+            fn coords(&self) -> &[f64] {
+                AsRef::<[f64; $n]>::as_ref(self)
+            }
+            fn coords_mut(&mut self) -> &mut [f64] {
+                AsMut::<[f64; $n]>::as_mut(self)
+            }
+            #[inline]
+            fn dot(self, o: Self) -> f64 {
+                <$t>::dot(self, o)
+            }
+            #[inline]
+            fn length(self) -> f64 {
+                <$t>::length(self)
+            }
+            #[inline]
+            fn is_finite(self) -> bool {
+                <$t>::is_finite(self)
+            }
         }
-        r
-    }
-
-    /// `self - o`.
-    fn sub(self, o: Self) -> Self {
-        self.add(o.scale(-1.0))
-    }
-
-    /// `s · self`.
-    fn scale(self, s: f64) -> Self {
-        let mut r = self;
-        for a in r.coords_mut() {
-            *a *= s;
-        }
-        r
-    }
-
-    /// The dot product.
-    fn dot(self, o: Self) -> f64 {
-        self.coords()
-            .iter()
-            .zip(o.coords())
-            .map(|(a, b)| a * b)
-            .sum()
-    }
-
-    /// The Euclidean length.
-    fn norm(self) -> f64 {
-        self.dot(self).sqrt()
-    }
-
-    /// Whether every coordinate is finite.
-    fn is_finite(&self) -> bool {
-        self.coords().iter().all(|c| c.is_finite())
-    }
+    };
 }
 
-impl Vector for [f64; 2] {
-    const DIM: usize = 2;
-    fn zero() -> Self {
-        [0.0; 2]
-    }
-    fn coords(&self) -> &[f64] {
-        self
-    }
-    fn coords_mut(&mut self) -> &mut [f64] {
-        self
-    }
-}
+impl_point!(DVec2, 2);
+impl_point!(DVec3, 3);
 
-impl Vector for [f64; 3] {
-    const DIM: usize = 3;
-    fn zero() -> Self {
-        [0.0; 3]
-    }
-    fn coords(&self) -> &[f64] {
-        self
-    }
-    fn coords_mut(&mut self) -> &mut [f64] {
-        self
-    }
-}
-
-/// The cross product of two space vectors.
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `Σ cᵢ·vᵢ`, the linear combinations the analytic surfaces are made of.
-pub fn combine<V: Vector>(terms: &[(f64, V)]) -> V {
-    terms
-        .iter()
-        .fold(V::zero(), |acc, (c, v)| acc.add(v.scale(*c)))
+/// `Σ cᵢ·vᵢ`, the linear combinations the analytic surfaces are made of: folded from zero in
+/// the order of `terms` (`((0 + c₀v₀) + c₁v₁) + …`), which the results depend on to the bit.
+#[inline]
+pub fn combine<V: Point>(terms: &[(f64, V)]) -> V {
+    terms.iter().fold(V::ZERO, |acc, &(c, v)| acc + v * c)
 }

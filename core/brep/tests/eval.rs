@@ -3,18 +3,20 @@
 use serde_json::json;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_6, PI, SQRT_2};
 use tessd_brep::bspline::KnotVector;
-use tessd_brep::{Curve2, Curve3, Surface};
+use tessd_brep::{Curve2, Curve3, DVec3, Surface};
 
 fn surface(v: serde_json::Value) -> Surface {
     serde_json::from_value(v).unwrap()
 }
 
-fn close3(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
+fn close3(a: impl Into<[f64; 3]>, b: impl Into<[f64; 3]>, tol: f64) -> bool {
+    let (a, b) = (a.into(), b.into());
     (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
 }
 
 #[track_caller]
-fn assert_close3(a: [f64; 3], b: [f64; 3], tol: f64) {
+fn assert_close3(a: impl Into<[f64; 3]>, b: impl Into<[f64; 3]>, tol: f64) {
+    let (a, b) = (a.into(), b.into());
     assert!(close3(a, b, tol), "{a:?} != {b:?} (tol {tol})");
 }
 
@@ -186,7 +188,7 @@ fn partial_derivatives_match_central_differences() {
         let fd_u = central(|t| s.point(t, v), u, h);
         let fd_v = central(|t| s.point(u, t), v, h);
         for (what, exact, fd) in [("∂u", e.du, fd_u), ("∂v", e.dv, fd_v)] {
-            let scale = exact.iter().map(|c| c.abs()).fold(1.0, f64::max);
+            let scale = exact.abs().max_element().max(1.0);
             assert!(
                 close3(exact, fd, 1e-6 * scale),
                 "{name}: {what} = {exact:?}, finite differences {fd:?}"
@@ -196,7 +198,7 @@ fn partial_derivatives_match_central_differences() {
     }
 }
 
-fn central(f: impl Fn(f64) -> [f64; 3], t: f64, h: f64) -> [f64; 3] {
+fn central(f: impl Fn(f64) -> DVec3, t: f64, h: f64) -> [f64; 3] {
     let (a, b) = (f(t + h), f(t - h));
     [0, 1, 2].map(|i| (a[i] - b[i]) / (2.0 * h))
 }
@@ -296,11 +298,7 @@ fn curve_derivatives_match_central_differences() {
     for t in [0.05, 0.39, 0.41, 0.8] {
         let d = c3.eval(t).1;
         let fd = central(|s| c3.point(s), t, h);
-        assert!(close3(
-            d,
-            fd,
-            1e-6 * d.iter().fold(1.0, |m, c| c.abs().max(m))
-        ));
+        assert!(close3(d, fd, 1e-6 * d.abs().max_element().max(1.0)));
     }
 }
 
@@ -370,9 +368,7 @@ fn periodic_bspline_curve_closes() {
 
 /// Rows of poles grown from each pole of [`periodic_cubic`] by `row`, with its knots and
 /// multiplicities (u of a surface periodic in u).
-fn periodic_rows(
-    row: impl Fn([f64; 3]) -> Vec<[f64; 3]>,
-) -> (Vec<Vec<[f64; 3]>>, Vec<f64>, Vec<u32>) {
+fn periodic_rows(row: impl Fn(DVec3) -> Vec<DVec3>) -> (Vec<Vec<DVec3>>, Vec<f64>, Vec<u32>) {
     let Curve3::Bspline(b) = periodic_cubic() else {
         unreachable!()
     };
@@ -383,7 +379,7 @@ fn periodic_rows(
 fn periodic_surface_wraps() {
     // A torus-like periodic B-spline surface in u: the same rows as the curve above.
     let c = periodic_cubic();
-    let (poles, knots, mults) = periodic_rows(|p| vec![p, [p[0], p[1], p[2] + 1.0]]);
+    let (poles, knots, mults) = periodic_rows(|p| vec![p, DVec3::new(p[0], p[1], p[2] + 1.0)]);
     let s = surface(json!({
         "type": "bspline", "degree_u": 3, "degree_v": 1, "poles": poles, "weights": null,
         "knots_u": knots, "mults_u": mults, "knots_v": [0, 1], "mults_v": [2, 2],
@@ -484,8 +480,8 @@ fn bspline_point_path_matches_eval() {
     let (poles, knots, mults) = periodic_rows(|p| {
         vec![
             p,
-            [p[0] + 0.5, p[1], p[2] + 1.0],
-            [p[0], p[1] + 0.3, p[2] + 2.0],
+            DVec3::new(p[0] + 0.5, p[1], p[2] + 1.0),
+            DVec3::new(p[0], p[1] + 0.3, p[2] + 2.0),
         ]
     });
     let weights: Vec<Vec<f64>> = (0..poles.len())
@@ -505,7 +501,7 @@ fn bspline_point_path_matches_eval() {
             (-0.3, 1.0),
         ] {
             let (p, e) = (s.point(u, v), s.eval(u, v).point);
-            let scale = e.iter().map(|c| c.abs()).fold(1.0, f64::max);
+            let scale = e.abs().max_element().max(1.0);
             assert_close3(p, e, 1e-14 * scale);
         }
     }

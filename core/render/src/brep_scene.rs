@@ -106,8 +106,8 @@ impl BrepScene {
             .bounding_box()
             .ok_or_else(|| RenderError::Camera("the part has no finite point to look at".into()))?;
         let bounds = Bounds {
-            min: b.min.into(),
-            max: b.max.into(),
+            min: b.min,
+            max: b.max,
         };
         let origin = bounds.center().to_array();
         let diagonal = 2.0 * bounds.radius();
@@ -180,7 +180,7 @@ fn face_info(face: &Face, trim: &TrimStructure, part: &Bounds, k_i: Option<u32>)
     };
     let grid: Vec<[f64; 3]> = (0..=n)
         .flat_map(|j| (0..=n).map(move |i| (i, j)))
-        .map(|(i, j)| p(i, j))
+        .map(|(i, j)| p(i, j).to_array())
         .collect();
     let at = |i: usize, j: usize| grid[j * (n + 1) + i];
     let second = |a: [f64; 3], b: [f64; 3], c: [f64; 3], e: [f64; 3]| {

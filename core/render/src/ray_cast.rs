@@ -224,10 +224,8 @@ pub fn face_seeds(face: &Face, origin: [f64; 3], margin: f64) -> (usize, usize, 
         let (u, v) = uv(s, t);
         face.surface.eval(u, v).normal()
     };
-    let angle = |a: Option<[f64; 3]>, b: Option<[f64; 3]>| match (a, b) {
-        (Some(a), Some(b)) => (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
-            .clamp(-1.0, 1.0)
-            .acos(),
+    let angle = |a: Option<Vec3>, b: Option<Vec3>| match (a, b) {
+        (Some(a), Some(b)) => a.dot(b).clamp(-1.0, 1.0).acos(),
         _ => 0.0,
     };
     let (mut turn_s, mut turn_t) = (0.0f64, 0.0f64);

@@ -28,7 +28,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use tessd_brep::bspline::KnotVector;
-use tessd_brep::{Curve3, Face, Surface};
+use tessd_brep::{Curve3, DVec3, Face, Surface};
 
 /// Surface kind: plane.
 pub const PLANE: u32 = 0;
@@ -141,11 +141,11 @@ impl SurfacePack {
         self.words.push(n as f32);
     }
 
-    fn vector(&mut self, v: [f64; 3]) {
-        self.words.extend(v.map(|x| x as f32));
+    fn vector(&mut self, v: DVec3) {
+        self.words.extend(v.to_array().map(|x| x as f32));
     }
 
-    fn position(&mut self, p: [f64; 3]) {
+    fn position(&mut self, p: DVec3) {
         let o = self.origin;
         self.words.extend([0, 1, 2].map(|k| (p[k] - o[k]) as f32));
     }

@@ -29,8 +29,8 @@ fn face_id_png_decodes_to_the_array() {
     let doc = plate_doc();
     let b = doc.bounding_box().unwrap();
     let bounds = Bounds {
-        min: b.min.into(),
-        max: b.max.into(),
+        min: b.min,
+        max: b.max,
     };
     let (w, h) = (97, 61); // odd sizes: rows need padding to 256 bytes
     let camera = Camera::fit(View::Iso, &bounds, 30.0, w as f64 / h as f64);
@@ -72,8 +72,8 @@ fn brep_uv_matches_the_analytic_plane() {
     let doc = plate_doc();
     let b = doc.bounding_box().unwrap();
     let bounds = Bounds {
-        min: b.min.into(),
-        max: b.max.into(),
+        min: b.min,
+        max: b.max,
     };
     let (w, h) = (160, 120);
     let camera = Camera::new([12.0, -9.0, 20.0], [15.0, 4.0, 0.0], [0.0, 0.0, 1.0], 35.0)

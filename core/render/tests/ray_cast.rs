@@ -25,8 +25,8 @@ const H: u32 = 64;
 fn bounds(doc: &Document) -> Bounds {
     let b = doc.bounding_box().unwrap();
     Bounds {
-        min: b.min.into(),
-        max: b.max.into(),
+        min: b.min,
+        max: b.max,
     }
 }
 

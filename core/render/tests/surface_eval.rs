@@ -252,12 +252,12 @@ fn gpu_surfaces_match_the_f64_evaluation() {
                 worst_kind = face.surface.type_name();
             }
             // Derivatives: direction, where the derivative is not degenerate.
-            let degenerate = 1e-3 * norm(e.du).max(norm(e.dv)).max(1e-300);
+            let degenerate = 1e-3 * norm(e.du.into()).max(norm(e.dv.into())).max(1e-300);
             for (which, cpu, gpu_d) in [("du", e.du, g[1]), ("dv", e.dv, g[2])] {
-                if norm(cpu) <= degenerate || norm(cpu) < 1e-9 * diagonal {
+                if norm(cpu.into()) <= degenerate || norm(cpu.into()) < 1e-9 * diagonal {
                     continue;
                 }
-                let a = angle(cpu, gpu_d);
+                let a = angle(cpu.into(), gpu_d);
                 assert!(
                     a <= 1e-3,
                     "{name}: face {} ({}) at ({u}, {v}): {which} GPU {gpu_d:?} vs CPU {cpu:?}, \

@@ -7,9 +7,11 @@
 mod support;
 
 use serde_json::{Value, json};
+use std::ops::{Div, Mul};
 use std::path::{Path, PathBuf};
 use support::{Daemon, run_ok, tessd};
-use tessd_brep::{Curve, Document, Surface, Units};
+use tessd_brep::vector::Point;
+use tessd_brep::{Curve, DVec2, DVec3, Document, Surface, Units};
 use tessd_ipc::client::{Client, ClientError};
 use tessd_ipc::error::ErrorCode;
 
@@ -23,33 +25,32 @@ fn load(name: &str) -> Document {
     Document::from_json(&std::fs::read_to_string(fixture(name)).unwrap()).unwrap()
 }
 
-fn scale_point<const N: usize>(p: [f64; N], s: [f64; N]) -> [f64; N] {
-    std::array::from_fn(|k| p[k] * s[k])
-}
-
 /// A curve (3D edge or trim) under the map `p → (s₀·p₀, s₁·p₁, …)` about the origin, and the
 /// factor its parameter range scales by: a line's parameter is a length, conics' and
 /// B-splines' are not. Conics only under a uniform map (all `s` equal).
-fn scale_curve<const N: usize>(c: &Curve<[f64; N]>, s: [f64; N]) -> (Curve<[f64; N]>, f64) {
+fn scale_curve<P>(c: &Curve<P>, s: P) -> (Curve<P>, f64)
+where
+    P: Point + Mul<Output = P> + Div<f64, Output = P>,
+{
     let uniform = |what: &str| {
         assert!(
-            s.iter().all(|&x| x == s[0]),
+            s.coords().iter().all(|&x| x == s.coords()[0]),
             "{what} under an anisotropic map"
         );
-        s[0]
+        s.coords()[0]
     };
     let mut c = c.clone();
     let t = match &mut c {
         Curve::Line { origin, dir } => {
-            *origin = scale_point(*origin, s);
-            let d = scale_point(*dir, s);
-            let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
-            *dir = d.map(|x| x / len);
+            *origin = *origin * s;
+            let d = *dir * s;
+            let len = d.length();
+            *dir = d / len;
             len
         }
         Curve::Circle { center, radius, .. } => {
             *radius *= uniform("a circle");
-            *center = scale_point(*center, s);
+            *center = *center * s;
             1.0
         }
         Curve::Ellipse {
@@ -59,13 +60,13 @@ fn scale_curve<const N: usize>(c: &Curve<[f64; N]>, s: [f64; N]) -> (Curve<[f64;
             ..
         } => {
             let k = uniform("an ellipse");
-            *center = scale_point(*center, s);
+            *center = *center * s;
             *major_radius *= k;
             *minor_radius *= k;
             1.0
         }
         Curve::Bspline(b) => {
-            b.poles = b.poles.iter().map(|p| scale_point(*p, s)).collect();
+            b.poles = b.poles.iter().map(|&p| p * s).collect();
             1.0
         }
     };
@@ -112,12 +113,12 @@ fn scaled(doc: &Document, s: f64, units: Units) -> Document {
                 axis_origin, curve, ..
             } => {
                 *axis_origin = axis_origin.map(|x| x * s);
-                let (c, t) = scale_curve(curve, [s; 3]);
+                let (c, t) = scale_curve(curve, DVec3::splat(s));
                 **curve = c;
                 [1.0, t]
             }
             Surface::Extrusion { curve, .. } => {
-                let (c, t) = scale_curve(curve, [s; 3]);
+                let (c, t) = scale_curve(curve, DVec3::splat(s));
                 **curve = c;
                 [t, s]
             }
@@ -133,14 +134,14 @@ fn scaled(doc: &Document, s: f64, units: Units) -> Document {
         let [u0, u1, v0, v1] = face.bounds;
         face.bounds = [u0 * uv[0], u1 * uv[0], v0 * uv[1], v1 * uv[1]];
         for trim in face.loops.iter_mut().flat_map(|l| &mut l.trims) {
-            let (c, t) = scale_curve(&trim.curve, uv);
+            let (c, t) = scale_curve(&trim.curve, DVec2::from(uv));
             trim.curve = c;
             trim.range = trim.range.map(|x| x * t);
         }
     }
     for edge in doc.edges.iter_mut().flatten() {
         if let Some(curve) = &edge.curve {
-            let (c, t) = scale_curve(curve, [s; 3]);
+            let (c, t) = scale_curve(curve, DVec3::splat(s));
             edge.curve = Some(c);
             edge.range = edge.range.map(|x| x * t);
         }

@@ -9,8 +9,7 @@ mod support;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use support::{Daemon, run_ok, tessd};
-use tessd_brep::vector::Vector;
-use tessd_brep::{Curve, Document};
+use tessd_brep::{Curve, DVec3, Document};
 use tessd_ipc::arrays::Arrays;
 use tessd_ipc::client::{Client, ClientError};
 use tessd_ipc::error::ErrorCode;
@@ -27,7 +26,7 @@ const FAR: [f64; 3] = [20000.123456789, -19999.87654321, 20000.3141592];
 
 /// `doc` moved by `d`, checked valid.
 fn translated(doc: &Document, d: [f64; 3]) -> Document {
-    let moved = doc.translated(d);
+    let moved = doc.translated(d.into());
     moved.validate().unwrap();
     moved
 }
@@ -133,10 +132,15 @@ fn far_parts_come_back_relative_or_in_f64() {
         let (mut f64_err, mut rel_err, mut naive_err): (f64, f64, f64) = (0.0, 0.0, 0.0);
         let largest_rel = rel.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
         for (i, (p, q)) in rel.iter().zip(&abs).enumerate() {
-            let want = if same_mesh { near64[i].add(FAR) } else { *q };
-            f64_err = f64_err.max(q.sub(want).norm());
-            rel_err = rel_err.max(p.add(o).sub(want).norm());
-            naive_err = naive_err.max(q.map(|x| f64::from(x as f32)).sub(want).norm());
+            let (p, q) = (DVec3::from(*p), DVec3::from(*q));
+            let want = if same_mesh {
+                DVec3::from(near64[i]) + DVec3::from(FAR)
+            } else {
+                q
+            };
+            f64_err = f64_err.max((q - want).length());
+            rel_err = rel_err.max((p + DVec3::from(o) - want).length());
+            naive_err = naive_err.max((q.map(|x| f64::from(x as f32)) - want).length());
         }
         eprintln!(
             "{name} moved by 2e4: origin {o:?}; against the {} f64 positions: f64 off by \
@@ -243,14 +247,14 @@ fn loose_cube(tolerance: Option<f64>) -> Document {
         let Some(Curve::Line { origin, dir }) = &mut edge.curve else {
             continue;
         };
-        if *origin != [0.0; 3] {
+        if *origin != [0.0; 3].into() {
             continue;
         }
-        let end = origin.add(dir.scale(edge.range[1]));
-        let d = end.sub(starts[k]);
-        *origin = starts[k];
-        *dir = d.scale(1.0 / d.norm());
-        edge.range = [0.0, d.norm()];
+        let end = *origin + *dir * edge.range[1];
+        let d = end - DVec3::from(starts[k]);
+        *origin = starts[k].into();
+        *dir = d * (1.0 / d.length());
+        edge.range = [0.0, d.length()];
         edge.vertex_tolerances = tolerance.map(|t| [t, 0.0]);
         k += 1;
     }

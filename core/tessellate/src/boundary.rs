@@ -13,17 +13,16 @@
 use crate::Options;
 use crate::edges::{EdgeSamples, EdgeTable, min_segments, sample_chordal, snap_radius, trim_point};
 use std::collections::HashMap;
-use tessd_brep::vector::Vector;
-use tessd_brep::{Curve2, Face, Trim};
+use tessd_brep::{Curve2, DVec2, DVec3, Face, Trim};
 
 /// A boundary point: its (u, v) on the face and its 3D position (for points of shared edges,
 /// the edge's sample, exactly).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoundaryPoint {
     /// (u, v) on this face.
-    pub uv: [f64; 2],
+    pub uv: DVec2,
     /// The 3D position.
-    pub p: [f64; 3],
+    pub p: DVec3,
     /// Where the segment from this point to the next one comes from, so that it can be split
     /// (`None` on degenerate edges and the bounds rectangle).
     pub next: Option<Segment>,
@@ -65,15 +64,15 @@ pub fn face_loops(
 ) -> Vec<Polyline> {
     if face.loops.is_empty() {
         let [u0, u1, v0, v1] = face.bounds;
-        let corners = [[u0, v0], [u1, v0], [u1, v1], [u0, v1]];
+        let corners = [(u0, v0), (u1, v0), (u1, v1), (u0, v1)].map(DVec2::from);
         let mut out = Vec::new();
         for k in 0..4 {
             let (a, b) = (corners[k], corners[(k + 1) % 4]);
-            let len = b.sub(a).norm();
+            let len = (b - a).length();
             let trim = Trim {
                 curve: Curve2::Line {
                     origin: a,
-                    dir: b.sub(a).scale(1.0 / len),
+                    dir: (b - a) * (1.0 / len),
                 },
                 range: [0.0, len],
                 edge: None,
@@ -98,7 +97,7 @@ pub fn face_loops(
                         let more = extra.get(&(li, ti)).map_or(&[][..], |v| v);
                         let source = Some(Source::Free(li, ti));
                         let pts = free_trim(face, trim, more, source, options);
-                        let len: f64 = pts.windows(2).map(|w| w[1].p.sub(w[0].p).norm()).sum();
+                        let len: f64 = pts.windows(2).map(|w| (w[1].p - w[0].p).length()).sum();
                         if len < 2.0 * snap_radius(options) {
                             continue;
                         }
@@ -178,7 +177,7 @@ fn free_trim(
 
 /// A trim on a degenerate edge: (u, v) samples along the trim (enough for well-shaped
 /// triangles in (u, v)), every one at the edge's single point.
-fn degenerate_trim(trim: &Trim, p: [f64; 3]) -> Vec<BoundaryPoint> {
+fn degenerate_trim(trim: &Trim, p: DVec3) -> Vec<BoundaryPoint> {
     let [t0, t1] = trim.range;
     let n = trim.curve.segments(t0, t1).max(16);
     (0..=n)
@@ -210,7 +209,7 @@ fn shared_trim(
     trim: &Trim,
     id: u64,
     params: &[f64],
-    points: &[[f64; 3]],
+    points: &[DVec3],
     options: &Options,
 ) -> Vec<BoundaryPoint> {
     let [t0, t1] = trim.range;
@@ -226,14 +225,17 @@ fn shared_trim(
     } else {
         let last = points.len() - 1;
         let start = trim_point(face, &trim.curve, t0);
-        let (d0, d1) = (start.sub(points[0]).norm(), start.sub(points[last]).norm());
+        let (d0, d1) = (
+            (start - points[0]).length(),
+            (start - points[last]).length(),
+        );
         if (d0 - d1).abs() > 1e-9 * (d0 + d1) && points[0] != points[last] {
             d0 < d1
         } else {
             let near = trim_point(face, &trim.curve, t0 + 0.01 * (t1 - t0));
             let a = points[1.min(last)];
             let b = points[last.saturating_sub(1)];
-            near.sub(a).norm() <= near.sub(b).norm()
+            (near - a).length() <= (near - b).length()
         }
     };
     let order: Vec<usize> = if forward {
@@ -256,7 +258,7 @@ fn shared_trim(
         }
         if same {
             let uv = trim.curve.point(params[i]);
-            if face.surface.point(uv[0], uv[1]).sub(points[i]).norm() <= near {
+            if (face.surface.point(uv.x, uv.y) - points[i]).length() <= near {
                 return BoundaryPoint {
                     uv,
                     p: points[i],
@@ -281,14 +283,14 @@ fn shared_trim(
 
 /// The parameter of the pcurve whose surface point is nearest `p`, from `guess`, within the
 /// trim's range.
-fn project(face: &Face, curve: &Curve2, p: [f64; 3], guess: f64, t0: f64, t1: f64) -> f64 {
+fn project(face: &Face, curve: &Curve2, p: DVec3, guess: f64, t0: f64, t1: f64) -> f64 {
     let (lo, hi) = (t0.min(t1), t0.max(t1));
     let mut t = guess.clamp(lo, hi);
     for _ in 0..12 {
         let (uv, duv) = curve.eval(t);
-        let sp = face.surface.eval(uv[0], uv[1]);
-        let j = sp.du.scale(duv[0]).add(sp.dv.scale(duv[1]));
-        let r = sp.point.sub(p);
+        let sp = face.surface.eval(uv.x, uv.y);
+        let j = sp.du * duv.x + sp.dv * duv.y;
+        let r = sp.point - p;
         let jj = j.dot(j);
         if jj.is_nan() || jj <= 0.0 {
             break;

@@ -12,15 +12,14 @@ use crate::interior::Plan;
 use rustc_hash::FxHashSet;
 use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{ConstrainedDelaunayTriangulation, HasPosition, Point2, Triangulation};
-use tessd_brep::Face;
-use tessd_brep::vector::{Vector, cross};
+use tessd_brep::{DVec2, DVec3, Face};
 
 /// A triangulation vertex: scaled (u, v) for spade, the true (u, v) and the 3D position.
 #[derive(Clone, Copy, Debug)]
 struct Vertex {
     pos: Point2<f64>,
-    uv: [f64; 2],
-    p: [f64; 3],
+    uv: DVec2,
+    p: DVec3,
 }
 
 impl HasPosition for Vertex {
@@ -54,7 +53,7 @@ const MAX_VERTICES: usize = 400_000;
 pub fn triangulate(
     face: &Face,
     loops: &[Polyline],
-    interior: &[[f64; 2]],
+    interior: &[DVec2],
     plan: &Plan,
     options: &Options,
 ) -> FaceTriangles {
@@ -62,7 +61,7 @@ pub fn triangulate(
     let b = plan.bounds;
     let shake = JITTER * ((b[1] - b[0]) * scale[0]).max((b[3] - b[2]) * scale[1]);
     let shake = if shake.is_finite() { shake } else { 0.0 };
-    let mk = |uv: [f64; 2], p: [f64; 3]| {
+    let mk = |uv: DVec2, p: DVec3| {
         let [jx, jy] = jitter(uv);
         Vertex {
             pos: Point2::new(uv[0] * scale[0] + shake * jx, uv[1] * scale[1] + shake * jy),
@@ -116,8 +115,8 @@ pub fn triangulate(
             let i = v.fix().index();
             if index[i] == u32::MAX {
                 index[i] = out.points.len() as u32;
-                out.points.push(v.data().p);
-                out.uvs.push(v.data().uv);
+                out.points.push(v.data().p.to_array());
+                out.uvs.push(v.data().uv.to_array());
             }
             tri[k] = index[i];
         }
@@ -136,7 +135,7 @@ const JITTER: f64 = 1e-10;
 
 /// A displacement in [−1, 1]² that depends on the point alone (equal points stay equal:
 /// loops meeting at a vertex still meet), from a hash of its coordinates' bits.
-fn jitter(uv: [f64; 2]) -> [f64; 2] {
+fn jitter(uv: DVec2) -> [f64; 2] {
     let mut h = uv[0].to_bits() ^ uv[1].to_bits().rotate_left(29) ^ 0x9e37_79b9_7f4a_7c15;
     // SplitMix64's finaliser.
     h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -151,9 +150,9 @@ fn jitter(uv: [f64; 2]) -> [f64; 2] {
 /// (cross or overlap) and would be dropped.
 fn bulk_load(
     loops: &[Polyline],
-    interior: &[[f64; 2]],
+    interior: &[DVec2],
     face: &Face,
-    mk: &dyn Fn([f64; 2], [f64; 3]) -> Vertex,
+    mk: &dyn Fn(DVec2, DVec3) -> Vertex,
 ) -> Option<Cdt> {
     let count = loops.iter().map(Vec::len).sum::<usize>() + interior.len();
     let mut vertices = Vec::with_capacity(count);
@@ -183,14 +182,14 @@ fn bulk_load(
 /// split at a new surface point (an open edge in the welded mesh, but a face that stays whole).
 fn insert_one_by_one(
     loops: &[Polyline],
-    interior: &[[f64; 2]],
+    interior: &[DVec2],
     face: &Face,
     scale: [f64; 2],
-    mk: &dyn Fn([f64; 2], [f64; 3]) -> Vertex,
+    mk: &dyn Fn(DVec2, DVec3) -> Vertex,
 ) -> Cdt {
     let mut cdt = Cdt::new();
     let surface_vertex = |pos: Point2<f64>| {
-        let uv = [pos.x / scale[0], pos.y / scale[1]];
+        let uv = DVec2::new(pos.x / scale[0], pos.y / scale[1]);
         Vertex {
             pos,
             uv,
@@ -259,8 +258,8 @@ const NEAR: f64 = 0.25;
 /// so the point cannot split it, and the sliver between them — flat in (u, v), upright in 3D
 /// where the edge is a straight pcurve on a curved surface (a helix on a cylinder) — adds area
 /// that covers no surface (7 % on the thread of OCCT's bottle).
-fn near_constraint(f: &FaceRef<'_>, uv: [f64; 2], metric: [f64; 2]) -> bool {
-    let at = |uv: [f64; 2]| Point2::new(uv[0] * metric[0], uv[1] * metric[1]);
+fn near_constraint(f: &FaceRef<'_>, uv: DVec2, metric: [f64; 2]) -> bool {
+    let at = |uv: DVec2| Point2::new(uv[0] * metric[0], uv[1] * metric[1]);
     let p = at(uv);
     f.adjacent_edges().iter().any(|e| {
         if !e.is_constraint_edge() {
@@ -324,7 +323,7 @@ fn refinement_points(
     inside: &[bool],
     limits: &Limits,
     checked: &mut Checked,
-) -> Vec<([f64; 2], FixedVertexHandle)> {
+) -> Vec<(DVec2, FixedVertexHandle)> {
     let mut out = Vec::new();
     for f in cdt.inner_faces() {
         if !inside[f.fix().index()] {
@@ -350,27 +349,27 @@ fn triangle_points(
     f: &FaceRef<'_>,
     limits: &Limits,
     checked: &mut Checked,
-    out: &mut Vec<([f64; 2], FixedVertexHandle)>,
+    out: &mut Vec<(DVec2, FixedVertexHandle)>,
 ) -> bool {
     let (tol, metric) = (limits.tol, limits.metric);
     let [a, b, c] = f.vertices().map(|v| *v.data());
-    let cuv = a.uv.add(b.uv).add(c.uv).scale(1.0 / 3.0);
-    let cp = a.p.add(b.p).add(c.p).scale(1.0 / 3.0);
+    let cuv = (a.uv + b.uv + c.uv) * (1.0 / 3.0);
+    let cp = (a.p + b.p + c.p) * (1.0 / 3.0);
     let sp = face.surface.eval(cuv[0], cuv[1]);
     if !sp.point.is_finite() {
         return true;
     }
-    let n = cross(b.p.sub(a.p), c.p.sub(a.p));
-    let area2 = n.norm();
+    let n = (b.p - a.p).cross(c.p - a.p);
+    let area2 = n.length();
     // Slivers and collapsed triangles (poles) have no reliable normal or centroid.
-    let edge_max = [a.p.sub(b.p), b.p.sub(c.p), c.p.sub(a.p)]
+    let edge_max = [a.p - b.p, b.p - c.p, c.p - a.p]
         .iter()
-        .map(|d| d.norm())
+        .map(|d| d.length())
         .fold(0.0, f64::max);
     if area2 <= 1e-12 * edge_max * edge_max || edge_max <= 1e-3 * tol {
         return true;
     }
-    let mut want = sp.point.sub(cp).norm() > tol;
+    let mut want = (sp.point - cp).length() > tol;
     if !want && let Some(sn) = sp.normal() {
         let cosang = (n.dot(sn) / area2).abs().clamp(0.0, 1.0);
         want = cosang < limits.cos_angle && edge_max > limits.angle_floor;
@@ -392,10 +391,10 @@ fn triangle_points(
             continue;
         }
         let [p, q] = [e.from(), e.to()].map(|v| *v.data());
-        let muv = p.uv.add(q.uv).scale(0.5);
-        let mp = p.p.add(q.p).scale(0.5);
+        let muv = (p.uv + q.uv) * 0.5;
+        let mp = (p.p + q.p) * 0.5;
         let s = face.surface.point(muv[0], muv[1]);
-        if s.is_finite() && s.sub(mp).norm() > tol && !near_constraint(f, muv, metric) {
+        if s.is_finite() && (s - mp).length() > tol && !near_constraint(f, muv, metric) {
             out.push((muv, e.from().fix()));
             all = false;
         } else {

@@ -13,7 +13,7 @@ use crate::Options;
 use crate::boundary::{FreeSplits, Polyline, Source, face_loops};
 use crate::edges::{EdgeTable, split_edge};
 use std::collections::{HashMap, HashSet};
-use tessd_brep::{Curve3, Document};
+use tessd_brep::{Curve3, DVec2, Document};
 
 /// The most rounds of splitting; polylines still crossing then are left to the triangulation.
 pub const ROUNDS: usize = 24;
@@ -38,8 +38,8 @@ pub type SegmentRef = (usize, usize);
 pub fn crossing_segments(loops: &[Polyline]) -> Vec<[SegmentRef; 2]> {
     struct Seg {
         at: SegmentRef,
-        a: [f64; 2],
-        b: [f64; 2],
+        a: DVec2,
+        b: DVec2,
         u: [f64; 2],
         v: [f64; 2],
     }
@@ -73,12 +73,12 @@ pub fn crossing_segments(loops: &[Polyline]) -> Vec<[SegmentRef; 2]> {
 }
 
 /// The sign of the turn a → b → c (twice the signed area).
-fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
 /// Whether segments ab and cd cross at a point interior to both.
-fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+fn cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     let (o1, o2) = (orient(a, b, c), orient(a, b, d));
     let (o3, o4) = (orient(c, d, a), orient(c, d, b));
     o1 * o2 < 0.0 && o3 * o4 < 0.0
@@ -184,12 +184,13 @@ pub fn face_loops_uncrossed(
 mod tests {
     use super::*;
     use crate::boundary::BoundaryPoint;
+    use tessd_brep::DVec3;
 
     fn poly(pts: &[[f64; 2]]) -> Polyline {
         pts.iter()
             .map(|&uv| BoundaryPoint {
-                uv,
-                p: [uv[0], uv[1], 0.0],
+                uv: uv.into(),
+                p: DVec3::new(uv[0], uv[1], 0.0),
                 next: None,
             })
             .collect()

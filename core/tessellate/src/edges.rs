@@ -6,8 +6,8 @@
 
 use crate::Options;
 use std::collections::HashMap;
-use tessd_brep::vector::Vector;
-use tessd_brep::{Curve, Curve2, Curve3, Document, Face};
+use tessd_brep::vector::Point;
+use tessd_brep::{Curve, Curve2, Curve3, DVec3, Document, Face};
 
 /// The discretisation of one shared edge.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,10 +18,10 @@ pub enum EdgeSamples {
         /// The curve parameters, in the edge's range order.
         params: Vec<f64>,
         /// The 3D points at those parameters.
-        points: Vec<[f64; 3]>,
+        points: Vec<DVec3>,
     },
     /// A degenerate edge: the single 3D point every sample of its trims maps to.
-    Point([f64; 3]),
+    Point(DVec3),
 }
 
 /// The samples of every edge, by edge id.
@@ -31,7 +31,7 @@ pub type EdgeTable = HashMap<u64, EdgeSamples>;
 /// stays within `tol` of the curve's midpoint and turns by less than `angle`; at least
 /// `min_segments` segments. Returns the parameters, from `t0` to `t1`.
 pub fn sample_chordal(
-    f: &dyn Fn(f64) -> [f64; 3],
+    f: &dyn Fn(f64) -> DVec3,
     t0: f64,
     t1: f64,
     min_segments: usize,
@@ -62,7 +62,7 @@ pub fn sample_chordal(
 /// [`crate::crossings`] splits them. A conic's count allows for a full turn written to 15
 /// digits (`tessd_brep::curve::conic_segments`): five starting segments where 2π gives four
 /// would end, every segment halved alike, with 25 % more points on the edge.
-pub fn min_segments<P: Vector>(curve: &Curve<P>, t0: f64, t1: f64) -> usize {
+pub fn min_segments<P: Point>(curve: &Curve<P>, t0: f64, t1: f64) -> usize {
     let span = (t1 - t0).abs();
     let n = match curve {
         Curve::Line { .. } => 1.0,
@@ -84,20 +84,20 @@ pub fn min_segments<P: Vector>(curve: &Curve<P>, t0: f64, t1: f64) -> usize {
 /// The largest distance of the curve's points at the quarter points of `[a, b]` from the
 /// chord `pa`–`pb` (the midpoint `pm` already evaluated).
 fn chord_deviation(
-    f: &dyn Fn(f64) -> [f64; 3],
-    (a, pa): (f64, [f64; 3]),
-    (b, pb): (f64, [f64; 3]),
-    pm: [f64; 3],
+    f: &dyn Fn(f64) -> DVec3,
+    (a, pa): (f64, DVec3),
+    (b, pb): (f64, DVec3),
+    pm: DVec3,
 ) -> f64 {
-    let d = pb.sub(pa);
+    let d = pb - pa;
     let len2 = d.dot(d);
-    let off = |p: [f64; 3]| {
+    let off = |p: DVec3| {
         let t = if len2 > 0.0 {
-            (p.sub(pa).dot(d) / len2).clamp(0.0, 1.0)
+            ((p - pa).dot(d) / len2).clamp(0.0, 1.0)
         } else {
             0.0
         };
-        p.sub(pa.add(d.scale(t))).norm()
+        (p - (pa + d * t)).length()
     };
     let q1 = f(a + 0.25 * (b - a));
     let q3 = f(a + 0.75 * (b - a));
@@ -107,9 +107,9 @@ fn chord_deviation(
 /// Pushes the samples of `(a, b]`, splitting in two while the curve's chordal deviation (at
 /// the midpoint and quarter points) or the turn between the half-chords is too large.
 fn refine(
-    f: &dyn Fn(f64) -> [f64; 3],
-    (a, pa): (f64, [f64; 3]),
-    (b, pb): (f64, [f64; 3]),
+    f: &dyn Fn(f64) -> DVec3,
+    (a, pa): (f64, DVec3),
+    (b, pb): (f64, DVec3),
     tol: f64,
     angle: f64,
     depth: u32,
@@ -118,8 +118,8 @@ fn refine(
     let m = 0.5 * (a + b);
     let pm = f(m);
     let dev = chord_deviation(f, (a, pa), (b, pb), pm);
-    let (d1, d2) = (pm.sub(pa), pb.sub(pm));
-    let (l1, l2) = (d1.norm(), d2.norm());
+    let (d1, d2) = (pm - pa, pb - pm);
+    let (l1, l2) = (d1.length(), d2.length());
     // The turn between the half-chords exceeds `angle` when its cosine is below cos(angle).
     let cos_turn = if l1 > 0.0 && l2 > 0.0 {
         d1.dot(d2) / (l1 * l2)
@@ -145,7 +145,7 @@ fn refine(
 /// largest file tolerance of the points merged into it.
 #[derive(Default)]
 pub struct VertexSnap {
-    reps: Vec<([f64; 3], f64)>,
+    reps: Vec<(DVec3, f64)>,
     base: f64,
     cell: f64,
     cells: HashMap<[i64; 3], Vec<usize>>,
@@ -186,13 +186,13 @@ impl VertexSnap {
         self.cell
     }
 
-    fn cell_of(&self, p: [f64; 3]) -> [i64; 3] {
-        p.map(|c| (c / self.cell).floor() as i64)
+    fn cell_of(&self, p: DVec3) -> [i64; 3] {
+        p.to_array().map(|c| (c / self.cell).floor() as i64)
     }
 
     /// The index of the nearest vertex within max(`base`, its file tolerance + `f`) of `p`,
     /// and the distance.
-    fn nearest(&self, p: [f64; 3], f: f64) -> Option<(usize, f64)> {
+    fn nearest(&self, p: DVec3, f: f64) -> Option<(usize, f64)> {
         let c = self.cell_of(p);
         let mut best: Option<(usize, f64)> = None;
         for dx in -1..=1 {
@@ -201,7 +201,7 @@ impl VertexSnap {
                     let key = [c[0] + dx, c[1] + dy, c[2] + dz];
                     for &i in self.cells.get(&key).into_iter().flatten() {
                         let (q, g) = self.reps[i];
-                        let d = q.sub(p).norm();
+                        let d = (q - p).length();
                         if d <= self.base.max(g + f) && best.is_none_or(|(_, bd)| d < bd) {
                             best = Some((i, d));
                         }
@@ -214,24 +214,24 @@ impl VertexSnap {
 
     /// The representative of the vertex `p` (without a file tolerance of its own) merges
     /// onto, if there is one.
-    pub fn find(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+    pub fn find(&self, p: DVec3) -> Option<DVec3> {
         self.find_within(p, 0.0)
     }
 
     /// [`VertexSnap::find`] for a point with the file tolerance `f`.
-    pub fn find_within(&self, p: [f64; 3], f: f64) -> Option<[f64; 3]> {
+    pub fn find_within(&self, p: DVec3, f: f64) -> Option<DVec3> {
         let f = f.clamp(0.0, 0.5 * self.cell);
         self.nearest(p, f).map(|(i, _)| self.reps[i].0)
     }
 
     /// `p` (without a file tolerance) snapped onto an existing vertex, or made a new one.
-    pub fn snap(&mut self, p: [f64; 3]) -> [f64; 3] {
+    pub fn snap(&mut self, p: DVec3) -> DVec3 {
         self.snap_within(p, 0.0).0
     }
 
     /// `p`, with the file tolerance `f`, snapped onto the nearest vertex it merges with, or
     /// made a new vertex; and how.
-    pub fn snap_within(&mut self, p: [f64; 3], f: f64) -> ([f64; 3], Snapped) {
+    pub fn snap_within(&mut self, p: DVec3, f: f64) -> (DVec3, Snapped) {
         if !p.is_finite() {
             return (p, Snapped::New);
         }
@@ -269,9 +269,9 @@ pub fn file_radius(vertex: Option<f64>, options: &Options) -> f64 {
 }
 
 /// The surface point of a trim's curve at `t`.
-pub fn trim_point(face: &Face, curve: &Curve2, t: f64) -> [f64; 3] {
-    let [u, v] = curve.point(t);
-    face.surface.point(u, v)
+pub fn trim_point(face: &Face, curve: &Curve2, t: f64) -> DVec3 {
+    let uv = curve.point(t);
+    face.surface.point(uv.x, uv.y)
 }
 
 /// Adds the sample at the middle of the segment between the parameters `ta` and `tb` of edge
@@ -324,7 +324,7 @@ pub fn discretise_with_stats(doc: &Document, options: &Options) -> (EdgeTable, M
     struct Sampled {
         id: u64,
         params: Vec<f64>,
-        points: Vec<[f64; 3]>,
+        points: Vec<DVec3>,
         length: f64,
         radii: [f64; 2],
     }
@@ -335,8 +335,8 @@ pub fn discretise_with_stats(doc: &Document, options: &Options) -> (EdgeTable, M
         let f = |t: f64| curve.point(t);
         let min = min_segments(curve, t0, t1).max(2);
         let params = sample_chordal(&f, t0, t1, min, options.tolerance, options.angle);
-        let points: Vec<[f64; 3]> = params.iter().map(|&t| curve.point(t)).collect();
-        let length: f64 = points.windows(2).map(|w| w[1].sub(w[0]).norm()).sum();
+        let points: Vec<DVec3> = params.iter().map(|&t| curve.point(t)).collect();
+        let length: f64 = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
         let vt = edge.vertex_tolerances;
         let radii = [0, 1].map(|k| file_radius(vt.map(|v| v[k]), options));
         sampled.push(Sampled {
@@ -376,7 +376,7 @@ pub fn discretise_with_stats(doc: &Document, options: &Options) -> (EdgeTable, M
             table.insert(id, EdgeSamples::Point(q));
             continue;
         }
-        let open = points[0].sub(points[last]).norm() > base;
+        let open = (points[0] - points[last]).length() > base;
         let (a, how_a) = snap.snap_within(points[0], radii[0]);
         let (b, how_b) = snap.snap_within(points[last], radii[1]);
         count(how_a);
@@ -417,9 +417,9 @@ mod tests {
     #[allow(clippy::approx_constant)] // the very digits OCCT writes for 2π, and one turn above
     fn a_full_turn_written_to_15_digits_starts_from_four_segments() {
         let circle: Curve3 = Curve::Circle {
-            center: [0.0; 3],
-            x_dir: [1.0, 0.0, 0.0],
-            y_dir: [0.0, 1.0, 0.0],
+            center: DVec3::ZERO,
+            x_dir: DVec3::X,
+            y_dir: DVec3::Y,
             radius: 5.0,
         };
         assert_eq!(min_segments(&circle, 0.0, std::f64::consts::TAU), 4);

@@ -8,8 +8,7 @@
 use crate::Options;
 use crate::boundary::Polyline;
 use std::collections::HashMap;
-use tessd_brep::Face;
-use tessd_brep::vector::Vector;
+use tessd_brep::{DVec2, Face};
 
 /// The most grid points per direction, and per face.
 pub const MAX_PER_DIRECTION: usize = 512;
@@ -106,7 +105,7 @@ pub fn survey(face: &Face, b: [f64; 4], n: usize, options: &Options) -> Survey {
             let u = b[0] + wu * i as f64 / n as f64;
             let v = b[2] + wv * j as f64 / n as f64;
             let p0 = face.surface.eval(u, v);
-            let (nu, nv) = (p0.du.norm(), p0.dv.norm());
+            let (nu, nv) = (p0.du.length(), p0.dv.length());
             if nu.is_finite() && nv.is_finite() {
                 sums[0] += nu;
                 sums[1] += nv;
@@ -124,17 +123,17 @@ pub fn survey(face: &Face, b: [f64; 4], n: usize, options: &Options) -> Survey {
                 } else {
                     (face.surface.point(u, v + h), p0.dv)
                 };
-                let second = p1.sub(p0.point).sub(first.scale(h)).scale(2.0 / (h * h));
+                let second = (p1 - p0.point - first * h) * (2.0 / (h * h));
                 // Only the part across the tangent bends the iso-curve: the part along it is
                 // the parametrisation speeding up (large on uneven rational B-splines), which
                 // moves no point off the chord.
-                let s1 = first.norm();
+                let s1 = first.length();
                 let along = if s1 > 0.0 {
                     second.dot(first) / (s1 * s1)
                 } else {
                     0.0
                 };
-                let s2 = second.sub(first.scale(along)).norm();
+                let s2 = (second - first * along).length();
                 if !(s2.is_finite() && s1.is_finite()) || s2 <= 1e-300 {
                     continue;
                 }
@@ -218,7 +217,7 @@ pub fn grid_steps(plan: &Plan) -> [f64; 2] {
 /// gives fewer points. On a tensor grid a sphere's cells shrink to slivers towards its poles,
 /// where its u step could grow as the rows shorten (a fillet's R3 sphere octant at 0.01 mm:
 /// 544 → 472 triangles).
-pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<[f64; 2]> {
+pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<DVec2> {
     let b = plan.bounds;
     if !(b[1] > b[0] && b[3] > b[2]) {
         return Vec::new();
@@ -291,7 +290,11 @@ pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<[f64; 2]> {
         let n = ((n as f64 / thin).ceil() as usize).max(1);
         for i in 1..n {
             let along = b[2 * dir] + extent[dir] * i as f64 / n as f64;
-            let uv = if dir == 0 { [along, at] } else { [at, along] };
+            let uv = if dir == 0 {
+                DVec2::new(along, at)
+            } else {
+                DVec2::new(at, along)
+            };
             if !near.within(uv) {
                 out.push(uv);
             }
@@ -304,7 +307,7 @@ pub fn grid(loops: &[Polyline], plan: &Plan) -> Vec<[f64; 2]> {
 struct SegmentIndex {
     scale: [f64; 2],
     keep: f64,
-    segments: Vec<([f64; 2], [f64; 2])>,
+    segments: Vec<(DVec2, DVec2)>,
     cells: HashMap<[i64; 2], Vec<usize>>,
 }
 
@@ -346,11 +349,11 @@ impl SegmentIndex {
         index
     }
 
-    fn scaled(&self, uv: [f64; 2]) -> [f64; 2] {
-        [uv[0] * self.scale[0], uv[1] * self.scale[1]]
+    fn scaled(&self, uv: DVec2) -> DVec2 {
+        DVec2::new(uv.x * self.scale[0], uv.y * self.scale[1])
     }
 
-    fn cell(&self, p: [f64; 2]) -> [i64; 2] {
+    fn cell(&self, p: DVec2) -> [i64; 2] {
         [
             (p[0] / self.keep).floor() as i64,
             (p[1] / self.keep).floor() as i64,
@@ -358,7 +361,7 @@ impl SegmentIndex {
     }
 
     /// Whether a boundary segment passes within `keep` of `uv`.
-    fn within(&self, uv: [f64; 2]) -> bool {
+    fn within(&self, uv: DVec2) -> bool {
         let p = self.scaled(uv);
         let c = self.cell(p);
         for dx in -1..=1 {
@@ -380,20 +383,20 @@ impl SegmentIndex {
     }
 }
 
-fn lerp(a: [f64; 2], b: [f64; 2], t: f64) -> [f64; 2] {
-    a.add(b.sub(a).scale(t))
+fn lerp(a: DVec2, b: DVec2, t: f64) -> DVec2 {
+    a + (b - a) * t
 }
 
 /// The distance from `p` to the segment `ab`.
-pub fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let ab = b.sub(a);
+pub fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let ab = b - a;
     let len2 = ab.dot(ab);
     let t = if len2 > 0.0 {
-        (p.sub(a).dot(ab) / len2).clamp(0.0, 1.0)
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
     } else {
         0.0
     };
-    p.sub(lerp(a, b, t)).norm()
+    (p - lerp(a, b, t)).length()
 }
 
 #[cfg(test)]

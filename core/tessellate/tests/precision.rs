@@ -7,8 +7,7 @@ mod common;
 
 use common::{area, load, open_edges};
 use std::f64::consts::FRAC_PI_2;
-use tessd_brep::vector::Vector;
-use tessd_brep::{Curve, Document};
+use tessd_brep::{Curve, DVec3, Document};
 use tessd_tessellate::boundary::{Source, face_loops};
 use tessd_tessellate::edges::{EdgeSamples, discretise};
 use tessd_tessellate::{Options, Origin, TessellateError, Tessellation, tessellate};
@@ -26,15 +25,15 @@ fn cube_with_loose_corner(starts: [[f64; 3]; 3], vertex_tolerance: Option<f64>) 
         let Some(Curve::Line { origin, dir }) = &mut edge.curve else {
             panic!("the cube's edges are lines")
         };
-        if *origin != [0.0; 3] {
+        if *origin != [0.0; 3].into() {
             continue;
         }
-        let end = origin.add(dir.scale(edge.range[1]));
-        let start = starts[k];
-        let d = end.sub(start);
+        let end = *origin + *dir * edge.range[1];
+        let start = DVec3::from(starts[k]);
+        let d = end - start;
         *origin = start;
-        *dir = d.scale(1.0 / d.norm());
-        edge.range = [0.0, d.norm()];
+        *dir = d * (1.0 / d.length());
+        edge.range = [0.0, d.length()];
         edge.vertex_tolerances = vertex_tolerance.map(|t| [t, 0.0]);
         k += 1;
     }
@@ -184,7 +183,9 @@ fn shared_points(doc: &Document, options: &Options) -> Vec<(f64, [f64; 2], [f64;
     loops[0]
         .iter()
         .filter_map(|b| match b.next {
-            Some(s) if s.source == Source::Edge(7) => Some((s.t[0], b.uv, b.p)),
+            Some(s) if s.source == Source::Edge(7) => {
+                Some((s.t[0], b.uv.to_array(), b.p.to_array()))
+            }
             _ => None,
         })
         .collect()
@@ -202,9 +203,10 @@ fn reparametrised_pcurves_are_projected() {
         // The pcurve at the edge's own parameter is far off (the old "same parameter" by
         // ranges)...
         let naive = trim.curve.point(t);
-        naive_worst = naive_worst.max(surface.point(naive[0], naive[1]).sub(p).norm());
+        naive_worst =
+            naive_worst.max((surface.point(naive[0], naive[1]) - DVec3::from(p)).length());
         // ...the (u, v) found maps onto the edge's point within 1e-9 of the radius.
-        let d = surface.point(uv[0], uv[1]).sub(p).norm();
+        let d = (surface.point(uv[0], uv[1]) - DVec3::from(p)).length();
         assert!(
             d <= 1e-9 * 5.0,
             "t = {t}: (u, v) {uv:?} is {d} from the edge"
@@ -218,7 +220,7 @@ fn reparametrised_pcurves_are_projected() {
     // And in the mesh: every vertex's (u, v) is its position, in f64.
     let t = run_with(&doc, options);
     for (uv, p) in t.uvs.iter().zip(&t.points) {
-        let d = surface.point(uv[0], uv[1]).sub(*p).norm();
+        let d = (surface.point(uv[0], uv[1]) - DVec3::from(*p)).length();
         assert!(d <= 1e-9 * 5.0, "{uv:?} vs {p:?}: {d}");
     }
     let exact = FRAC_PI_2 * 5.0;
@@ -236,13 +238,13 @@ fn same_parametrisation_stays_on_the_fast_path() {
     let points = shared_points(&doc, &Options::new(0.01));
     // Bit for bit the pcurve at the edge's parameter: no projection moved them.
     for &(t, uv, _) in &points {
-        assert_eq!(uv, trim.curve.point(t), "t = {t}");
+        assert_eq!(uv, trim.curve.point(t).to_array(), "t = {t}");
     }
 }
 
 /// `doc` moved by `d`, checked valid.
 fn translated(doc: &Document, d: [f64; 3]) -> Document {
-    let moved = doc.translated(d);
+    let moved = doc.translated(d.into());
     moved.validate().unwrap();
     moved
 }
@@ -300,17 +302,17 @@ fn far_parts_are_written_relative_to_an_origin() {
         assert_eq!(far.mesh.face_indices, near.mesh.face_indices, "{name}");
         let (mut worst, mut naive): (f64, f64) = (0.0, 0.0);
         for (i, q) in near.points.iter().enumerate() {
-            let want = q.add(d);
+            let want = DVec3::from(*q) + DVec3::from(d);
             let rel = far.mesh.positions[i].map(f64::from);
-            let got = [rel[0] + o[0], rel[1] + o[1], rel[2] + o[2]];
-            worst = worst.max(got.sub(want).norm());
+            let got = DVec3::new(rel[0] + o[0], rel[1] + o[1], rel[2] + o[2]);
+            worst = worst.max((got - want).length());
             assert!(
-                far.points[i].sub(want).norm() < 1e-9,
+                (DVec3::from(far.points[i]) - want).length() < 1e-9,
                 "{name}: f64 point {i}"
             );
             // Absolute f32, as without an origin.
             let abs = far.points[i].map(|c| f64::from(c as f32));
-            naive = naive.max(abs.sub(want).norm());
+            naive = naive.max((DVec3::from(abs) - want).length());
         }
         eprintln!(
             "{name} moved by 2e4: origin {o:?}; relative f32 + origin off by {worst:.2e}, \

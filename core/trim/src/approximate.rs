@@ -77,7 +77,7 @@ pub fn approximate_trim(trim: &Trim, eps_uv: f64) -> Result<TrimApprox, NotFinit
     let straight = match &trim.curve {
         Curve::Line { .. } => Some(vec![t0, t1]),
         Curve::Circle { center, radius, .. } => {
-            return approximate_conic(trim, *center, *radius, eps_uv);
+            return approximate_conic(trim, center.to_array(), *radius, eps_uv);
         }
         Curve::Ellipse {
             center,
@@ -85,7 +85,12 @@ pub fn approximate_trim(trim: &Trim, eps_uv: f64) -> Result<TrimApprox, NotFinit
             minor_radius,
             ..
         } => {
-            return approximate_conic(trim, *center, major_radius.max(*minor_radius), eps_uv);
+            return approximate_conic(
+                trim,
+                center.to_array(),
+                major_radius.max(*minor_radius),
+                eps_uv,
+            );
         }
         Curve::Bspline(b) if b.degree == 1 => corners,
         _ => {
@@ -96,7 +101,7 @@ pub fn approximate_trim(trim: &Trim, eps_uv: f64) -> Result<TrimApprox, NotFinit
         }
     };
     if let Some(ts) = straight {
-        let pts: Vec<P2> = ts.iter().map(|&t| trim.curve.point(t)).collect();
+        let pts: Vec<P2> = ts.iter().map(|&t| trim.curve.point(t).to_array()).collect();
         if pts.iter().flatten().any(|c| !c.is_finite()) {
             return Err(NotFinite);
         }
@@ -186,13 +191,14 @@ fn approximate_conic(
     let flat_tol = 0.25 * eps_uv;
     let mut pieces = Vec::with_capacity(n);
     let mut max_error: f64 = 0.0;
-    let mut start = trim.curve.point(t0);
+    let mut start = trim.curve.point(t0).to_array();
     for k in 0..n {
         let end = if k + 1 == n {
             trim.curve.point(t1)
         } else {
             trim.curve.point(at(k + 1))
-        };
+        }
+        .to_array();
         let m = trim.curve.point(0.5 * (at(k) + at(k + 1)));
         let mid = [
             center[0] + (m[0] - center[0]) * scale,
@@ -277,7 +283,10 @@ fn measure(
         let exact = match (i.is_multiple_of(2), samples.mids.get(i / 2)) {
             (true, _) => samples.points[i / 2],
             (false, Some(&m)) => m,
-            (false, None) => trim.curve.point(t0 + mid(&samples.params, i) * (t1 - t0)),
+            (false, None) => trim
+                .curve
+                .point(t0 + mid(&samples.params, i) * (t1 - t0))
+                .to_array(),
         };
         // s increases with i: walk the spans.
         while span + 2 < b.len() && b[span + 1] <= s {

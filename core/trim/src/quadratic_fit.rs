@@ -35,11 +35,15 @@ impl Samples {
         let params: Vec<f64> = (0..=count).map(|i| i as f64 / count as f64).collect();
         let points = params
             .iter()
-            .map(|&s| trim.curve.point(t0 + s * (t1 - t0)))
+            .map(|&s| trim.curve.point(t0 + s * (t1 - t0)).to_array())
             .collect();
         let mids = params
             .windows(2)
-            .map(|w| trim.curve.point(t0 + 0.5 * (w[0] + w[1]) * (t1 - t0)))
+            .map(|w| {
+                trim.curve
+                    .point(t0 + 0.5 * (w[0] + w[1]) * (t1 - t0))
+                    .to_array()
+            })
             .collect();
         let d = |t: f64, inwards: f64| {
             let (_, d) = trim.curve.eval(inside_corner(trim, t, inwards));

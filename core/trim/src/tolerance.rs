@@ -45,8 +45,7 @@
 //! orthogonal, equally fast directions: a looser tolerance now gives fewer pieces for the
 //! same world guarantee.)
 
-use tessd_brep::vector::Vector;
-use tessd_brep::{Curve, Face, Surface};
+use tessd_brep::{Curve, DVec3, Face, Surface};
 
 /// Grid points per direction when bounding the derivatives.
 pub const GRID: usize = 17;
@@ -108,7 +107,7 @@ fn estimate(face: &Face, eps_world: f64, plan: &SamplePlan) -> UvTolerance {
     plan.for_each(|u, v| {
         samples += 1;
         let sp = face.surface.eval(u, v);
-        let (a, b) = (sp.du.norm(), sp.dv.norm());
+        let (a, b) = (sp.du.length(), sp.dv.length());
         if a.is_finite() {
             mu = mu.max(a);
         }
@@ -267,7 +266,7 @@ fn knot_lines(surface: &Surface) -> (KnotLine<'_>, KnotLine<'_>) {
     }
 }
 
-fn curve_knots(curve: &Curve<[f64; 3]>) -> KnotLine<'_> {
+fn curve_knots(curve: &Curve<DVec3>) -> KnotLine<'_> {
     match curve {
         Curve::Bspline(b) => Some((b.knots.as_slice(), b.periodic)),
         _ => None,
@@ -331,9 +330,8 @@ fn samples_in(spans: &[[f64; 2]], k: usize) -> Vec<f64> {
 /// The largest singular value of the 3 × 2 matrix [a b]: `√λmax` of the Gram matrix
 /// `[[a·a, a·b], [a·b, b·b]]`, `λmax = (E + G) / 2 + √(((E − G) / 2)² + F²)`. Rounded up
 /// by a few ulps, so that it never falls below |a| or |b| by rounding.
-pub fn largest_singular_value(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
-    let (e, f, g) = (dot(a, a), dot(a, b), dot(b, b));
+pub fn largest_singular_value(a: DVec3, b: DVec3) -> f64 {
+    let (e, f, g) = (a.dot(a), a.dot(b), b.dot(b));
     let half = 0.5 * (e - g);
     let lambda = 0.5 * (e + g) + half.hypot(f);
     lambda.sqrt() * (1.0 + 8.0 * f64::EPSILON)

@@ -25,9 +25,9 @@ use tessd_trim::{NodeKind, TrimStructure};
 fn cw_ellipse(center: [f64; 2], a: f64, b: f64, from: f64, to: f64) -> Trim {
     Trim {
         curve: Curve::Ellipse {
-            center,
-            x_dir: [1.0, 0.0],
-            y_dir: [0.0, -1.0],
+            center: center.into(),
+            x_dir: [1.0, 0.0].into(),
+            y_dir: [0.0, -1.0].into(),
             major_radius: a,
             minor_radius: b,
         },
@@ -41,7 +41,7 @@ fn bspline(degree: usize, poles: Vec<[f64; 2]>, knots: Vec<f64>, mults: Vec<u32>
     Trim {
         curve: Curve::Bspline(BSplineCurve {
             degree,
-            poles,
+            poles: poles.into_iter().map(Into::into).collect(),
             weights: None,
             knots,
             mults,
@@ -85,7 +85,11 @@ fn check(name: &str, face: &Face, eps: f64, spots: &[[f64; 2]]) -> TrimStructure
         .iter()
         .flat_map(|tr| {
             let [t0, t1] = tr.range;
-            (0..1024).map(move |i| tr.curve.point(t0 + (t1 - t0) * i as f64 / 1024.0))
+            (0..1024).map(move |i| {
+                tr.curve
+                    .point(t0 + (t1 - t0) * i as f64 / 1024.0)
+                    .to_array()
+            })
         })
         .collect();
     let [u0, u1, v0, v1] = face.bounds;
@@ -328,7 +332,7 @@ fn corners_inside_bsplines_are_junctions() {
     let f = corner_face();
     let corner = f.loops[0].trims[3].curve.point(0.5);
     for eps in [0.1, 0.01, 1e-3] {
-        let t = check("corner", &f, eps, &[corner]);
+        let t = check("corner", &f, eps, &[corner.into()]);
         let at_corner = t.loops[0]
             .iter()
             .filter(|q| (q.p[2][0] - corner[0]).hypot(q.p[2][1] - corner[1]) < 1e-9)

@@ -240,9 +240,9 @@ fn diagnose_tangents() {
                             trim.curve.type_name(),
                             a.pieces.len(),
                             a.max_error,
-                            angle(d0, s0),
-                            angle(d1, s1),
-                            angle(d1, nd)
+                            angle(d0.into(), s0),
+                            angle(d1.into(), s1),
+                            angle(d1.into(), nd.into())
                         );
                     }
                 }

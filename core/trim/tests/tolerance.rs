@@ -7,7 +7,7 @@ mod common;
 
 use common::{Rng, plane};
 use std::time::Instant;
-use tessd_brep::{BSplineCurve, BSplineSurface, Curve, Document, Face, Frame, Surface};
+use tessd_brep::{BSplineCurve, BSplineSurface, Curve, DVec3, Document, Face, Frame, Surface};
 use tessd_trim::tolerance::{
     GRID, MAX_SAMPLES, SAFETY, SamplePlan, UvTolerance, grid_uv_tolerance, largest_singular_value,
     uv_tolerance,
@@ -16,9 +16,9 @@ use tessd_trim::tolerance::{
 fn frame() -> Frame {
     let (c, s) = (0.6f64, 0.8f64);
     Frame {
-        origin: [1.0, -2.0, 0.5],
-        x_dir: [c, s, 0.0],
-        y_dir: [0.0, 0.0, 1.0],
+        origin: [1.0, -2.0, 0.5].into(),
+        x_dir: [c, s, 0.0].into(),
+        y_dir: [0.0, 0.0, 1.0].into(),
     }
 }
 
@@ -51,7 +51,10 @@ fn sheared_bspline() -> Surface {
     Surface::Bspline(BSplineSurface {
         degree_u: 3,
         degree_v: 3,
-        poles,
+        poles: poles
+            .into_iter()
+            .map(|row: Vec<[f64; 3]>| row.into_iter().map(Into::into).collect())
+            .collect(),
         weights: None,
         knots_u: vec![0.0, 1.0],
         mults_u: vec![4, 4],
@@ -143,7 +146,7 @@ fn the_singular_value_bounds_every_direction() {
     for _ in 0..10_000 {
         let mut r = || 4.0 * rng.next() - 2.0;
         let (a, b) = ([r(), r(), r()], [r(), r(), r()]);
-        let s = largest_singular_value(a, b);
+        let s = largest_singular_value(a.into(), b.into());
         let (c, d) = (r(), r());
         let n = c.hypot(d);
         let j = [0, 1, 2].map(|k| a[k] * c + b[k] * d);
@@ -203,7 +206,10 @@ fn clustered_bspline() -> Surface {
     Surface::Bspline(BSplineSurface {
         degree_u: 3,
         degree_v: 3,
-        poles,
+        poles: poles
+            .into_iter()
+            .map(|row: Vec<[f64; 3]>| row.into_iter().map(Into::into).collect())
+            .collect(),
         weights: None,
         knots_u: vec![0.0, 0.001, 0.002, 0.5, 1.0],
         mults_u: vec![4, 1, 1, 1, 4],
@@ -219,10 +225,13 @@ fn clustered_bspline() -> Surface {
 fn clustered_extrusion() -> Surface {
     let xs = [0.0, 0.0, 0.05, 0.06, 0.35, 0.7, 1.0];
     Surface::Extrusion {
-        direction: [0.0, 0.6, 0.8],
+        direction: [0.0, 0.6, 0.8].into(),
         curve: Box::new(Curve::Bspline(BSplineCurve {
             degree: 3,
-            poles: xs.iter().map(|&x| [x, 0.5 * x * x, 0.0]).collect(),
+            poles: xs
+                .iter()
+                .map(|&x| DVec3::new(x, 0.5 * x * x, 0.0))
+                .collect(),
             weights: None,
             knots: vec![0.0, 0.001, 0.002, 0.5, 1.0],
             mults: vec![4, 1, 1, 1, 4],
@@ -347,7 +356,10 @@ fn many_spans(n: usize, short: f64) -> Surface {
     Surface::Bspline(BSplineSurface {
         degree_u: 3,
         degree_v: 3,
-        poles,
+        poles: poles
+            .into_iter()
+            .map(|row: Vec<[f64; 3]>| row.into_iter().map(Into::into).collect())
+            .collect(),
         weights: None,
         knots_u: knots,
         mults_u,

@@ -6,7 +6,7 @@ mod common;
 
 use common::{Rng, exact_inside, line, plane, sampled_loops};
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
-use tessd_brep::{BSplineCurve, Curve, Document, Face, Frame, Loop, Surface, Trim};
+use tessd_brep::{BSplineCurve, Curve, DVec2, Document, Face, Frame, Loop, Surface, Trim};
 use tessd_trim::approximate::{approximate_loops, approximate_trim};
 use tessd_trim::classify::{TrimSource, classify};
 use tessd_trim::implicit::{Implicit, ImplicitKind};
@@ -25,9 +25,13 @@ fn circle(center: [f64; 2], radius: f64, clockwise: bool) -> Loop {
     Loop {
         trims: vec![Trim {
             curve: Curve::Circle {
-                center,
-                x_dir: [1.0, 0.0],
-                y_dir: if clockwise { [0.0, -1.0] } else { [0.0, 1.0] },
+                center: center.into(),
+                x_dir: [1.0, 0.0].into(),
+                y_dir: if clockwise {
+                    [0.0, -1.0].into()
+                } else {
+                    [0.0, 1.0].into()
+                },
                 radius,
             },
             range: [0.0, TAU],
@@ -106,13 +110,7 @@ fn classification_matches_exact_geometry_within_eps() {
 
 /// Distance from `p` to the curve `c` over `[t0, t1]`: the nearest of `n` samples, refined by
 /// golden-section search in the neighbouring intervals.
-fn distance_to_curve(
-    c: &Curve<[f64; 2]>,
-    t0: f64,
-    t1: f64,
-    samples: &[[f64; 2]],
-    p: [f64; 2],
-) -> f64 {
+fn distance_to_curve(c: &Curve<DVec2>, t0: f64, t1: f64, samples: &[[f64; 2]], p: [f64; 2]) -> f64 {
     let n = samples.len() - 1;
     let d = |q: [f64; 2]| (q[0] - p[0]).hypot(q[1] - p[1]);
     let (best, _) = samples
@@ -127,13 +125,13 @@ fn distance_to_curve(
     for _ in 0..80 {
         let x1 = b - g * (b - a);
         let x2 = a + g * (b - a);
-        if d(c.point(x1)) < d(c.point(x2)) {
+        if d(c.point(x1).to_array()) < d(c.point(x2).to_array()) {
             b = x2;
         } else {
             a = x1;
         }
     }
-    d(c.point(0.5 * (a + b)))
+    d(c.point(0.5 * (a + b)).to_array())
 }
 
 /// Both one-sided distances between the approximation and the curve, by dense sampling.
@@ -141,7 +139,11 @@ fn hausdorff(trim: &Trim, pieces: &[Quadratic]) -> f64 {
     let [t0, t1] = trim.range;
     let n = 4000;
     let exact: Vec<[f64; 2]> = (0..=n)
-        .map(|i| trim.curve.point(t0 + (t1 - t0) * i as f64 / n as f64))
+        .map(|i| {
+            trim.curve
+                .point(t0 + (t1 - t0) * i as f64 / n as f64)
+                .to_array()
+        })
         .collect();
     let mut worst: f64 = 0.0;
     let mut approx = Vec::new();
@@ -188,7 +190,7 @@ fn check_approximation(name: &str, trim: &Trim, eps: f64) {
     assert!((last[0] - e[0]).hypot(last[1] - e[1]) < 1e-12);
 }
 
-fn nurbs_circle(center: [f64; 2], r: f64) -> Curve<[f64; 2]> {
+fn nurbs_circle(center: [f64; 2], r: f64) -> Curve<DVec2> {
     let w = FRAC_1_SQRT_2;
     let dirs = [
         [1.0, 0.0],
@@ -205,7 +207,7 @@ fn nurbs_circle(center: [f64; 2], r: f64) -> Curve<[f64; 2]> {
         degree: 2,
         poles: dirs
             .iter()
-            .map(|d| [center[0] + r * d[0], center[1] + r * d[1]])
+            .map(|d| DVec2::new(center[0] + r * d[0], center[1] + r * d[1]))
             .collect(),
         weights: Some(vec![1.0, w, 1.0, w, 1.0, w, 1.0, w, 1.0]),
         knots: vec![0.0, 1.0, 2.0, 3.0, 4.0],
@@ -219,9 +221,9 @@ fn nurbs_circle(center: [f64; 2], r: f64) -> Curve<[f64; 2]> {
 fn approximations_stay_within_eps() {
     let circle = Trim {
         curve: Curve::Circle {
-            center: [0.3, -0.2],
-            x_dir: [1.0, 0.0],
-            y_dir: [0.0, 1.0],
+            center: [0.3, -0.2].into(),
+            x_dir: [1.0, 0.0].into(),
+            y_dir: [0.0, 1.0].into(),
             radius: 2.0,
         },
         range: [0.3, 0.3 + TAU],
@@ -229,9 +231,9 @@ fn approximations_stay_within_eps() {
     };
     let ellipse = Trim {
         curve: Curve::Ellipse {
-            center: [1.0, 2.0],
-            x_dir: [0.6, 0.8],
-            y_dir: [-0.8, 0.6],
+            center: [1.0, 2.0].into(),
+            x_dir: [0.6, 0.8].into(),
+            y_dir: [-0.8, 0.6].into(),
             major_radius: 3.0,
             minor_radius: 0.5,
         },
@@ -247,13 +249,13 @@ fn approximations_stay_within_eps() {
         curve: Curve::Bspline(BSplineCurve {
             degree: 5,
             poles: vec![
-                [0.0, 0.0],
-                [1.0, 2.0],
-                [2.0, -1.0],
-                [3.0, 3.0],
-                [4.0, 0.0],
-                [5.0, 1.0],
-                [6.0, -2.0],
+                [0.0, 0.0].into(),
+                [1.0, 2.0].into(),
+                [2.0, -1.0].into(),
+                [3.0, 3.0].into(),
+                [4.0, 0.0].into(),
+                [5.0, 1.0].into(),
+                [6.0, -2.0].into(),
             ],
             weights: Some(vec![1.0, 2.0, 0.5, 1.0, 3.0, 1.0, 1.0]),
             knots: vec![0.0, 0.4, 1.0],
@@ -290,12 +292,12 @@ fn approximations_stay_within_eps() {
 fn conics_are_cut_directly_within_eps() {
     let circle = |r: f64, range: [f64; 2], clockwise: bool| Trim {
         curve: Curve::Circle {
-            center: [0.3, -0.2],
-            x_dir: [FRAC_1_SQRT_2, FRAC_1_SQRT_2],
+            center: [0.3, -0.2].into(),
+            x_dir: [FRAC_1_SQRT_2, FRAC_1_SQRT_2].into(),
             y_dir: if clockwise {
-                [FRAC_1_SQRT_2, -FRAC_1_SQRT_2]
+                [FRAC_1_SQRT_2, -FRAC_1_SQRT_2].into()
             } else {
-                [-FRAC_1_SQRT_2, FRAC_1_SQRT_2]
+                [-FRAC_1_SQRT_2, FRAC_1_SQRT_2].into()
             },
             radius: r,
         },
@@ -304,9 +306,9 @@ fn conics_are_cut_directly_within_eps() {
     };
     let ellipse = |a: f64, b: f64, range: [f64; 2]| Trim {
         curve: Curve::Ellipse {
-            center: [1.0, 2.0],
-            x_dir: [0.6, 0.8],
-            y_dir: [-0.8, 0.6],
+            center: [1.0, 2.0].into(),
+            x_dir: [0.6, 0.8].into(),
+            y_dir: [-0.8, 0.6].into(),
             major_radius: a,
             minor_radius: b,
         },
@@ -344,19 +346,19 @@ fn conics_are_cut_directly_within_eps() {
                 assert_eq!(w[0].p[2], w[1].p[0], "{name}: pieces are connected");
             }
             let [t0, t1] = trim.range;
-            assert_eq!(a.pieces[0].p[0], trim.curve.point(t0), "{name}");
+            assert_eq!(a.pieces[0].p[0], trim.curve.point(t0).to_array(), "{name}");
             assert_eq!(
                 a.pieces.last().unwrap().p[2],
-                trim.curve.point(t1),
+                trim.curve.point(t1).to_array(),
                 "{name}"
             );
         }
         // The circle as a NURBS goes through sampling, fitting and knot removal.
         let exact = Trim {
             curve: Curve::Circle {
-                center: [0.5, 0.5],
-                x_dir: [1.0, 0.0],
-                y_dir: [0.0, 1.0],
+                center: [0.5, 0.5].into(),
+                x_dir: [1.0, 0.0].into(),
+                y_dir: [0.0, 1.0].into(),
                 radius: 1.5,
             },
             range: [0.0, TAU],
@@ -540,9 +542,9 @@ fn tangent_face() -> Face {
             Loop {
                 trims: vec![Trim {
                     curve: Curve::Circle {
-                        center: [0.5, 0.25],
-                        x_dir: [0.0, -1.0],
-                        y_dir: [-1.0, 0.0],
+                        center: [0.5, 0.25].into(),
+                        x_dir: [0.0, -1.0].into(),
+                        y_dir: [-1.0, 0.0].into(),
                         radius: 0.25,
                     },
                     range: [0.0, TAU],
@@ -668,9 +670,9 @@ fn bottle_document_builds_at_both_tolerances() {
 fn arc(center: [f64; 2], r: f64, from: f64, to: f64) -> Trim {
     Trim {
         curve: Curve::Circle {
-            center,
-            x_dir: [1.0, 0.0],
-            y_dir: [0.0, 1.0],
+            center: center.into(),
+            x_dir: [1.0, 0.0].into(),
+            y_dir: [0.0, 1.0].into(),
             radius: r,
         },
         range: [from, to],
@@ -730,9 +732,9 @@ fn world_tolerance_holds_on_a_cylinder() {
         reversed: false,
         surface: Surface::Cylinder {
             frame: Frame {
-                origin: [0.0, 0.0, 0.0],
-                x_dir: [1.0, 0.0, 0.0],
-                y_dir: [0.0, 1.0, 0.0],
+                origin: [0.0, 0.0, 0.0].into(),
+                x_dir: [1.0, 0.0, 0.0].into(),
+                y_dir: [0.0, 1.0, 0.0].into(),
             },
             radius: r,
         },
@@ -740,9 +742,9 @@ fn world_tolerance_holds_on_a_cylinder() {
         loops: vec![Loop {
             trims: vec![Trim {
                 curve: Curve::Ellipse {
-                    center: [1.5, 2.5],
-                    x_dir: [0.0, 1.0],
-                    y_dir: [-1.0, 0.0],
+                    center: [1.5, 2.5].into(),
+                    x_dir: [0.0, 1.0].into(),
+                    y_dir: [-1.0, 0.0].into(),
                     major_radius: 2.0,
                     minor_radius: 1.0,
                 },
@@ -766,7 +768,7 @@ fn world_tolerance_holds_on_a_cylinder() {
     let world: Vec<[f64; 3]> = (0..=n)
         .map(|i| {
             let p = trim.curve.point(TAU * i as f64 / n as f64);
-            face.surface.point(p[0], p[1])
+            face.surface.point(p[0], p[1]).to_array()
         })
         .collect();
     let mut worst: f64 = 0.0;

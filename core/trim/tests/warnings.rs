@@ -5,7 +5,7 @@
 mod common;
 
 use common::{line, plane};
-use tessd_brep::{BSplineCurve, Curve, Document, Face, Loop, Trim};
+use tessd_brep::{BSplineCurve, Curve, DVec2, Document, Face, Loop, Trim};
 use tessd_trim::TrimStructure;
 
 /// The rectangle [0, 2] × [0, 1] whose bottom side is a rational quadratic from (0, 0) to
@@ -16,7 +16,11 @@ pub fn spiked_face(w: f64) -> Face {
     let spike = Trim {
         curve: Curve::Bspline(BSplineCurve {
             degree: 2,
-            poles: vec![[0.0, 0.0], [1.0, 0.5], [2.0, 0.0]],
+            poles: vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(1.0, 0.5),
+                DVec2::new(2.0, 0.0),
+            ],
             weights: Some(vec![1.0, w, 1.0]),
             knots: vec![0.0, 1.0],
             mults: vec![3, 3],

@@ -17,12 +17,12 @@ use std::f64::consts::{PI, TAU};
 use super::geometry::RawCurve;
 use super::locations::{Trsf, normalized};
 use super::segment::{periodic_segment, piece_poles};
-use crate::model::{BSplineCurve, Curve, Curve2, Curve3, Frame};
-use crate::vector::Vector;
+use crate::model::{BSplineCurve, Curve, Curve2, Curve3, Frame, Point2, Point3};
+use crate::vector::Point;
 
 /// `(curve, t0, t1)`: `raw` on `[t0, t1]` as a format curve with the same parameter, or why it
 /// has none.
-pub(crate) fn on_range<P: Vector>(
+pub(crate) fn on_range<P: Point>(
     raw: &RawCurve<P>,
     t0: f64,
     t1: f64,
@@ -84,7 +84,7 @@ fn basis<P>(raw: &RawCurve<P>) -> &RawCurve<P> {
 
 /// A line, circle, ellipse or B-spline record as it is (ocp.py `_exact_curve`); `None` for the
 /// other types.
-fn exact<P: Vector>(raw: &RawCurve<P>) -> Option<Curve<P>> {
+fn exact<P: Point>(raw: &RawCurve<P>) -> Option<Curve<P>> {
     Some(match raw {
         RawCurve::Line { origin, dir } => Curve::Line {
             origin: *origin,
@@ -122,7 +122,7 @@ fn exact<P: Vector>(raw: &RawCurve<P>) -> Option<Curve<P>> {
 /// The exact B-spline of a parabola `O + t²/(4f)·X + t·Y` on `[t0, t1]`, same parameter: the
 /// quadratic Bézier of the range (OCCT's converter writes the same poles, in the parabola's
 /// own frame first).
-fn parabola<P: Vector>(o: P, x: P, y: P, f: f64, t0: f64, t1: f64) -> Curve<P> {
+fn parabola<P: Point>(o: P, x: P, y: P, f: f64, t0: f64, t1: f64) -> Curve<P> {
     // Local (along X, along Y) coordinates of the poles; f = 0 is OCCT's degenerate case,
     // the line O + t·X.
     let local = if f > 0.0 {
@@ -136,10 +136,7 @@ fn parabola<P: Vector>(o: P, x: P, y: P, f: f64, t0: f64, t1: f64) -> Curve<P> {
     };
     Curve::Bspline(BSplineCurve {
         degree: 2,
-        poles: local
-            .iter()
-            .map(|&(a, b)| o.add(x.scale(a)).add(y.scale(b)))
-            .collect(),
+        poles: local.iter().map(|&(a, b)| o + x * a + y * b).collect(),
         weights: None,
         knots: vec![t0, t1],
         mults: vec![3, 3],
@@ -163,13 +160,13 @@ const HYPERBOLA_PIECES: f64 = 1024.0;
 /// which the format allows (docs/brep-format.md, Trim). A 2D hyperbola and the 3D one it is
 /// the pcurve of become curves of equal parameter, being converted with the same knots and
 /// weights.
-fn hyperbola<P: Vector>(o: P, x: P, y: P, a: f64, b: f64, t0: f64, t1: f64) -> Option<Curve<P>> {
+fn hyperbola<P: Point>(o: P, x: P, y: P, a: f64, b: f64, t0: f64, t1: f64) -> Option<Curve<P>> {
     let n = ((t1 - t0) / HYPERBOLA_PIECE).ceil().max(1.0);
     if n.is_nan() || n > HYPERBOLA_PIECES {
         return None;
     }
     let n = n as usize;
-    let at = |(u, v): (f64, f64)| o.add(x.scale(a * u)).add(y.scale(b * v));
+    let at = |(u, v): (f64, f64)| o + x * (a * u) + y * (b * v);
     let knots: Vec<f64> = (0..=n)
         .map(|i| {
             if i == n {
@@ -188,7 +185,7 @@ fn hyperbola<P: Vector>(o: P, x: P, y: P, a: f64, b: f64, t0: f64, t1: f64) -> O
         poles.push(at((k[1].cosh(), k[1].sinh())));
         weights.push(1.0);
     }
-    if !poles.iter().all(Vector::is_finite) {
+    if !poles.iter().all(|p| Point::is_finite(*p)) {
         return None;
     }
     let mut mults = vec![2; n + 1];
@@ -206,13 +203,13 @@ fn hyperbola<P: Vector>(o: P, x: P, y: P, a: f64, b: f64, t0: f64, t1: f64) -> O
 
 /// The meridian or profile of a surface of revolution or extrusion: ocp.py's `_exact_curve`
 /// (trimmed curves unwrapped; lines, circles, ellipses and B-splines only).
-pub(crate) fn exact3(raw: &RawCurve<[f64; 3]>) -> Option<Curve3> {
+pub(crate) fn exact3(raw: &RawCurve<Point3>) -> Option<Curve3> {
     exact(basis(raw))
 }
 
 /// The parameter range a curve record is defined on, when bounded (a trimmed curve's trim, a
 /// closed conic's period, a B-spline's knots): what `Geom_Curve::First/LastParameter` give.
-pub(crate) fn natural_range(raw: &RawCurve<[f64; 3]>) -> Option<[f64; 2]> {
+pub(crate) fn natural_range(raw: &RawCurve<Point3>) -> Option<[f64; 2]> {
     match raw {
         RawCurve::Trimmed { u1, u2, .. } => Some([*u1, *u2]),
         RawCurve::Circle { .. } | RawCurve::Ellipse { .. } => Some([0.0, TAU]),
@@ -263,8 +260,8 @@ pub(crate) fn transformed(c: Curve3, t: &Trsf) -> Curve3 {
 /// to itself with the same parameter (points and both axes mirrored, as OCCT's
 /// `Geom2d_Curve::Mirrored`).
 pub(crate) fn mirrored(c: Curve2) -> Curve2 {
-    let p = |q: [f64; 2]| [2.0 * PI - q[0], q[1]];
-    let d = |q: [f64; 2]| [-q[0], q[1]];
+    let p = |q: Point2| Point2::new(2.0 * PI - q[0], q[1]);
+    let d = |q: Point2| Point2::new(-q[0], q[1]);
     match c {
         Curve::Line { origin, dir } => Curve::Line {
             origin: p(origin),
@@ -306,12 +303,12 @@ pub(crate) fn mirrored(c: Curve2) -> Curve2 {
 /// projection is affine); lines, circles and ellipses must lie in the plane (else their
 /// projection changes parametrisation, and it is refused).
 pub(crate) fn on_plane(c: &Curve3, plane: &Frame) -> Result<Curve2, String> {
-    let uv = |q: [f64; 3]| {
-        let d = q.sub(plane.origin);
-        [d.dot(plane.x_dir), d.dot(plane.y_dir)]
+    let uv = |q: Point3| {
+        let d = q - plane.origin;
+        Point2::new(d.dot(plane.x_dir), d.dot(plane.y_dir))
     };
-    let vec = |q: [f64; 3]| [q.dot(plane.x_dir), q.dot(plane.y_dir)];
-    let in_plane = |v: [f64; 2]| (v.norm() - 1.0).abs() <= 1e-9;
+    let vec = |q: Point3| Point2::new(q.dot(plane.x_dir), q.dot(plane.y_dir));
+    let in_plane = |v: Point2| (v.length() - 1.0).abs() <= 1e-9;
     let out = "its 3D curve is not in the face's plane".to_string();
     Ok(match c {
         Curve::Line { origin, dir } => {
@@ -375,12 +372,12 @@ pub(crate) fn on_plane(c: &Curve3, plane: &Frame) -> Result<Curve2, String> {
 }
 
 /// `gp_Ax22d(P, X, Y)`: X normalised, Y = X turned ±90° by the sense of X × Y.
-fn axes22d(x: [f64; 2], y: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+fn axes22d(x: Point2, y: Point2) -> (Point2, Point2) {
     let x = normalized(x);
     let y = if x[0] * y[1] - x[1] * y[0] >= 0.0 {
-        [-x[1], x[0]]
+        Point2::new(-x[1], x[0])
     } else {
-        [x[1], -x[0]]
+        Point2::new(x[1], -x[0])
     };
     (x, y)
 }
@@ -395,7 +392,7 @@ pub(crate) fn trim_box(c: &Curve2, t0: f64, t1: f64) -> [f64; 4] {
         f64::INFINITY,
         f64::NEG_INFINITY,
     ];
-    let mut add = |p: [f64; 2]| {
+    let mut add = |p: Point2| {
         b = [
             b[0].min(p[0]),
             b[1].max(p[0]),
@@ -453,13 +450,13 @@ pub(crate) fn trim_box(c: &Curve2, t0: f64, t1: f64) -> [f64; 4] {
 #[allow(clippy::too_many_arguments)]
 fn extremes(
     c: &Curve2,
-    x: [f64; 2],
-    y: [f64; 2],
+    x: Point2,
+    y: Point2,
     a: f64,
     b: f64,
     lo: f64,
     hi: f64,
-    add: &mut impl FnMut([f64; 2]),
+    add: &mut impl FnMut(Point2),
 ) {
     for k in 0..2 {
         let phase = (b * y[k]).atan2(a * x[k]);
@@ -483,9 +480,9 @@ mod tests {
     #[test]
     fn parabola_is_exact_and_same_parameter() {
         let raw = RawCurve::Parabola {
-            origin: [1.0, 2.0],
-            x: [0.0, 1.0],
-            y: [-1.0, 0.0],
+            origin: Point2::new(1.0, 2.0),
+            x: Point2::new(0.0, 1.0),
+            y: Point2::new(-1.0, 0.0),
             focal: 0.5,
         };
         let (c, a, b) = on_range(&raw, -1.0, 3.0).unwrap();
@@ -500,9 +497,9 @@ mod tests {
     #[test]
     fn hyperbola_is_exact_and_agrees_at_its_knots() {
         let raw = RawCurve::Hyperbola {
-            center: [1.0, 2.0, 3.0],
-            x: [0.0, 1.0, 0.0],
-            y: [0.0, 0.0, 1.0],
+            center: Point3::new(1.0, 2.0, 3.0),
+            x: Point3::new(0.0, 1.0, 0.0),
+            y: Point3::new(0.0, 0.0, 1.0),
             major: 2.0,
             minor: 0.5,
         };
@@ -512,8 +509,8 @@ mod tests {
         assert_eq!(bs.knots.len(), 9);
         for &k in &bs.knots {
             let p = c.point(k);
-            let want = [1.0, 2.0 + 2.0 * k.cosh(), 3.0 + 0.5 * k.sinh()];
-            assert!(p.sub(want).norm() < 1e-12, "{k}: {p:?} {want:?}");
+            let want = Point3::new(1.0, 2.0 + 2.0 * k.cosh(), 3.0 + 0.5 * k.sinh());
+            assert!((p - want).length() < 1e-12, "{k}: {p:?} {want:?}");
         }
         // Between knots every point is on the hyperbola: ((y−2)/2)² − ((z−3)/0.5)² = 1.
         for i in 0..=100 {
@@ -526,9 +523,9 @@ mod tests {
     #[test]
     fn arcs_box_their_extremes_bsplines_their_acting_poles() {
         let c = Curve::Circle {
-            center: [1.0, 1.0],
-            x_dir: [1.0, 0.0],
-            y_dir: [0.0, 1.0],
+            center: Point2::new(1.0, 1.0),
+            x_dir: Point2::new(1.0, 0.0),
+            y_dir: Point2::new(0.0, 1.0),
             radius: 2.0,
         };
         let b = trim_box(&c, 0.0, PI);
@@ -539,7 +536,12 @@ mod tests {
         );
         let bs = Curve::Bspline(BSplineCurve {
             degree: 1,
-            poles: vec![[0.0, 0.0], [1.0, 5.0], [2.0, 0.0], [3.0, -5.0]],
+            poles: vec![
+                Point2::new(0.0, 0.0),
+                Point2::new(1.0, 5.0),
+                Point2::new(2.0, 0.0),
+                Point2::new(3.0, -5.0),
+            ],
             weights: None,
             knots: vec![0.0, 1.0, 2.0, 3.0],
             mults: vec![2, 1, 1, 2],

@@ -20,8 +20,7 @@ use super::locations::LocId;
 use super::surfaces::{Placed, place};
 use super::topology::{Data, EdgeRep, Kind, Orient};
 use super::{OcctError, syntax, unsupported};
-use crate::model::{Curve, Curve2, Face, Loop, Trim};
-use crate::vector::Vector;
+use crate::model::{Curve, Curve2, Face, Loop, Point2, Trim};
 
 /// Gaps between consecutive trims above this fraction of the bounds' size get a bridge
 /// (document.py `GAP_BRIDGE`).
@@ -54,11 +53,11 @@ struct T {
 }
 
 impl T {
-    fn start(&self) -> [f64; 2] {
+    fn start(&self) -> Point2 {
         self.curve.point(self.t0)
     }
 
-    fn end(&self) -> [f64; 2] {
+    fn end(&self) -> Point2 {
         self.curve.point(self.t1)
     }
 
@@ -375,7 +374,7 @@ fn chained(trims: Vec<T>, size: f64) -> Vec<T> {
 
 /// document.py `signed_area`: the shoelace area of 16 samples per trim.
 fn signed_area(l: &[T]) -> f64 {
-    let pts: Vec<[f64; 2]> = l
+    let pts: Vec<Point2> = l
         .iter()
         .flat_map(|t| {
             (0..AREA_SAMPLES).map(move |k| {
@@ -400,18 +399,18 @@ fn bridged(l: Vec<T>, size: f64) -> Vec<T> {
         return l;
     }
     let n = l.len();
-    let ends: Vec<([f64; 2], [f64; 2])> = l.iter().map(|t| (t.start(), t.end())).collect();
+    let ends: Vec<(Point2, Point2)> = l.iter().map(|t| (t.start(), t.end())).collect();
     let mut out = Vec::with_capacity(n);
     for (i, t) in l.into_iter().enumerate() {
         out.push(t);
         let (a, b) = (ends[i].1, ends[(i + 1) % n].0);
-        let d = b.sub(a);
-        let g = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        let d = b - a;
+        let g = d.length();
         if g > GAP_BRIDGE * size {
             out.push(T {
                 curve: Curve::Line {
                     origin: a,
-                    dir: [d[0] / g, d[1] / g],
+                    dir: d / g,
                 },
                 t0: 0.0,
                 t1: g,

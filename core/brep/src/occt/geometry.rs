@@ -12,8 +12,8 @@
 use super::OcctError;
 use super::lexer::Lexer;
 use super::locations::normalized;
-use crate::model::{BSplineCurve, BSplineSurface};
-use crate::vector::{Vector, cross};
+use crate::model::{BSplineCurve, BSplineSurface, Point2, Point3};
+use crate::vector::Point;
 
 /// Records nest (trimmed, offset, extrusion, revolution): deeper than this is refused rather
 /// than recursed into.
@@ -100,13 +100,13 @@ pub(crate) enum RawCurve<P> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Ax3 {
     /// Origin.
-    pub origin: [f64; 3],
+    pub origin: Point3,
     /// Main direction.
-    pub axis: [f64; 3],
+    pub axis: Point3,
     /// X direction.
-    pub x: [f64; 3],
+    pub x: Point3,
     /// Y direction.
-    pub y: [f64; 3],
+    pub y: Point3,
 }
 
 /// A surface record.
@@ -125,18 +125,18 @@ pub(crate) enum RawSurface {
     /// A linear extrusion of a curve.
     Extrusion {
         /// Direction.
-        dir: [f64; 3],
+        dir: Point3,
         /// The swept curve.
-        curve: RawCurve<[f64; 3]>,
+        curve: RawCurve<Point3>,
     },
     /// A surface of revolution.
     Revolution {
         /// A point of the axis.
-        origin: [f64; 3],
+        origin: Point3,
         /// The axis direction.
-        dir: [f64; 3],
+        dir: Point3,
         /// The meridian.
-        curve: RawCurve<[f64; 3]>,
+        curve: RawCurve<Point3>,
     },
     /// A B-spline surface (Béziers are read into their identical B-spline).
     Bspline(BSplineSurface),
@@ -172,9 +172,9 @@ impl<T> Table<T> {
 /// The geometry sections.
 pub(crate) struct Geometry {
     /// `Curve2ds`.
-    pub curves2d: Table<RawCurve<[f64; 2]>>,
+    pub curves2d: Table<RawCurve<Point2>>,
     /// `Curves`.
-    pub curves: Table<RawCurve<[f64; 3]>>,
+    pub curves: Table<RawCurve<Point3>>,
     /// `Surfaces`.
     pub surfaces: Table<RawSurface>,
 }
@@ -183,8 +183,8 @@ impl Geometry {
     /// Reads the six sections in OCCT's order; the polygon and triangulation sections may be
     /// absent (OCCT's reader allows it).
     pub fn read(lx: &mut Lexer, version: u32) -> Result<Geometry, OcctError> {
-        let curves2d = read_table(lx, "Curve2ds", |lx| read_curve::<[f64; 2]>(lx, 0))?;
-        let curves = read_table(lx, "Curves", |lx| read_curve::<[f64; 3]>(lx, 0))?;
+        let curves2d = read_table(lx, "Curve2ds", |lx| read_curve::<Point2>(lx, 0))?;
+        let curves = read_table(lx, "Curves", |lx| read_curve::<Point3>(lx, 0))?;
         skip_section(lx, "Polygon3D", skip_polygon3d)?;
         skip_section(lx, "PolygonOnTriangulations", skip_polygon_on_triangulation)?;
         let surfaces = read_table(lx, "Surfaces", |lx| read_surface(lx, 0))?;
@@ -283,7 +283,7 @@ fn skip_triangulation(lx: &mut Lexer, version: u32) -> Result<(), OcctError> {
 }
 
 /// What differs between 2D and 3D records.
-pub(crate) trait Space: Vector {
+pub(crate) trait Space: Point {
     /// A conic's (X, Y) as OCCT builds its frame: 2D `gp_Ax22d(P, X, Y)` (Y turned ±90° from
     /// X by the sign of X × Y); 3D `gp_Ax2(P, N, X)` (X made normal to N, Y = N × X; the
     /// written Y is read past).
@@ -293,15 +293,15 @@ pub(crate) trait Space: Vector {
     fn offset_extra(lx: &mut Lexer) -> Result<(), OcctError>;
 }
 
-impl Space for [f64; 2] {
+impl Space for Point2 {
     fn conic_axes(lx: &mut Lexer) -> Result<(Self, Self), OcctError> {
-        let x: [f64; 2] = dir(lx)?;
-        let y: [f64; 2] = dir(lx)?;
+        let x: Point2 = dir(lx)?;
+        let y: Point2 = dir(lx)?;
         let sense = x[0] * y[1] - x[1] * y[0];
         let y = if sense >= 0.0 {
-            [-x[1], x[0]]
+            Point2::new(-x[1], x[0])
         } else {
-            [x[1], -x[0]]
+            Point2::new(x[1], -x[0])
         };
         Ok((x, y))
     }
@@ -311,42 +311,42 @@ impl Space for [f64; 2] {
     }
 }
 
-impl Space for [f64; 3] {
+impl Space for Point3 {
     fn conic_axes(lx: &mut Lexer) -> Result<(Self, Self), OcctError> {
-        let n: [f64; 3] = dir(lx)?;
-        let vx: [f64; 3] = dir(lx)?;
-        let _: [f64; 3] = dir(lx)?;
+        let n: Point3 = dir(lx)?;
+        let vx: Point3 = dir(lx)?;
+        let _: Point3 = dir(lx)?;
         let (x, y) = ax2_axes(n, vx).ok_or_else(|| lx.error("X direction parallel to the axis"))?;
         Ok((x, y))
     }
 
     fn offset_extra(lx: &mut Lexer) -> Result<(), OcctError> {
-        let _: [f64; 3] = dir(lx)?;
+        let _: Point3 = dir(lx)?;
         Ok(())
     }
 }
 
 /// `gp_Ax2(P, N, Vx)`'s X and Y: X = N × (Vx × N) normalised, Y = N × X.
-fn ax2_axes(n: [f64; 3], vx: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
-    let x = cross(n, cross(vx, n));
-    if x.norm().is_nan() || x.norm() <= 1e-300 {
+fn ax2_axes(n: Point3, vx: Point3) -> Option<(Point3, Point3)> {
+    let x = n.cross(vx.cross(n));
+    if x.length().is_nan() || x.length() <= 1e-300 {
         return None;
     }
     let x = normalized(x);
-    Some((x, normalized(cross(n, x))))
+    Some((x, normalized(n.cross(x))))
 }
 
-fn point<P: Vector>(lx: &mut Lexer) -> Result<P, OcctError> {
-    let mut p = P::zero();
+fn point<P: Point>(lx: &mut Lexer) -> Result<P, OcctError> {
+    let mut p = P::ZERO;
     for c in p.coords_mut() {
         *c = lx.real("a coordinate")?;
     }
     Ok(p)
 }
 
-fn dir<P: Vector>(lx: &mut Lexer) -> Result<P, OcctError> {
+fn dir<P: Point>(lx: &mut Lexer) -> Result<P, OcctError> {
     let d: P = point(lx)?;
-    if d.norm().is_nan() || d.norm() <= 1e-300 {
+    if d.length().is_nan() || d.length() <= 1e-300 {
         return Err(lx.error("a null direction"));
     }
     Ok(normalized(d))
@@ -462,7 +462,7 @@ fn read_curve<P: Space>(lx: &mut Lexer, depth: usize) -> Result<RawCurve<P>, Occ
 
 type Poles<P> = (Vec<P>, Option<Vec<f64>>);
 
-fn read_poles<P: Vector>(lx: &mut Lexer, n: usize, rational: bool) -> Result<Poles<P>, OcctError> {
+fn read_poles<P: Point>(lx: &mut Lexer, n: usize, rational: bool) -> Result<Poles<P>, OcctError> {
     let per = P::DIM + usize::from(rational);
     lx.check_count("the pole count", (n * per) as i64, 2)?;
     let mut poles = Vec::with_capacity(n);
@@ -500,7 +500,7 @@ fn check_weights(lx: &Lexer, line: u32, w: &[f64]) -> Result<(), OcctError> {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn bspline_curve<P: Vector>(
+fn bspline_curve<P: Point>(
     lx: &Lexer,
     line: u32,
     degree: usize,
@@ -538,13 +538,13 @@ fn bspline_curve<P: Vector>(
 
 fn ax3(lx: &mut Lexer) -> Result<Ax3, OcctError> {
     let origin = point(lx)?;
-    let axis: [f64; 3] = dir(lx)?;
-    let vx: [f64; 3] = dir(lx)?;
-    let vy: [f64; 3] = dir(lx)?;
+    let axis: Point3 = dir(lx)?;
+    let vx: Point3 = dir(lx)?;
+    let vy: Point3 = dir(lx)?;
     let (x, y) = ax2_axes(axis, vx).ok_or_else(|| lx.error("X direction parallel to the axis"))?;
     // `gp_Ax3(P, N, X)` is direct; the written Y on the other side makes it indirect.
-    let direct = vy.dot(cross(axis, vx)) >= 0.0;
-    let y = if direct { y } else { y.scale(-1.0) };
+    let direct = vy.dot(axis.cross(vx)) >= 0.0;
+    let y = if direct { y } else { y * -1.0 };
     Ok(Ax3 { origin, axis, x, y })
 }
 
@@ -620,7 +620,7 @@ fn read_surface(lx: &mut Lexer, depth: usize) -> Result<RawSurface, OcctError> {
     })
 }
 
-type Grid = (Vec<Vec<[f64; 3]>>, Option<Vec<Vec<f64>>>);
+type Grid = (Vec<Vec<Point3>>, Option<Vec<Vec<f64>>>);
 
 fn pole_grid(lx: &mut Lexer, nu: usize, nv: usize, rational: bool) -> Result<Grid, OcctError> {
     let per = 3 + usize::from(rational);
@@ -632,7 +632,7 @@ fn pole_grid(lx: &mut Lexer, nu: usize, nv: usize, rational: bool) -> Result<Gri
     let mut poles = Vec::with_capacity(nu);
     let mut weights = Vec::with_capacity(if rational { nu } else { 0 });
     for _ in 0..nu {
-        let (row, w) = read_poles::<[f64; 3]>(lx, nv, rational)?;
+        let (row, w) = read_poles::<Point3>(lx, nv, rational)?;
         poles.push(row);
         if let Some(w) = w {
             weights.push(w);
@@ -666,7 +666,7 @@ fn bspline_surface(
     lx: &Lexer,
     line: u32,
     [du, dv]: [usize; 2],
-    poles: Vec<Vec<[f64; 3]>>,
+    poles: Vec<Vec<Point3>>,
     weights: Option<Vec<Vec<f64>>>,
     (knots_u, mults_u, knots_v, mults_v): KnotsUv,
     [up, vp]: [bool; 2],
@@ -726,7 +726,10 @@ mod tests {
         // A clockwise 2D circle keeps its sense; Y is rebuilt from X.
         match &g.curves2d.items[0].0 {
             RawCurve::Circle { x, y, radius, .. } => {
-                assert_eq!((*x, *y, *radius), ([1.0, 0.0], [0.0, -1.0], 3.0));
+                assert_eq!(
+                    (*x, *y, *radius),
+                    (Point2::new(1.0, 0.0), Point2::new(0.0, -1.0), 3.0)
+                );
             }
             other => panic!("{other:?}"),
         }
@@ -741,7 +744,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
         match &g.surfaces.items[0].0 {
-            RawSurface::Plane(a) => assert_eq!(a.y, [0.0, -1.0, 0.0]),
+            RawSurface::Plane(a) => assert_eq!(a.y, Point3::new(0.0, -1.0, 0.0)),
             other => panic!("{other:?}"),
         }
     }

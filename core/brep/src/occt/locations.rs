@@ -12,7 +12,9 @@ use std::collections::{HashMap, HashSet};
 
 use super::lexer::Lexer;
 use super::{OcctError, OcctErrorKind};
-use crate::vector::Vector;
+use crate::model::Point3;
+use crate::vector::Point;
+use glam::DMat3;
 
 /// An interned location (0 is the identity).
 pub(crate) type LocId = u32;
@@ -30,63 +32,47 @@ const MAX_REPEAT: i64 = 1024;
 /// A rigid motion `x ↦ R·x + t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Trsf {
-    /// The rotation, by rows.
-    pub r: [[f64; 3]; 3],
+    /// The rotation (glam's products sum `r[i][0]·v[0] + r[i][1]·v[1] + r[i][2]·v[2]` in
+    /// that order, as OCCT's `gp_Trsf` does).
+    pub r: DMat3,
     /// The translation.
-    pub t: [f64; 3],
+    pub t: Point3,
 }
 
 impl Trsf {
     /// The identity.
     pub const IDENTITY: Trsf = Trsf {
-        r: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        t: [0.0; 3],
+        r: DMat3::IDENTITY,
+        t: Point3::ZERO,
     };
 
     /// `R·v` (a vector: no translation).
-    pub fn vector(&self, v: [f64; 3]) -> [f64; 3] {
-        let r = &self.r;
-        [
-            r[0][0] * v[0] + r[0][1] * v[1] + r[0][2] * v[2],
-            r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2],
-            r[2][0] * v[0] + r[2][1] * v[1] + r[2][2] * v[2],
-        ]
+    pub fn vector(&self, v: Point3) -> Point3 {
+        self.r * v
     }
 
     /// `R·p + t`.
-    pub fn point(&self, p: [f64; 3]) -> [f64; 3] {
-        self.vector(p).add(self.t)
+    pub fn point(&self, p: Point3) -> Point3 {
+        self.vector(p) + self.t
     }
 
     /// `R·d`, renormalised (as `gp_Dir::Transform` does).
-    pub fn dir(&self, d: [f64; 3]) -> [f64; 3] {
+    pub fn dir(&self, d: Point3) -> Point3 {
         normalized(self.vector(d))
     }
 
     /// `self ∘ o` (`o` applied first), OCCT's `gp_Trsf` product.
     pub fn then_after(&self, o: &Trsf) -> Trsf {
-        let mut r = [[0.0; 3]; 3];
-        for (i, row) in r.iter_mut().enumerate() {
-            for (j, x) in row.iter_mut().enumerate() {
-                *x = (0..3).map(|k| self.r[i][k] * o.r[k][j]).sum();
-            }
-        }
         Trsf {
-            r,
+            r: self.r * o.r,
             t: self.point(o.t),
         }
     }
 
     /// The inverse of a rigid motion.
     pub fn inverse(&self) -> Trsf {
-        let mut r = [[0.0; 3]; 3];
-        for (i, row) in r.iter_mut().enumerate() {
-            for (j, x) in row.iter_mut().enumerate() {
-                *x = self.r[j][i];
-            }
-        }
-        let rt = Trsf { r, t: [0.0; 3] };
-        let t = rt.vector(self.t).scale(-1.0);
+        let r = self.r.transpose();
+        let t = (r * self.t) * -1.0;
         Trsf { r, t }
     }
 
@@ -110,9 +96,9 @@ impl Trsf {
 }
 
 /// `v / |v|` (`gp_Dir`'s normalisation).
-pub(crate) fn normalized<V: Vector>(v: V) -> V {
-    let n = v.norm();
-    v.scale(1.0 / n)
+pub(crate) fn normalized<V: Point>(v: V) -> V {
+    let n = v.length();
+    v * (1.0 / n)
 }
 
 /// An elementary location (a type-1 record).
@@ -354,8 +340,8 @@ fn datum(m: [[f64; 4]; 3], line: u32) -> Result<Datum, String> {
     };
     Ok(Datum {
         trsf: Trsf {
-            r,
-            t: [m[0][3], m[1][3], m[2][3]],
+            r: DMat3::from_cols_array_2d(&r).transpose(),
+            t: Point3::new(m[0][3], m[1][3], m[2][3]),
         },
         not_rigid,
         line,
@@ -379,8 +365,8 @@ mod tests {
         // rotation first, then the translation.
         let locs = read(ROT_Z90_AND_MOVE_X10).unwrap();
         let l = locs.number(3).unwrap();
-        let p = locs.trsf(l).unwrap().point([1.0, 2.0, 3.0]);
-        assert_eq!(p, [8.0, 1.0, 3.0]);
+        let p = locs.trsf(l).unwrap().point(Point3::new(1.0, 2.0, 3.0));
+        assert_eq!(p, Point3::new(8.0, 1.0, 3.0));
     }
 
     #[test]
@@ -399,7 +385,7 @@ mod tests {
         assert_eq!(back, a);
         assert_eq!(locs.pow(a, 4).unwrap(), locs.pow(a, 4).unwrap());
         let a4 = locs.pow(a, 4).unwrap();
-        let t = locs.trsf(a4).unwrap().point([1.0, 2.0, 3.0]);
+        let t = locs.trsf(a4).unwrap().point(Point3::new(1.0, 2.0, 3.0));
         assert!((t[0] - 1.0).abs() < 1e-12 && (t[1] - 2.0).abs() < 1e-12);
     }
 

@@ -8,7 +8,7 @@
 //! curves are cut exactly; inserting a knot never changes the curve nor its parameter.
 
 use crate::model::BSplineCurve;
-use crate::vector::Vector;
+use crate::vector::Point;
 
 /// A B-spline as flat knots and homogeneous poles (non-periodic: `flat.len() = poles + p + 1`,
 /// domain `[flat[p], flat[poles]]`).
@@ -18,7 +18,7 @@ struct Flat {
     hom: Vec<[f64; 4]>,
 }
 
-fn homogeneous<P: Vector>(b: &BSplineCurve<P>, i: usize) -> [f64; 4] {
+fn homogeneous<P: Point>(b: &BSplineCurve<P>, i: usize) -> [f64; 4] {
     let w = b.weights.as_ref().map_or(1.0, |w| w[i]);
     let c = b.poles[i].coords();
     let mut h = [0.0, 0.0, 0.0, w];
@@ -28,8 +28,8 @@ fn homogeneous<P: Vector>(b: &BSplineCurve<P>, i: usize) -> [f64; 4] {
     h
 }
 
-fn cartesian<P: Vector>(h: &[f64; 4]) -> P {
-    let mut p = P::zero();
+fn cartesian<P: Point>(h: &[f64; 4]) -> P {
+    let mut p = P::ZERO;
     for (k, x) in p.coords_mut().iter_mut().enumerate() {
         *x = h[k] / h[3];
     }
@@ -38,7 +38,7 @@ fn cartesian<P: Vector>(h: &[f64; 4]) -> P {
 
 impl Flat {
     /// A non-periodic curve as it is.
-    fn of<P: Vector>(b: &BSplineCurve<P>) -> Flat {
+    fn of<P: Point>(b: &BSplineCurve<P>) -> Flat {
         Flat {
             p: b.degree,
             flat: b
@@ -98,7 +98,7 @@ impl Flat {
 
 /// The control points of the piece of `b` on `[lo, hi]` (all of them for a periodic curve):
 /// the hull of these holds the piece (weights are positive).
-pub(crate) fn piece_poles<P: Vector>(b: &BSplineCurve<P>, lo: f64, hi: f64) -> Vec<P> {
+pub(crate) fn piece_poles<P: Point>(b: &BSplineCurve<P>, lo: f64, hi: f64) -> Vec<P> {
     if b.periodic || b.poles.len() <= b.degree {
         return b.poles.clone();
     }
@@ -111,7 +111,7 @@ pub(crate) fn piece_poles<P: Vector>(b: &BSplineCurve<P>, lo: f64, hi: f64) -> V
 /// The periodic B-spline `b` on `[t0, t1]` (t0 < t1, any position relative to its knot span)
 /// as a non-periodic clamped B-spline with the same parameter, or `None` when the range is
 /// degenerate or spans more periods than is sane.
-pub(crate) fn periodic_segment<P: Vector>(
+pub(crate) fn periodic_segment<P: Point>(
     b: &BSplineCurve<P>,
     t0: f64,
     t1: f64,
@@ -207,18 +207,18 @@ pub(crate) fn periodic_segment<P: Vector>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Curve;
+    use crate::model::{Curve, Point2};
 
-    fn periodic_circle_like() -> BSplineCurve<[f64; 2]> {
+    fn periodic_circle_like() -> BSplineCurve<Point2> {
         // A periodic rational quadratic: 4 poles on a square, weights 1, 0.5, 1, 0.5.
         BSplineCurve {
             degree: 2,
             poles: vec![
-                [1.0, 0.0],
-                [1.0, 1.0],
-                [-1.0, 1.0],
-                [-1.0, -1.0],
-                [1.0, -1.0],
+                Point2::new(1.0, 0.0),
+                Point2::new(1.0, 1.0),
+                Point2::new(-1.0, 1.0),
+                Point2::new(-1.0, -1.0),
+                Point2::new(1.0, -1.0),
             ],
             weights: Some(vec![1.0, 0.7, 1.3, 0.9, 1.1]),
             knots: vec![0.0, 1.0, 2.5, 3.0, 4.0, 5.0],
@@ -240,7 +240,7 @@ mod tests {
             for i in 0..=40 {
                 let t = t0 + (t1 - t0) * i as f64 / 40.0;
                 let (a, b) = (whole.point(t), seg.point(t));
-                assert!(a.sub(b).norm() < 1e-12, "[{t0}, {t1}] at {t}: {a:?} {b:?}");
+                assert!((a - b).length() < 1e-12, "[{t0}, {t1}] at {t}: {a:?} {b:?}");
             }
         }
     }
@@ -249,7 +249,13 @@ mod tests {
     fn piece_poles_hold_the_piece_tightly() {
         let b = BSplineCurve {
             degree: 3,
-            poles: vec![[0.0, 0.0], [1.0, 3.0], [2.0, -3.0], [3.0, 3.0], [4.0, 0.0]],
+            poles: vec![
+                Point2::new(0.0, 0.0),
+                Point2::new(1.0, 3.0),
+                Point2::new(2.0, -3.0),
+                Point2::new(3.0, 3.0),
+                Point2::new(4.0, 0.0),
+            ],
             weights: None,
             knots: vec![0.0, 0.5, 1.0],
             mults: vec![4, 1, 4],
@@ -259,7 +265,7 @@ mod tests {
         let c = Curve::Bspline(b.clone());
         let poles = piece_poles(&b, 0.6, 0.7);
         assert_eq!(poles.len(), 4);
-        assert!(poles[0].sub(c.point(0.6)).norm() < 1e-12);
-        assert!(poles[3].sub(c.point(0.7)).norm() < 1e-12);
+        assert!((poles[0] - c.point(0.6)).length() < 1e-12);
+        assert!((poles[3] - c.point(0.7)).length() < 1e-12);
     }
 }

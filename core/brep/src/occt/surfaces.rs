@@ -14,7 +14,6 @@ use super::curves::{exact3, natural_range, transformed};
 use super::geometry::{Ax3, RawSurface};
 use super::locations::Trsf;
 use crate::model::{Frame, Surface};
-use crate::vector::{Vector, cross};
 
 /// A surface ready for the document.
 pub(crate) struct Placed {
@@ -35,8 +34,8 @@ pub(crate) fn place(raw: &RawSurface, t: &Trsf) -> Result<Placed, String> {
     let frame = |a: &Ax3| {
         let axis = t.dir(a.axis);
         let (x, y) = (t.dir(a.x), t.dir(a.y));
-        let mirror = cross(x, y).dot(axis) < 0.0;
-        let y = if mirror { y.scale(-1.0) } else { y };
+        let mirror = x.cross(y).dot(axis) < 0.0;
+        let y = if mirror { y * -1.0 } else { y };
         (
             Frame {
                 origin: t.point(a.origin),

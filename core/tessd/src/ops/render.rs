@@ -452,8 +452,8 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             .bounding_box()
             .ok_or_else(|| OpError::request("the document has no faces to render"))?;
         let bounds = Bounds {
-            min: b.min.into(),
-            max: b.max.into(),
+            min: b.min,
+            max: b.max,
         };
         let cams = cameras(&p, &bounds)?;
         let trim_tolerance = match &asked_tolerance {

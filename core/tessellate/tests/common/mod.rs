@@ -114,7 +114,7 @@ pub fn dense_loops(face: &Face) -> Vec<Vec<[f64; 2]>> {
                 let n = 400;
                 for k in 0..n {
                     let t = t0 + (t1 - t0) * k as f64 / n as f64;
-                    pts.push(trim.curve.point(t));
+                    pts.push(trim.curve.point(t).to_array());
                 }
             }
             pts

@@ -22,9 +22,9 @@ impl Rng {
 pub fn plane() -> Surface {
     Surface::Plane {
         frame: Frame {
-            origin: [0.0, 0.0, 0.0],
-            x_dir: [1.0, 0.0, 0.0],
-            y_dir: [0.0, 1.0, 0.0],
+            origin: [0.0, 0.0, 0.0].into(),
+            x_dir: [1.0, 0.0, 0.0].into(),
+            y_dir: [0.0, 1.0, 0.0].into(),
         },
     }
 }
@@ -35,8 +35,8 @@ pub fn line(a: [f64; 2], b: [f64; 2]) -> Trim {
     let len = d[0].hypot(d[1]);
     Trim {
         curve: Curve::Line {
-            origin: a,
-            dir: [d[0] / len, d[1] / len],
+            origin: a.into(),
+            dir: [d[0] / len, d[1] / len].into(),
         },
         range: [0.0, len],
         edge: None,
@@ -75,8 +75,11 @@ pub fn sampled_loops(face: &Face, per_trim: usize) -> Vec<Vec<[f64; 2]>> {
                 .iter()
                 .flat_map(|tr| {
                     let [t0, t1] = tr.range;
-                    (0..per_trim)
-                        .map(move |i| tr.curve.point(t0 + (t1 - t0) * i as f64 / per_trim as f64))
+                    (0..per_trim).map(move |i| {
+                        tr.curve
+                            .point(t0 + (t1 - t0) * i as f64 / per_trim as f64)
+                            .to_array()
+                    })
                 })
                 .collect()
         })
