@@ -194,7 +194,9 @@ impl Camera {
         {
             return Err(RenderError::Camera(format!(
                 "eye {:?}, target {:?} and up {:?} must be finite",
-                self.eye, self.target, self.up
+                self.eye.to_array(),
+                self.target.to_array(),
+                self.up.to_array()
             )));
         }
         if !(self.fov > 0.0 && self.fov < 180.0) {
@@ -207,7 +209,7 @@ impl Camera {
         if d.length() == 0.0 {
             return Err(RenderError::Camera(format!(
                 "eye and target are the same point {:?}",
-                self.eye
+                self.eye.to_array()
             )));
         }
         let f = normalize(d);
@@ -215,7 +217,8 @@ impl Camera {
         if u.length() == 0.0 || f.cross(normalize(u)).length() < 1e-9 {
             return Err(RenderError::Camera(format!(
                 "up {:?} is parallel to the view direction {:?} (or zero)",
-                self.up, f
+                self.up.to_array(),
+                f.to_array()
             )));
         }
         Ok(())
@@ -404,7 +407,12 @@ mod tests {
     #[test]
     fn bad_cameras_are_refused() {
         let up = [0.0, 0.0, 1.0];
-        assert!(Camera::new([0.0; 3], [0.0; 3], up, 30.0).check().is_err());
+        let same = Camera::new([0.0; 3], [0.0; 3], up, 30.0).check();
+        // The message names the points as the request wrote them, not as glam's Debug does.
+        assert_eq!(
+            same.unwrap_err().to_string(),
+            "camera: eye and target are the same point [0.0, 0.0, 0.0]"
+        );
         assert!(
             Camera::new([0.0; 3], [0.0, 0.0, 1.0], up, 30.0)
                 .check()
