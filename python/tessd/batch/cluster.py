@@ -9,8 +9,8 @@ default scope ``"node"`` the socket is keyed by the cluster and the host name on
 one daemon: the first to start spawns it (detached, in its own session), the others find it
 answering. The daemon serves each connection on its own threads and runs
 its parallel passes on all cores, so one daemon per node uses the node's cores without N
-copies of its memory. Starts are serialised on the node by an flock (``batch-start.lock`` in
-the socket folder; see :func:`_start_lock` for the daemon-side race it avoids). With scope ``"worker"`` the socket also carries the worker's name (each
+copies of its memory. Starts and stops are serialised on the node by an flock (``batch-start.lock``
+in the socket folder, :func:`_start_lock`). With scope ``"worker"`` the socket also carries the worker's name (each
 process gets its own daemon; a nanny-restarted worker keeps its name and so finds its daemon
 again).
 
@@ -124,13 +124,14 @@ def worker_daemon(cfg: DaemonConfig, restart: bool = False, worker_name: Any = N
 
 @contextlib.contextmanager
 def _start_lock(folder: str) -> Iterator[None]:
-    """Serialises daemon starts on this node (an flock on ``<socket dir>/batch-start.lock``).
+    """Serialises daemon starts and stops on this node (an flock on
+    ``<socket dir>/batch-start.lock``).
 
-    Two ``tessd serve --socket P`` started at the same moment race in the daemon's stale-socket
-    recovery (core/ipc/src/socket.rs ``bind``): the second can see the first's socket file
-    between its bind and its listen, take it for stale and unlink it, leaving the first
-    listening on a path nobody can reach. Under the lock the second worker's ensure_daemon
-    finds the first daemon answering."""
+    The daemon itself is safe against simultaneous starts (core/ipc/src/socket.rs ``bind``
+    takes its own lock around the stale-socket check, so exactly one binds). This lock is about
+    the workers: the second worker's ensure_daemon finds the first one's daemon answering
+    instead of spawning a process that would only exit "already serving", and a last worker's
+    stop-if-unheld does not run while another worker is starting or joining the daemon."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover - Windows: no flock (and no Unix socket files)
