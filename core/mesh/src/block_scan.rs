@@ -3,7 +3,11 @@
 //! Each check reduces a block of a few thousand values to one number (a maximum, an OR) in a
 //! branch-free loop the compiler vectorises, and only when a block fails looks inside it for
 //! the first offending element, so that errors still name it. Validation of a 4 M-triangle mesh
-//! is then a few sequential passes over its arrays instead of a branch per corner.
+//! is then a few passes over its arrays instead of a branch per corner, and the blocks are
+//! shared out between the cores (rayon's `position_first` still reports the *first* failing
+//! block, so the error named does not depend on the thread count).
+
+use rayon::prelude::*;
 
 /// Values per block: big enough to amortise the per-block test, small enough to stay in L1.
 const BLOCK: usize = 4096;
@@ -13,27 +17,23 @@ const NON_FINITE: u32 = 0x7f80_0000;
 
 /// Index of the first value that is NaN or infinite.
 pub(crate) fn first_non_finite(values: &[f32]) -> Option<usize> {
-    for (b, block) in values.chunks(BLOCK).enumerate() {
+    let b = values.par_chunks(BLOCK).position_first(|block| {
         let top = block
             .iter()
             .fold(0u32, |m, v| m.max(v.to_bits() & 0x7fff_ffff));
-        if top >= NON_FINITE {
-            let i = block.iter().position(|v| !v.is_finite());
-            return Some(b * BLOCK + i.expect("the block holds one"));
-        }
-    }
-    None
+        top >= NON_FINITE
+    })?;
+    let i = values[b * BLOCK..].iter().position(|v| !v.is_finite());
+    Some(b * BLOCK + i.expect("the block holds one"))
 }
 
 /// Index of the first value that is `>= bound`.
 pub(crate) fn first_at_or_above(values: &[u32], bound: u32) -> Option<usize> {
-    for (b, block) in values.chunks(BLOCK).enumerate() {
-        if block.iter().fold(0u32, |m, &v| m.max(v)) >= bound {
-            let i = block.iter().position(|&v| v >= bound);
-            return Some(b * BLOCK + i.expect("the block holds one"));
-        }
-    }
-    None
+    let b = values
+        .par_chunks(BLOCK)
+        .position_first(|block| block.iter().fold(0u32, |m, &v| m.max(v)) >= bound)?;
+    let i = values[b * BLOCK..].iter().position(|&v| v >= bound);
+    Some(b * BLOCK + i.expect("the block holds one"))
 }
 
 /// Whether every step of `offsets` is at least `min_step` (so the offsets never decrease and
@@ -41,13 +41,15 @@ pub(crate) fn first_at_or_above(values: &[u32], bound: u32) -> Option<usize> {
 pub(crate) fn steps_at_least(offsets: &[u32], min_step: u32) -> bool {
     let n = offsets.len().saturating_sub(1);
     let (lo, hi) = (&offsets[..n], &offsets[offsets.len().min(1)..]);
-    lo.chunks(BLOCK).zip(hi.chunks(BLOCK)).all(|(a, b)| {
-        // u64 sums cannot wrap; the OR of the failures vectorises.
-        let bad = a.iter().zip(b).fold(0u32, |acc, (&x, &y)| {
-            acc | u32::from(u64::from(x) + u64::from(min_step) > u64::from(y))
-        });
-        bad == 0
-    })
+    lo.par_chunks(BLOCK)
+        .zip(hi.par_chunks(BLOCK))
+        .all(|(a, b)| {
+            // u64 sums cannot wrap; the OR of the failures vectorises.
+            let bad = a.iter().zip(b).fold(0u32, |acc, (&x, &y)| {
+                acc | u32::from(u64::from(x) + u64::from(min_step) > u64::from(y))
+            });
+            bad == 0
+        })
 }
 
 #[cfg(test)]

@@ -30,6 +30,38 @@ pub(crate) fn single_thread() -> bool {
     rayon::current_num_threads() == 1
 }
 
+/// A slice that the blocks of a parallel pass write at once, each at places no other block
+/// writes (the caller's counting fixes them beforehand, as in a counting sort): the one
+/// shape of shared writing that safe Rust cannot split up front, since a block's places are
+/// scattered over the whole slice.
+pub(crate) struct DisjointWrites<'a> {
+    ptr: *mut u32,
+    len: usize,
+    _slice: std::marker::PhantomData<&'a mut [u32]>,
+}
+
+// SAFETY: the slice is borrowed mutably for the writer's lifetime, and only written through
+// `write`, whose callers guarantee that no two threads write the same index.
+unsafe impl Sync for DisjointWrites<'_> {}
+
+impl<'a> DisjointWrites<'a> {
+    /// A writer over `slice`.
+    pub(crate) fn new(slice: &'a mut [u32]) -> Self {
+        DisjointWrites {
+            ptr: slice.as_mut_ptr(),
+            len: slice.len(),
+            _slice: std::marker::PhantomData,
+        }
+    }
+
+    /// Writes `value` at `at`; no other thread may write `at` during the pass.
+    pub(crate) fn write(&self, at: usize, value: u32) {
+        assert!(at < self.len, "index {at} out of {}", self.len);
+        // SAFETY: in bounds (checked above); the caller owns index `at` exclusively.
+        unsafe { self.ptr.add(at).write(value) };
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

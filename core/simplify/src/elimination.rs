@@ -4,7 +4,7 @@
 //! simplification actually lowers the complexity.
 
 use crate::area_vector;
-use crate::blocks;
+use crate::blocks::{self, DisjointWrites};
 use crate::partition::UNUSED;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -107,9 +107,26 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
         .enumerate()
         .map(|(b, fates)| {
             let mut c = [0u64; 4];
+            let start = b * blocks::BLOCK;
+            if let Some(triangles) = mesh.triangles() {
+                // All triangles, the common case: three ids to compare, no offsets to read.
+                for (slot, t) in fates.iter_mut().zip(&triangles[start..]) {
+                    let v = t.map(|i| cluster_of[i as usize]);
+                    let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
+                    if distinct && !zero_area_triangle(v, reps) {
+                        c[0] += 1;
+                    } else {
+                        *slot = Fate::Collapsed;
+                        c[2] += 1;
+                        c[3] += u64::from(distinct);
+                    }
+                }
+                c[1] = 3 * c[0];
+                return c;
+            }
             let mut ring = Vec::new();
             for (i, slot) in fates.iter_mut().enumerate() {
-                let f = b * blocks::BLOCK + i;
+                let f = start + i;
                 match image(mesh, cluster_of, reps, f, &mut ring) {
                     Image::Face(corners) => {
                         c[0] += 1;
@@ -182,34 +199,62 @@ impl Fates {
         if duplicate.is_empty() {
             return out;
         }
-        // The input faces of the duplicates change fate.
-        let mut next = duplicate.iter().peekable();
-        let kept = out.fate.iter_mut().filter(|f| **f == Fate::Kept);
-        for (i, f) in kept.enumerate() {
-            if next.next_if(|&&d| d as usize == i).is_some() {
-                *f = Fate::Duplicate;
-            }
-        }
-        // Squeeze the duplicates out in place: the write position never passes the read position.
-        let mut next = duplicate.iter().peekable();
+        // The input faces of the duplicates change fate (parallel over the blocks of input
+        // faces: each knows from the counts how many kept faces come before it).
+        let firsts: Vec<u64> = counts
+            .iter()
+            .scan(0u64, |before, c| {
+                let first = *before;
+                *before += c[0];
+                Some(first)
+            })
+            .collect();
+        out.fate
+            .par_chunks_mut(blocks::BLOCK)
+            .zip(firsts)
+            .for_each(|(fates, first)| {
+                let from = duplicate.partition_point(|&d| u64::from(d) < first);
+                let mut next = duplicate[from..].iter().peekable();
+                let kept = fates.iter_mut().filter(|f| **f == Fate::Kept);
+                for (i, f) in kept.enumerate() {
+                    if next.peek().is_none() {
+                        break;
+                    }
+                    if next
+                        .next_if(|&&d| u64::from(d) == first + i as u64)
+                        .is_some()
+                    {
+                        *f = Fate::Duplicate;
+                    }
+                }
+            });
+        // Squeeze the duplicates out in place, a run of faces between two duplicates at a
+        // time (one move each); the write position never passes the read position.
         let (mut corner_w, mut face_w) = (0usize, 0usize);
-        for f in 0..faces {
-            // Offsets f and f + 1 are still the originals here: writes go to `face_w` ≤ f, or to
-            // f + 1 with its own value when nothing was dropped yet.
+        let runs = duplicate
+            .iter()
+            .map(|&d| d as usize)
+            .chain(std::iter::once(faces));
+        let mut from = 0usize;
+        for dup in runs {
+            // Faces from..dup survive; their corners move down by (corners dropped so far).
             let (s, e) = (
-                out.face_offsets[f] as usize,
-                out.face_offsets[f + 1] as usize,
+                out.face_offsets[from] as usize,
+                out.face_offsets[dup] as usize,
             );
-            if next.next_if(|&&d| d as usize == f).is_some() {
-                continue;
-            }
+            let shift = (s - corner_w) as u32;
             out.face_indices.copy_within(s..e, corner_w);
             if corners {
                 out.source_corner.copy_within(s..e, corner_w);
             }
+            // Offsets from + 1 ..= dup end those faces: shifted down in place, then moved.
+            out.face_offsets[from + 1..=dup]
+                .iter_mut()
+                .for_each(|o| *o -= shift);
+            out.face_offsets.copy_within(from + 1..=dup, face_w + 1);
+            face_w += dup - from;
             corner_w += e - s;
-            face_w += 1;
-            out.face_offsets[face_w] = corner_w as u32;
+            from = dup + 1;
         }
         out.face_indices.truncate(corner_w);
         out.source_corner
@@ -312,6 +357,22 @@ fn write_faces(
 ) {
     let corners = !sources.is_empty();
     let (mut face, mut at) = (0usize, 0usize);
+    if let Some(triangles) = mesh.triangles() {
+        // All triangles: the kept ones' ids, without reading the offsets.
+        for f in range.filter(|&f| fate[f] == Fate::Kept) {
+            let t = triangles[f];
+            for k in 0..3 {
+                indices[at + k] = cluster_of[t[k] as usize];
+                if corners {
+                    sources[at + k] = 3 * f as u32 + k as u32;
+                }
+            }
+            at += 3;
+            offsets[face] = base + at as u32;
+            face += 1;
+        }
+        return;
+    }
     let mut ring = Vec::new();
     for f in range {
         if fate[f] != Fate::Kept {
@@ -344,30 +405,128 @@ fn write_faces(
 /// The output faces that repeat an earlier one (same cluster cycle up to rotation and
 /// reversal), sorted.
 ///
-/// Duplicates share their smallest cluster, so faces are bucketed by it (a counting sort: two
-/// linear passes, one array of bucket starts) and only faces within a bucket are compared; a
-/// bucket is the fan of faces around one output vertex, a handful of faces, and the few large
-/// ones are sorted instead of compared pairwise.
+/// Duplicates share their smallest cluster, so faces are bucketed by it and only faces within
+/// a bucket are compared; a bucket is the fan of faces around one output vertex, a handful of
+/// faces, and the few large ones are sorted instead of compared pairwise. The bucketing is a
+/// two-level counting sort that every core takes part in: faces are first spread, in face
+/// order, over [`DUPLICATE_RANGES`] ranges of clusters (a count and a scatter pass over blocks
+/// of faces), then each range — a few thousand faces, in cache — is bucketed and compared on
+/// its own. Within a bucket faces stay in increasing order, so the first of equal faces is
+/// the one kept, whatever the thread count.
 fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<u32> {
     let n = faces.face_offsets.len() - 1;
     let face = |f: usize| {
         &faces.face_indices[faces.face_offsets[f] as usize..faces.face_offsets[f + 1] as usize]
     };
-    let smallest = |f: usize| *face(f).iter().min().expect("faces have corners") as usize;
-    // Bucket ends, then (filling each bucket from its end, faces in decreasing order) starts.
-    let mut start = vec![0u32; clusters + 1];
-    for f in 0..n {
-        start[smallest(f)] += 1;
+    // Every face a triangle: faces are read as triples (no offsets).
+    let all_triangles = faces.face_indices.len() == 3 * n;
+    let triangle = |f: usize| -> [u32; 3] {
+        let t = &faces.face_indices[3 * f..3 * f + 3];
+        [t[0], t[1], t[2]]
+    };
+    let smallest = |f: usize| {
+        if all_triangles {
+            let t = triangle(f);
+            t[0].min(t[1]).min(t[2]) as usize
+        } else {
+            *face(f).iter().min().expect("faces have corners") as usize
+        }
+    };
+    let width = clusters.div_ceil(DUPLICATE_RANGES).max(1);
+    let ranges = clusters.div_ceil(width);
+    // Count and scatter (parallel over blocks of faces): each block's faces of each range go
+    // to a place fixed by the counts (range by range, block by block).
+    let counts: Vec<Vec<u32>> = blocks::map(n, |r| {
+        let mut c = vec![0u32; ranges];
+        r.for_each(|f| c[smallest(f) / width] += 1);
+        c
+    });
+    let mut range_start = Vec::with_capacity(ranges + 1);
+    let mut next = vec![vec![0u32; ranges]; counts.len()];
+    let mut total = 0u32;
+    for k in 0..ranges {
+        range_start.push(total as usize);
+        for (b, c) in counts.iter().enumerate() {
+            next[b][k] = total;
+            total += c[k];
+        }
     }
-    for c in 1..=clusters {
-        start[c] += start[c - 1];
-    }
-    let mut bucketed = vec![0u32; n];
-    for f in (0..n).rev() {
-        let c = smallest(f);
-        start[c] -= 1;
-        bucketed[start[c] as usize] = f as u32;
-    }
+    range_start.push(total as usize);
+    drop(counts);
+    let mut by_range = vec![0u32; n];
+    let writes = DisjointWrites::new(&mut by_range);
+    blocks::ranges(n).zip(next).for_each(|(r, mut next)| {
+        for f in r {
+            let k = smallest(f) / width;
+            writes.write(next[k] as usize, f as u32);
+            next[k] += 1;
+        }
+    });
+    // Each range on its own (parallel over ranges): bucket by smallest cluster, compare.
+    let marked: Vec<Vec<u32>> = (0..ranges)
+        .into_par_iter()
+        .map(|k| {
+            let list = &by_range[range_start[k]..range_start[k + 1]];
+            let base = k * width;
+            let mut start = vec![0u32; width + 1];
+            list.iter()
+                .for_each(|&f| start[smallest(f as usize) - base + 1] += 1);
+            for c in 1..=width {
+                start[c] += start[c - 1];
+            }
+            let mut fill = start.clone();
+            let mut bucketed = vec![0u32; list.len()];
+            for &f in list {
+                let c = smallest(f as usize) - base;
+                bucketed[fill[c] as usize] = f;
+                fill[c] += 1;
+            }
+            let mut marked = Vec::new();
+            let mut keys: Vec<(u64, u32)> = Vec::new();
+            for c in 0..width {
+                let bucket = &bucketed[start[c] as usize..start[c + 1] as usize];
+                if bucket.len() < 2 {
+                    continue;
+                }
+                if all_triangles {
+                    // The bucket's cluster is every face's smallest: the other two, sorted,
+                    // tell its faces apart.
+                    keys.clear();
+                    keys.extend(bucket.iter().map(|&f| {
+                        let [a, b, c] = triangle(f as usize);
+                        let (lo, hi) = (a.max(b).min(c).max(a.min(b)), a.max(b).max(c));
+                        ((u64::from(lo) << 32) | u64::from(hi), f)
+                    }));
+                    // Sorted by key, then face: the first of equal faces comes first.
+                    keys.sort_unstable();
+                    for w in keys.windows(2) {
+                        if w[0].0 == w[1].0 {
+                            marked.push(w[1].1);
+                        }
+                    }
+                } else {
+                    mark_polygon_duplicates(bucket, face, &mut marked);
+                }
+            }
+            marked
+        })
+        .collect();
+    let mut dup: Vec<u32> = marked.into_iter().flatten().collect();
+    dup.sort_unstable();
+    dup
+}
+
+/// Ranges of clusters the duplicate search first spreads faces over: fixed (not the thread
+/// count), enough for every core and for each range's buckets to stay in cache.
+const DUPLICATE_RANGES: usize = 256;
+
+/// Marks the faces of `bucket` (increasing face order, same smallest cluster) that repeat an
+/// earlier one, comparing canonical cluster cycles.
+fn mark_polygon_duplicates<'a>(
+    bucket: &[u32],
+    face: impl Fn(usize) -> &'a [u32],
+    marked: &mut Vec<u32>,
+) {
     let canonical = |f: u32| -> Vec<u32> {
         let fc = face(f as usize);
         if fc.len() == 3 {
@@ -379,58 +538,17 @@ fn find_duplicates(faces: &Eliminated, clusters: usize) -> Vec<u32> {
             canonical_polygon(&ring)
         }
     };
-    // Buckets are disjoint: blocks of clusters mark their own faces on every core, each
-    // bucket exactly as one thread would.
-    let marked = blocks::map(clusters, |r| {
-        let mut marked: Vec<u32> = Vec::new();
-        let mut local: Vec<bool> = Vec::new();
-        for c in r {
-            let bucket = &bucketed[start[c] as usize..start[c + 1] as usize];
-            if bucket.len() < 2 {
-                continue;
-            }
-            // Faces were bucketed in increasing order, so the first of equal faces comes first.
-            if bucket.len() <= 32 {
-                let sorted3 = |f: u32| {
-                    let fc = face(f as usize);
-                    let mut k = [fc[0], fc[1], fc[2]];
-                    k.sort_unstable();
-                    k
-                };
-                local.clear();
-                local.resize(bucket.len(), false);
-                for (i, &a) in bucket.iter().enumerate() {
-                    let len = face(a as usize).len();
-                    if local[i] {
-                        continue;
-                    }
-                    let same = |b: u32| match len {
-                        3 => sorted3(a) == sorted3(b),
-                        _ => canonical(a) == canonical(b),
-                    };
-                    for (j, &b) in bucket.iter().enumerate().skip(i + 1) {
-                        if !local[j] && face(b as usize).len() == len && same(b) {
-                            local[j] = true;
-                            marked.push(b);
-                        }
-                    }
-                }
-            } else {
-                let mut keyed: Vec<(Vec<u32>, u32)> =
-                    bucket.iter().map(|&f| (canonical(f), f)).collect();
-                keyed.sort_unstable();
-                for w in keyed.windows(2) {
-                    if w[0].0 == w[1].0 {
-                        marked.push(w[1].1);
-                    }
-                }
-            }
+    // Faces of different sizes never repeat each other: the length goes first in the key.
+    let mut keyed: Vec<((usize, Vec<u32>), u32)> = bucket
+        .iter()
+        .map(|&f| ((face(f as usize).len(), canonical(f)), f))
+        .collect();
+    keyed.sort_unstable();
+    for w in keyed.windows(2) {
+        if w[0].0 == w[1].0 {
+            marked.push(w[1].1);
         }
-        marked
-    });
-    let mut dup: Vec<u32> = marked.into_iter().flatten().collect();
-    dup.sort_unstable();
-    dup
+    }
 }
 
 /// Removes zero-length edges (equal neighbours, cyclically) and zero-angle corners (`a b a`)
@@ -528,6 +646,63 @@ mod tests {
         assert_eq!((e.duplicates, e.degenerate), (3, 1));
         assert_eq!(e.collapsed().collect::<Vec<_>>(), vec![5]);
         assert_eq!(count_used(&m, &ids, &m.positions), 4);
+    }
+
+    /// Many duplicates across several blocks, triangles alone and mixed with quads: the
+    /// parallel bucketing, fate update and run-wise squeeze match a plain first-seen filter.
+    #[test]
+    fn duplicates_across_blocks_match_a_first_seen_filter() {
+        for quads in [false, true] {
+            let mut state = 12345u64;
+            let mut next = |n: u64| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 33) % n) as u32
+            };
+            let positions: Vec<[f32; 3]> = (0..40)
+                .map(|_| [next(1000) as f32, next(1000) as f32, next(1000) as f32])
+                .collect();
+            let mut m = Mesh {
+                positions,
+                ..Mesh::default()
+            };
+            for f in 0..3 * blocks::BLOCK + 100 {
+                let corners = if quads && f % 3 == 0 { 4 } else { 3 };
+                let face: Vec<u32> = (0..corners).map(|_| next(40)).collect();
+                m.push_face(&face);
+            }
+            let ids: Vec<u32> = (0..40).collect();
+            let e = eliminate(&m, &ids, &m.positions, true);
+            // The reference: each face's collapsed ring, kept when its canonical cycle is new.
+            let (mut seen, mut faces, mut sources) =
+                (std::collections::HashSet::new(), vec![], vec![]);
+            let mut fate = vec![];
+            let mut ring = Vec::new();
+            for f in 0..m.face_count() {
+                let (s, end) = (m.face_offsets[f], m.face_offsets[f + 1]);
+                polygon_ring(&m, &ids, s..end, &mut ring);
+                if ring.len() < 3 || zero_area(&ring, &m.positions) {
+                    fate.push(Fate::Collapsed);
+                } else if seen.insert((ring.len(), canonical_polygon(&ring))) {
+                    fate.push(Fate::Kept);
+                    faces.push(ring.iter().map(|r| r.0).collect::<Vec<_>>());
+                    sources.extend(ring.iter().map(|r| r.1));
+                } else {
+                    fate.push(Fate::Duplicate);
+                }
+            }
+            assert!(fate.iter().filter(|f| **f == Fate::Duplicate).count() > 1000);
+            assert_eq!(e.fate, fate, "quads: {quads}");
+            let got: Vec<Vec<u32>> = (0..e.face_offsets.len() - 1)
+                .map(|f| {
+                    e.face_indices[e.face_offsets[f] as usize..e.face_offsets[f + 1] as usize]
+                        .to_vec()
+                })
+                .collect();
+            assert_eq!(got, faces, "quads: {quads}");
+            assert_eq!(e.source_corner, sources, "quads: {quads}");
+        }
     }
 
     #[test]

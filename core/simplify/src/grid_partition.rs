@@ -2,10 +2,10 @@
 //! bounding box cut into a grid; every non-empty cell is one cluster. The cell size is the
 //! largest detail that disappears.
 
-use crate::blocks;
+use crate::blocks::{self, DisjointWrites};
 use crate::cell_table::CellTable;
 use crate::options::GridSize;
-use crate::partition::{Cell, Partition, UNUSED};
+use crate::partition::{Cell, Members, Partition, UNUSED};
 use rayon::prelude::*;
 
 /// Largest number of cells along one axis (keeps cell keys in 21 bits per axis).
@@ -40,18 +40,22 @@ pub(crate) fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
     (dims, side)
 }
 
-/// Assigns every vertex with non-zero weight to the grid cell containing it. With `classes`,
-/// vertices of different classes never share a cluster (boundary preservation). Cluster ids
-/// follow the order in which cells are first met, so the output is deterministic.
+/// Assigns every vertex with non-zero weight to the grid cell containing it, and lists the
+/// vertices of every cluster. With `classes`, vertices of different classes never share a
+/// cluster (boundary preservation). Cluster ids follow the order in which cells are first met,
+/// so the output is deterministic.
 ///
 /// Every core bins (see [`crate::blocks`]): each block of vertices finds its cells in a small
 /// table of its own (in cache, where one table for the whole mesh would miss on almost every
-/// vertex), numbering them in the order it meets them; the blocks' cells are then numbered in
-/// block order — which is the order in which the whole vertex sequence meets them — a wave of
-/// blocks at a time; a last parallel pass turns each vertex's block-local id into its cluster
-/// id. The cells' statistics are summed afterwards, cluster by cluster, in the same block
-/// order (`cluster_stats::of_members`): holding them for every cell while binning took more
-/// memory than the mesh.
+/// vertex), numbering them in the order it meets them and counting their vertices; the blocks'
+/// cells are then numbered in block order — which is the order in which the whole vertex
+/// sequence meets them — a wave of blocks at a time, and each block-local cell learns how many
+/// vertices of its cluster earlier blocks hold. A last parallel pass turns each vertex's
+/// block-local id into its cluster id and writes the vertex into its cluster's list at once
+/// (a counting sort whose counts the binning gave for free), so the lists come out in
+/// increasing vertex order. The cells' statistics are summed afterwards, cluster by cluster,
+/// over those lists (`cluster_stats::of_members`): holding them for every cell while binning
+/// took more memory than the mesh.
 pub(crate) fn grid_partition(
     positions: &[[f32; 3]],
     weights: &[f32],
@@ -59,7 +63,7 @@ pub(crate) fn grid_partition(
     bounds: &Cell,
     size: GridSize,
     keep_cells: bool,
-) -> Partition {
+) -> (Partition, Members) {
     let (dims, side) = grid_dims(bounds, size);
     let inv: [f64; 3] = std::array::from_fn(|k| 1.0 / side[k]);
     let lo: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.min[k]));
@@ -80,71 +84,119 @@ pub(crate) fn grid_partition(
     };
     let mut table = CellTable::with_capacity(blocks::BLOCK);
     let mut cells = Vec::new();
-    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(positions.len().div_ceil(blocks::BLOCK));
-    // The blocks go in waves of WAVE_BLOCKS, so that only one wave's tables are held at once;
-    // the wave size does not depend on the thread count, and neither does the order in which
-    // the blocks' cells are numbered (block order).
-    for (wave, chunk) in cluster_of
-        .chunks_mut(WAVE_BLOCKS * blocks::BLOCK)
-        .enumerate()
-    {
-        // Pass 1 (parallel): local ids, and the cell key of each, per block.
-        let local: Vec<Vec<u64>> = chunk
-            .par_chunks_mut(blocks::BLOCK)
-            .enumerate()
-            .map(|(b, out)| {
-                let start = (wave * WAVE_BLOCKS + b) * blocks::BLOCK;
-                let mut table = CellTable::with_capacity(out.len());
-                let mut keys = Vec::new();
-                for (i, slot) in out.iter_mut().enumerate() {
-                    let v = start + i;
-                    if weights[v] <= 0.0 {
-                        continue;
-                    }
-                    let class = classes.map_or(0, |c| u64::from(c[v]));
-                    let key = key_of(&positions[v], class);
-                    let id = table.id(key);
-                    if id as usize == keys.len() {
-                        keys.push(key);
-                    }
-                    *slot = id;
-                }
-                keys
-            })
-            .collect();
-        // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order.
-        for keys in &local {
+    // Vertices per cluster so far (in block order).
+    let mut count: Vec<u32> = Vec::new();
+    // Per block: the cluster id of each block-local cell, and how many vertices of that
+    // cluster the earlier blocks hold.
+    let mut maps: Vec<(Vec<u32>, Vec<u32>)> =
+        Vec::with_capacity(positions.len().div_ceil(blocks::BLOCK));
+    // Pass 2 (sequential, one step per block-local cell): cluster ids in first-met order,
+    // and where each block's vertices of a cluster start within its list.
+    let mut number = |local: Vec<(Vec<u64>, Vec<u32>)>| {
+        for (keys, mut sizes) in local {
             let map = keys
                 .iter()
+                .zip(&mut sizes)
                 .enumerate()
-                .map(|(i, &key)| {
+                .map(|(i, (&key, size))| {
                     if let Some(&ahead) = keys.get(i + 8) {
                         table.prefetch(ahead);
                     }
                     let id = table.id(key);
-                    if keep_cells && id as usize == cells.len() {
-                        cells.push(cell_box(key));
+                    if id as usize == count.len() {
+                        count.push(0);
+                        if keep_cells {
+                            cells.push(cell_box(key));
+                        }
                     }
+                    let before = count[id as usize];
+                    count[id as usize] += *size;
+                    *size = before;
                     id
                 })
                 .collect();
-            maps.push(map);
+            maps.push((map, sizes));
         }
+    };
+    // The blocks go in waves of WAVE_BLOCKS, so that only one wave's tables are held at once;
+    // the wave size does not depend on the thread count, and neither does the order in which
+    // the blocks' cells are numbered (block order). While one wave is numbered (pass 2, one
+    // core), the next one bins (pass 1, the other cores).
+    let mut binned: Option<Vec<(Vec<u64>, Vec<u32>)>> = None;
+    for (wave, chunk) in cluster_of
+        .chunks_mut(WAVE_BLOCKS * blocks::BLOCK)
+        .enumerate()
+    {
+        // Pass 1 (parallel): local ids, and the cell key and vertex count of each, per block.
+        let bin = || {
+            chunk
+                .par_chunks_mut(blocks::BLOCK)
+                .enumerate()
+                .map(|(b, out)| {
+                    let start = (wave * WAVE_BLOCKS + b) * blocks::BLOCK;
+                    let mut table = CellTable::with_capacity(out.len());
+                    let (mut keys, mut sizes) = (Vec::new(), Vec::new());
+                    for (i, slot) in out.iter_mut().enumerate() {
+                        let v = start + i;
+                        if weights[v] <= 0.0 {
+                            continue;
+                        }
+                        let class = classes.map_or(0, |c| u64::from(c[v]));
+                        let key = key_of(&positions[v], class);
+                        let id = table.id(key);
+                        if id as usize == keys.len() {
+                            keys.push(key);
+                            sizes.push(0);
+                        }
+                        sizes[id as usize] += 1;
+                        *slot = id;
+                    }
+                    (keys, sizes)
+                })
+                .collect()
+        };
+        let previous = binned.take();
+        let (local, ()) = rayon::join(bin, || previous.into_iter().for_each(&mut number));
+        binned = Some(local);
     }
-    // Pass 3 (parallel): block-local ids to cluster ids.
+    binned.into_iter().for_each(&mut number);
+    // Cluster list starts (an exclusive prefix sum of the counts).
+    let mut start = Vec::with_capacity(count.len() + 1);
+    let mut total = 0u32;
+    for &n in &count {
+        start.push(total);
+        total += n;
+    }
+    start.push(total);
+    drop(count);
+    // Pass 3 (parallel): block-local ids to cluster ids, and every vertex into its list.
+    let mut ids = vec![0u32; total as usize];
+    // The places of a block's vertices in the lists are fixed by pass 2 (cluster start +
+    // vertices of earlier blocks + rank within the block): no two blocks write the same one.
+    let lists = DisjointWrites::new(&mut ids);
     cluster_of
         .par_chunks_mut(blocks::BLOCK)
-        .zip(&maps)
-        .for_each(|(out, map)| {
-            for c in out.iter_mut().filter(|c| **c != UNUSED) {
-                *c = map[*c as usize];
+        .zip(maps)
+        .enumerate()
+        .for_each(|(b, (out, (map, mut next)))| {
+            let lists = &lists;
+            for (i, c) in out.iter_mut().enumerate() {
+                if *c == UNUSED {
+                    continue;
+                }
+                let local = *c as usize;
+                *c = map[local];
+                let at = start[*c as usize] + next[local];
+                next[local] += 1;
+                lists.write(at as usize, (b * blocks::BLOCK + i) as u32);
             }
         });
-    Partition {
+    let partition = Partition {
         cluster_of,
         clusters: table.len() as usize,
         cells,
-    }
+    };
+    (partition, Members { start, ids })
 }
 
 #[cfg(test)]
@@ -163,8 +215,15 @@ mod tests {
             min: [0.0; 3],
             max: [1.0, 1.0, 0.0],
         };
-        let p = grid_partition(&positions, &w, None, &b, GridSize::CellsPerAxis(5), true);
+        let (p, m) = grid_partition(&positions, &w, None, &b, GridSize::CellsPerAxis(5), true);
         assert_eq!(p.clusters, 25);
+        // Every cluster lists exactly its vertices, in increasing order.
+        for c in 0..p.clusters {
+            let list = m.of(c);
+            assert!(list.is_sorted() && !list.is_empty());
+            assert!(list.iter().all(|&v| p.cluster_of[v as usize] == c as u32));
+        }
+        assert_eq!((0..p.clusters).map(|c| m.of(c).len()).sum::<usize>(), 121);
         // Points 0 and 1 (x = 0, 0.1) share the first cell; point 2 (x = 0.2) starts the second.
         assert_eq!(p.cluster_of[0], p.cluster_of[1]);
         assert_ne!(p.cluster_of[1], p.cluster_of[2]);
@@ -184,7 +243,7 @@ mod tests {
             min: [0.0; 3],
             max: [1.0; 3],
         };
-        let p = grid_partition(
+        let (p, _) = grid_partition(
             &positions,
             &[1.0, 1.0],
             Some(&[0, 1]),

@@ -78,7 +78,7 @@ pub use partition::{Cell, Partition};
 pub use quadric::Quadric;
 
 use adaptive_partition::{Adaptive, LeafView, Stop};
-use partition::{UNUSED, weighted_bounds};
+use partition::{UNUSED, referenced_bounds};
 use rayon::prelude::*;
 use representative::Source::{Leaves, Members};
 use std::borrow::Cow;
@@ -179,14 +179,14 @@ impl<'a> Prepared<'a> {
             Cow::Borrowed(mesh)
         };
         let weights = weights::vertex_weights(&work, options.weighting);
-        let bounds = weighted_bounds(&work.positions, &weights).ok_or(SimplifyError::Empty)?;
+        let (bounds, input_vertices) =
+            referenced_bounds(&work.positions, &weights).ok_or(SimplifyError::Empty)?;
         let size = (0..3)
             .map(|k| f64::from(bounds.max[k] - bounds.min[k]))
             .fold(0.0, f64::max);
         let classes = options
             .preserve_boundaries
             .then(|| features::feature_classes(&work, options.feature_angle_deg));
-        let input_vertices = weights.par_iter().filter(|&&w| w > 0.0).count() as u64;
         Ok(Prepared {
             work,
             weights,
@@ -247,7 +247,7 @@ impl<'a> Prepared<'a> {
                         "grid size {grid:?} must be positive"
                     )));
                 }
-                let p = grid_partition::grid_partition(
+                let (p, m) = grid_partition::grid_partition(
                     &work.positions,
                     weights,
                     classes,
@@ -255,7 +255,7 @@ impl<'a> Prepared<'a> {
                     grid,
                     options.keep_partition,
                 );
-                members = Some(p.members());
+                members = Some(m);
                 (p, None)
             }
             Method::Quality(length) => {
@@ -456,14 +456,18 @@ impl<'a> Prepared<'a> {
         if !work.creases.is_empty() {
             out.creases = edges::carry_creases(work, vertex_of, &out);
         }
-        // A maximum: the same whatever order the cores take it in.
-        report.max_displacement = work
-            .positions
-            .par_iter()
-            .zip(cluster_of)
-            .filter(|(_, c)| **c != UNUSED)
-            .map(|(p, &c)| dist(*p, reps[c as usize]))
-            .reduce(|| 0.0, f64::max);
+        // A maximum: the same whatever order the cores take it in. Squared, rooted once (the
+        // root is monotonic, so this is the largest root to the bit).
+        let largest = blocks::map(cluster_of.len(), |r| {
+            let mut top = 0f64;
+            for (p, &c) in work.positions[r.clone()].iter().zip(&cluster_of[r]) {
+                if c != UNUSED {
+                    top = top.max(dist2(*p, reps[c as usize]));
+                }
+            }
+            top
+        });
+        report.max_displacement = largest.into_iter().fold(0.0, f64::max).sqrt();
         report.uncovered_faces = gaps.faces.len() as u64;
         report.surface_error = if bounded {
             surface_bound::surface_bound(
@@ -524,9 +528,8 @@ fn max_abs(b: &Cell) -> f64 {
         .fold(0.0, f64::max)
 }
 
-fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {
+fn dist2(a: [f32; 3], b: [f32; 3]) -> f64 {
     (0..3)
         .map(|k| (f64::from(a[k]) - f64::from(b[k])).powi(2))
         .sum::<f64>()
-        .sqrt()
 }

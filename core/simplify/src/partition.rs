@@ -23,34 +23,13 @@ pub struct Partition {
     pub cells: Vec<Cell>,
 }
 
-impl Partition {
-    /// The vertices of each cluster, in increasing index order: a counting sort of
-    /// `cluster_of` (4 bytes a vertex and 4 a cluster).
-    pub(crate) fn members(&self) -> Members {
-        let mut start = vec![0u32; self.clusters + 1];
-        for &c in self.cluster_of.iter().filter(|&&c| c != UNUSED) {
-            start[c as usize] += 1;
-        }
-        for c in 1..=self.clusters {
-            start[c] += start[c - 1];
-        }
-        // Filled from each list's end, vertices in decreasing order: the lists come out in
-        // increasing order and `start` ends as their starts.
-        let mut ids = vec![0u32; start[self.clusters] as usize];
-        for (v, &c) in self.cluster_of.iter().enumerate().rev() {
-            if c != UNUSED {
-                start[c as usize] -= 1;
-                ids[start[c as usize] as usize] = v as u32;
-            }
-        }
-        Members { start, ids }
-    }
-}
-
-/// The vertices of every cluster (see [`Partition::members`]).
+/// The vertices of every cluster, each list in increasing vertex order (the grid partition
+/// builds them as it bins: `grid_partition.rs`).
 pub(crate) struct Members {
-    start: Vec<u32>,
-    ids: Vec<u32>,
+    /// Where each cluster's list starts in `ids`, and the end of the last.
+    pub start: Vec<u32>,
+    /// The lists, one after the other.
+    pub ids: Vec<u32>,
 }
 
 impl Members {
@@ -60,13 +39,43 @@ impl Members {
     }
 }
 
-/// Bounds of the vertices with non-zero weight (the referenced ones), or `None` if there are
-/// none. Minima and maxima do not depend on the order they are taken in: every core takes them.
-pub(crate) fn weighted_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Option<Cell> {
+/// Bounds of the vertices with non-zero weight (the referenced ones) and their number, or
+/// `None` if there are none. Minima, maxima and counts do not depend on the order they are
+/// taken in: every core takes them.
+pub(crate) fn referenced_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Option<(Cell, u64)> {
     let parts = crate::blocks::map(positions.len(), |r| {
+        let (block, w) = (&positions[r.clone()], &weights[r]);
+        let count = w.iter().map(|&w| u64::from(w > 0.0)).sum::<u64>();
+        if count == w.len() as u64 {
+            // Every vertex referenced (the usual case): minima and maxima over the flat
+            // coordinates, four vertices (twelve lanes, lane `l` holding coordinate `l % 3`) a
+            // step, which the compiler turns into vector instructions. `<` rather than
+            // `f32::min`: positions are finite (validated).
+            let flat = block.as_flattened();
+            let mut lo = [f32::INFINITY; 12];
+            let mut hi = [f32::NEG_INFINITY; 12];
+            let steps = flat.chunks_exact(12);
+            let rest = steps.remainder();
+            for p in steps {
+                for l in 0..12 {
+                    lo[l] = if p[l] < lo[l] { p[l] } else { lo[l] };
+                    hi[l] = if p[l] > hi[l] { p[l] } else { hi[l] };
+                }
+            }
+            for (l, &p) in rest.iter().enumerate() {
+                lo[l] = lo[l].min(p);
+                hi[l] = hi[l].max(p);
+            }
+            let lane = |a: &[f32; 12], k: usize, f: fn(f32, f32) -> f32| {
+                (k..12).step_by(3).map(|l| a[l]).reduce(f).unwrap()
+            };
+            let lo: [f32; 3] = std::array::from_fn(|k| lane(&lo, k, f32::min));
+            let hi: [f32; 3] = std::array::from_fn(|k| lane(&hi, k, f32::max));
+            return (lo, hi, count);
+        }
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
-        for (p, &w) in positions[r.clone()].iter().zip(&weights[r]) {
+        for (p, &w) in block.iter().zip(w) {
             if w > 0.0 {
                 for k in 0..3 {
                     lo[k] = lo[k].min(p[k]);
@@ -74,16 +83,17 @@ pub(crate) fn weighted_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Option
                 }
             }
         }
-        (lo, hi)
+        (lo, hi, count)
     });
-    let (lo, hi) = parts.into_iter().fold(
-        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
-        |(lo, hi), (l, h)| {
+    let (lo, hi, count) = parts.into_iter().fold(
+        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0),
+        |(lo, hi, n), (l, h, c)| {
             (
                 std::array::from_fn(|k| lo[k].min(l[k])),
                 std::array::from_fn(|k| hi[k].max(h[k])),
+                n + c,
             )
         },
     );
-    (lo[0] <= hi[0]).then_some(Cell { min: lo, max: hi })
+    (count > 0).then_some((Cell { min: lo, max: hi }, count))
 }
