@@ -15,15 +15,25 @@
 //! The vertices of a cell are a range of one index array that each split partitions in place
 //! (like a k-d tree build), so the whole partition costs one `u32` per vertex.
 
+use crate::blocks;
 use crate::feature_priority::{PackedNormal, plane_distance2, priority};
 use crate::options::Representative;
 use crate::partition::{Cell, Partition, UNUSED};
+use rayon::prelude::*;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 
-/// Cells with more vertices than this are refined in parallel (quality goal).
+/// Cells with more vertices than this are refined in parallel (quality goal) and evaluated
+/// by blocks on every core.
 const PARALLEL_CELL: usize = 1 << 15;
+
+/// A split's two children and its cut, or `None` when the cell's vertices coincide.
+type Halves = Option<(Node, Node, Cut)>;
+
+/// The complexity goal's rounds (see `Adaptive::approach`): a round splits every cell whose
+/// key is at least this share of the largest.
+const ROUND_SHARE: f64 = 0.9;
 
 /// A cell's vertices summarised: largest displacement to the representative (or, with vertex
 /// normals, the complexity goal's split priority), inner bounding box.
@@ -150,29 +160,58 @@ impl<'a> Adaptive<'a> {
     /// The referenced vertices, grouped by class (one root cell per class), and the root cells.
     /// Vertices are copied with their weights so that every later pass reads memory in order.
     /// `normals` (one per vertex) go into the points and are freed.
+    ///
+    /// A stable two-way split by class, on every core: each block of vertices counts its
+    /// referenced vertices of either class, which fixes where it writes them (class 0 first,
+    /// blocks in order), so the order is that of the vertices within each class whatever the
+    /// thread count.
     fn roots(
         &self,
         classes: Option<&[u8]>,
         normals: Option<Vec<PackedNormal>>,
     ) -> (Vec<Point>, Vec<Node>) {
-        let normal = |v: usize| normals.as_ref().map_or(PackedNormal::NONE, |n| n[v]);
-        let mut order: Vec<Point> = (0..self.positions.len())
-            .filter(|&v| self.weights[v] > 0.0)
-            .map(|v| Point {
-                p: self.positions[v],
-                w: self.weights[v],
-                id: v as u32,
-                n: normal(v),
-            })
-            .collect();
-        drop(normals);
-        let mut ranges = vec![(0, order.len())];
-        if let Some(classes) = classes {
-            order.sort_by_key(|q| classes[q.id as usize]);
-            let split = order.partition_point(|q| classes[q.id as usize] == 0);
-            ranges = vec![(0, split), (split, order.len())];
+        let n = self.positions.len();
+        let class = |v: usize| classes.map_or(0, |c| usize::from(c[v] != 0));
+        let counts: Vec<[usize; 2]> = blocks::map(n, |r| {
+            let mut c = [0; 2];
+            r.filter(|&v| self.weights[v] > 0.0)
+                .for_each(|v| c[class(v)] += 1);
+            c
+        });
+        let split = counts.iter().map(|c| c[0]).sum::<usize>();
+        let total = split + counts.iter().map(|c| c[1]).sum::<usize>();
+        let mut order: Vec<Point> = Vec::with_capacity(total);
+        {
+            // Each block's two destination slices, cut from the front of either class's part.
+            let (mut zero, mut one) = order.spare_capacity_mut()[..total].split_at_mut(split);
+            let mut jobs = Vec::with_capacity(counts.len());
+            for c in &counts {
+                let (a, rest) = std::mem::take(&mut zero).split_at_mut(c[0]);
+                zero = rest;
+                let (b, rest) = std::mem::take(&mut one).split_at_mut(c[1]);
+                one = rest;
+                jobs.push([a, b]);
+            }
+            let normal = |v: usize| normals.as_ref().map_or(PackedNormal::NONE, |n| n[v]);
+            blocks::ranges(n).zip(jobs).for_each(|(r, out)| {
+                let mut at = [0; 2];
+                for v in r.filter(|&v| self.weights[v] > 0.0) {
+                    let k = class(v);
+                    out[k][at[k]].write(Point {
+                        p: self.positions[v],
+                        w: self.weights[v],
+                        id: v as u32,
+                        n: normal(v),
+                    });
+                    at[k] += 1;
+                }
+            });
         }
-        let roots = ranges
+        // SAFETY: the blocks' slices tile `0..total` and each block wrote every place of its
+        // slices (its counts are the number of points it wrote).
+        unsafe { order.set_len(total) };
+        drop(normals);
+        let roots = [(0, split), (split, total)]
             .into_iter()
             .filter(|(s, e)| e > s)
             .map(|(start, end)| self.node(&order, start, end))
@@ -190,14 +229,31 @@ impl<'a> Adaptive<'a> {
     }
 
     /// Representative, largest displacement and inner box of a non-empty set of vertices.
+    /// A large set (the first levels of a split) is summed by blocks on every core, the block
+    /// sums added in block order, so the result does not depend on the thread count.
     fn evaluate(&self, verts: &[Point]) -> Eval {
-        let mut acc = Acc::default();
-        verts.iter().for_each(|q| acc.add(q));
+        let acc = if verts.len() > PARALLEL_CELL {
+            blocks::map(verts.len(), |r| {
+                let mut acc = Acc::default();
+                verts[r].iter().for_each(|q| acc.add(q));
+                acc
+            })
+            .iter()
+            .fold(Acc::default(), |mut all, part| {
+                all.merge(part);
+                all
+            })
+        } else {
+            let mut acc = Acc::default();
+            verts.iter().for_each(|q| acc.add(q));
+            acc
+        };
         self.finish_eval(&acc, verts)
     }
 
     /// Completes an evaluation from a cell's accumulated sums: one more pass over its vertices
-    /// for the largest displacement (in f32: the rounding is far below any tolerance, see the
+    /// (by blocks on every core for a large cell: a maximum does not depend on the order) for
+    /// the largest displacement (in f32: the rounding is far below any tolerance, see the
     /// margin in `Prepared::run`).
     fn finish_eval(&self, acc: &Acc, verts: &[Point]) -> Eval {
         let rep: [f32; 3] = if self.heaviest {
@@ -205,24 +261,18 @@ impl<'a> Adaptive<'a> {
         } else {
             acc.sum.map(|s| (s / acc.wsum) as f32)
         };
-        let mut err2 = 0f32;
-        let delta = |p: [f32; 3]| {
-            let d = [rep[0] - p[0], rep[1] - p[1], rep[2] - p[2]];
-            (d, d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-        };
-        if self.surface_priority {
-            let mut surface2 = 0f32;
-            for q in verts {
-                let (d, dd) = delta(q.p);
-                err2 = err2.max(dd);
-                surface2 = surface2.max(plane_distance2(d, dd, q.n.direction()));
-            }
-            err2 = priority(surface2.sqrt(), err2.sqrt()).powi(2);
+        let (err2, surface2) = if verts.len() > PARALLEL_CELL {
+            blocks::map(verts.len(), |r| self.extremes(rep, &verts[r]))
+                .into_iter()
+                .fold((0f32, 0f32), |a, b| (a.0.max(b.0), a.1.max(b.1)))
         } else {
-            for q in verts {
-                err2 = err2.max(delta(q.p).1);
-            }
-        }
+            self.extremes(rep, verts)
+        };
+        let err2 = if self.surface_priority {
+            priority(surface2.sqrt(), err2.sqrt()).powi(2)
+        } else {
+            err2
+        };
         Eval {
             err2,
             lo: acc.lo,
@@ -230,11 +280,33 @@ impl<'a> Adaptive<'a> {
         }
     }
 
+    /// The largest squared displacement of `verts` from `rep`, and (with the surface priority)
+    /// the largest squared distance from `rep` to their tangent planes.
+    fn extremes(&self, rep: [f32; 3], verts: &[Point]) -> (f32, f32) {
+        let delta = |p: [f32; 3]| {
+            let d = [rep[0] - p[0], rep[1] - p[1], rep[2] - p[2]];
+            (d, d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        };
+        let (mut err2, mut surface2) = (0f32, 0f32);
+        if self.surface_priority {
+            for q in verts {
+                let (d, dd) = delta(q.p);
+                err2 = err2.max(dd);
+                surface2 = surface2.max(plane_distance2(d, dd, q.n.direction()));
+            }
+        } else {
+            for q in verts {
+                err2 = err2.max(delta(q.p).1);
+            }
+        }
+        (err2, surface2)
+    }
+
     /// Splits `node` across the largest side of its inner box: partitions its vertices in place
     /// and returns the two children (both non-empty) and the cut (axis, coordinate), or `None`
     /// when its vertices coincide. The partition pass also accumulates both children's sums, so
     /// each child costs one more pass.
-    fn split(&self, order: &mut [Point], node: &Node) -> Option<(Node, Node, Cut)> {
+    fn split(&self, order: &mut [Point], node: &Node) -> Halves {
         let Eval { lo, hi, .. } = node.eval;
         let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))?;
         if hi[axis] <= lo[axis] {
@@ -385,7 +457,6 @@ impl<'a> Adaptive<'a> {
             jobs.push((*c, *cell, mine));
         }
         let parts: Vec<Result<Leaves, Stop>> = if jobs.len() > 1 {
-            use rayon::prelude::*;
             jobs.into_par_iter()
                 .with_min_len(64)
                 .map(|(c, cell, slice)| self.refine_one(slice, c, cell, tolerance))
@@ -533,6 +604,13 @@ impl<'a> Adaptive<'a> {
     /// Greedy splitting up to `goal` cells. A [`SplitQueue`] holds the cells that can still be
     /// split (displacement above zero) by arena index; returns every leaf's arena index in the
     /// order of its range.
+    ///
+    /// The cells are split in rounds, so that every core has work: a round takes the cell
+    /// with the largest key and every queued cell whose key is at least [`ROUND_SHARE`] of it
+    /// (in key order, as many as the goal still allows), and splits them all at once. That is
+    /// the one-at-a-time order of section 4 except where a child's key reaches into the round
+    /// (children mostly move less than their parent); the rounds depend on the keys alone, not
+    /// on the thread count.
     fn approach(
         &self,
         order: &mut [Point],
@@ -551,37 +629,91 @@ impl<'a> Adaptive<'a> {
                 kept.push(i as u32);
             }
         }
+        let mut round: Vec<u32> = Vec::new();
         while kept.len() + queue.len() < goal {
             if self.cancelled() {
                 return Err(Stop::Cancelled);
             }
-            let Some(ByError(_, i)) = queue.pop() else {
+            // Each split adds one cell: the round is at most the shortfall.
+            let room = goal - kept.len() - queue.len();
+            round.clear();
+            let Some(ByError(largest, first)) = queue.pop() else {
                 break;
             };
-            let node = live[i as usize];
-            match self.split(order, &node) {
-                Some((l, r, cut)) => {
-                    live[i as usize] = l;
-                    live.push(r);
-                    if self.keep_cells {
-                        let (lcell, rcell) = cut.cells(&cells[i as usize]);
-                        cells[i as usize] = lcell;
-                        cells.push(rcell);
-                    }
-                    for (child, slot) in [(l, i), (r, live.len() as u32 - 1)] {
-                        if child.eval.err() > 0.0 {
-                            queue.push(ByError(child.eval.err(), slot));
-                        } else {
-                            kept.push(slot);
+            round.push(first);
+            while round.len() < room
+                && let Some(ByError(_, i)) = queue.pop_at_least(largest * ROUND_SHARE)
+            {
+                round.push(i);
+            }
+            let split = self.split_round(order, live, &round);
+            for (&i, halves) in round.iter().zip(split) {
+                match halves {
+                    Some((l, r, cut)) => {
+                        live[i as usize] = l;
+                        live.push(r);
+                        if self.keep_cells {
+                            let (lcell, rcell) = cut.cells(&cells[i as usize]);
+                            cells[i as usize] = lcell;
+                            cells.push(rcell);
+                        }
+                        for (child, slot) in [(l, i), (r, live.len() as u32 - 1)] {
+                            if child.eval.err() > 0.0 {
+                                queue.push(ByError(child.eval.err(), slot));
+                            } else {
+                                kept.push(slot);
+                            }
                         }
                     }
+                    None => kept.push(i),
                 }
-                None => kept.push(i),
             }
         }
         kept.extend(queue.drain().map(|k| k.1));
         kept.sort_unstable_by_key(|&i| live[i as usize].start);
         Ok(kept)
+    }
+
+    /// Splits the cells `round` (arena indices) of `live`, in parallel when there are several:
+    /// their vertex ranges are disjoint, so each split gets its own slice of `order`. The
+    /// halves come back in the order of `round`, with their ranges in `order`'s terms.
+    fn split_round(&self, order: &mut [Point], live: &[Node], round: &[u32]) -> Vec<Halves> {
+        if let [i] = round {
+            return vec![self.split(order, &live[*i as usize])];
+        }
+        let mut by_start: Vec<usize> = (0..round.len()).collect();
+        by_start.sort_unstable_by_key(|&k| live[round[k] as usize].start);
+        let mut jobs: Vec<(usize, Node, &mut [Point])> = Vec::with_capacity(round.len());
+        let (mut rest, mut consumed) = (order, 0usize);
+        for k in by_start {
+            let node = live[round[k] as usize];
+            let (start, end) = (node.start as usize, node.end as usize);
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(start - consumed);
+            let (mine, tail) = tail.split_at_mut(end - start);
+            rest = tail;
+            consumed = end;
+            let local = Node {
+                start: 0,
+                end: node.end - node.start,
+                ..node
+            };
+            jobs.push((k, local, mine));
+        }
+        let mut halves: Vec<(usize, Halves)> = jobs
+            .into_par_iter()
+            .map(|(k, local, slice)| {
+                let base = live[round[k] as usize].start;
+                let shift = |n: Node| Node {
+                    start: n.start + base,
+                    end: n.end + base,
+                    ..n
+                };
+                let split = self.split(slice, &local);
+                (k, split.map(|(l, r, cut)| (shift(l), shift(r), cut)))
+            })
+            .collect();
+        halves.sort_unstable_by_key(|h| h.0);
+        halves.into_iter().map(|h| h.1).collect()
     }
 
     /// Labels every vertex with its leaf (leaves given by their starts and the end, in order).
@@ -709,6 +841,21 @@ impl SplitQueue {
         Some(k)
     }
 
+    /// Removes and returns the cell with the largest key if that key is at least `floor`.
+    fn pop_at_least(&mut self, floor: f64) -> Option<ByError> {
+        if self.heap.is_empty() {
+            let b = (0..self.current)
+                .rev()
+                .find(|&b| !self.bins[b].is_empty())?;
+            self.current = b;
+            self.heap = BinaryHeap::from(std::mem::take(&mut self.bins[b]));
+        }
+        if self.heap.peek()?.0 < floor {
+            return None;
+        }
+        self.pop()
+    }
+
     fn len(&self) -> usize {
         self.len
     }
@@ -787,6 +934,20 @@ impl Acc {
         // Ties go to the lowest vertex index, so results do not depend on order.
         if q.w > self.best.0 || (q.w == self.best.0 && q.id < self.best.1) {
             self.best = (q.w, q.id);
+        }
+    }
+
+    /// Adds the sums of `other` (taken over other vertices).
+    fn merge(&mut self, other: &Acc) {
+        for k in 0..3 {
+            self.lo[k] = self.lo[k].min(other.lo[k]);
+            self.hi[k] = self.hi[k].max(other.hi[k]);
+            self.sum[k] += other.sum[k];
+        }
+        self.wsum += other.wsum;
+        let (w, id) = other.best;
+        if w > self.best.0 || (w == self.best.0 && id < self.best.1) {
+            self.best = other.best;
         }
     }
 }
