@@ -55,6 +55,8 @@ use tessd_mesh::Mesh;
 use tessd_mesh::io::{ReadOptions, read_path, write_path};
 
 fn main() -> ExitCode {
+    // The daemon's allocation policy, so that the library's figures are the daemon's.
+    tessd_mesh::allocation::return_large_buffers_to_system();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("run") => run(&args[1..]),

@@ -19,6 +19,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod allocation;
 pub mod attribute;
 mod block_scan;
 mod error;

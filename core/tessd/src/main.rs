@@ -342,6 +342,8 @@ enum JobAction {
 }
 
 fn main() {
+    // Mesh-sized buffers go back to the system when a job frees them (see the module).
+    tessd_mesh::allocation::return_large_buffers_to_system();
     let cli = Cli::parse();
     let code = match set_threads(cli.threads).and_then(|()| run(cli)) {
         Ok(()) => 0,
