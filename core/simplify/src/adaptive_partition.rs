@@ -290,7 +290,11 @@ impl<'a> Adaptive<'a> {
         Eval {
             err2,
             at: 0.5 * (lo[axis] + hi[axis]),
-            axis: if hi[axis] > lo[axis] { axis as u8 } else { NO_CUT },
+            axis: if hi[axis] > lo[axis] {
+                axis as u8
+            } else {
+                NO_CUT
+            },
         }
     }
 
