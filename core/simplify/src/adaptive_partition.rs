@@ -28,6 +28,28 @@ use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 /// by blocks on every core.
 const PARALLEL_CELL: usize = 1 << 15;
 
+/// The slices `ranges` (increasing, disjoint) of `order`, each mutable on its own: the cells
+/// of a partition own disjoint ranges of the vertex order, so they can be refined or split in
+/// parallel.
+fn disjoint_slices<T>(
+    order: &mut [T],
+    ranges: impl Iterator<Item = std::ops::Range<usize>>,
+) -> Vec<&mut [T]> {
+    let (mut rest, mut consumed) = (order, 0usize);
+    ranges
+        .map(|r| {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(r.start - consumed);
+            let (mine, tail) = tail.split_at_mut(r.end - r.start);
+            rest = tail;
+            consumed = r.end;
+            mine
+        })
+        .collect()
+}
+
+/// Rounds with fewer points than this are split on one core (see `Adaptive::split_round`).
+const PARALLEL_ROUND: usize = 1 << 14;
+
 /// Cells of a round split together (see `Adaptive::approach`).
 const ROUND_CHUNK: usize = 4096;
 
@@ -462,17 +484,12 @@ impl<'a> Adaptive<'a> {
         cells: &[(Node, Cell)],
         tolerance: f64,
     ) -> Result<Leaves, Stop> {
-        let mut jobs: Vec<(Node, Cell, &mut [Point])> = Vec::with_capacity(cells.len());
-        let mut rest = order;
-        let mut consumed = 0;
-        for (c, cell) in cells {
-            let (start, end) = (c.start as usize, c.end as usize);
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(start - consumed);
-            let (mine, tail) = tail.split_at_mut(end - start);
-            rest = tail;
-            consumed = end;
-            jobs.push((*c, *cell, mine));
-        }
+        let slices = disjoint_slices(order, cells.iter().map(|(c, _)| c.range()));
+        let jobs: Vec<(Node, Cell, &mut [Point])> = cells
+            .iter()
+            .zip(slices)
+            .map(|((c, cell), slice)| (*c, *cell, slice))
+            .collect();
         let parts: Vec<Result<Leaves, Stop>> = if jobs.len() > 1 {
             jobs.into_par_iter()
                 .with_min_len(64)
@@ -699,27 +716,32 @@ impl<'a> Adaptive<'a> {
     /// their vertex ranges are disjoint, so each split gets its own slice of `order`. The
     /// halves come back in the order of `round`, with their ranges in `order`'s terms.
     fn split_round(&self, order: &mut [Point], live: &[Node], round: &[u32]) -> Vec<Halves> {
-        if let [i] = round {
-            return vec![self.split(order, &live[*i as usize])];
+        let points: usize = round.iter().map(|&i| live[i as usize].range().len()).sum();
+        if round.len() == 1 || points < PARALLEL_ROUND || blocks::single_thread() {
+            // Too little to share out: one after the other (the same splits, so the same
+            // result), without the bookkeeping.
+            return round
+                .iter()
+                .map(|&i| self.split(order, &live[i as usize]))
+                .collect();
         }
         let mut by_start: Vec<usize> = (0..round.len()).collect();
         by_start.sort_unstable_by_key(|&k| live[round[k] as usize].start);
-        let mut jobs: Vec<(usize, Node, &mut [Point])> = Vec::with_capacity(round.len());
-        let (mut rest, mut consumed) = (order, 0usize);
-        for k in by_start {
-            let node = live[round[k] as usize];
-            let (start, end) = (node.start as usize, node.end as usize);
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(start - consumed);
-            let (mine, tail) = tail.split_at_mut(end - start);
-            rest = tail;
-            consumed = end;
-            let local = Node {
-                start: 0,
-                end: node.end - node.start,
-                ..node
-            };
-            jobs.push((k, local, mine));
-        }
+        let ranges = by_start.iter().map(|&k| live[round[k] as usize].range());
+        let slices = disjoint_slices(order, ranges);
+        let jobs: Vec<(usize, Node, &mut [Point])> = by_start
+            .iter()
+            .zip(slices)
+            .map(|(&k, slice)| {
+                let node = live[round[k] as usize];
+                let local = Node {
+                    start: 0,
+                    end: node.end - node.start,
+                    ..node
+                };
+                (k, local, slice)
+            })
+            .collect();
         let mut halves: Vec<(usize, Halves)> = jobs
             .into_par_iter()
             .map(|(k, local, slice)| {
@@ -850,13 +872,7 @@ impl SplitQueue {
     }
 
     fn pop(&mut self) -> Option<ByError> {
-        if self.heap.is_empty() {
-            let b = (0..self.current)
-                .rev()
-                .find(|&b| !self.bins[b].is_empty())?;
-            self.current = b;
-            self.heap = BinaryHeap::from(std::mem::take(&mut self.bins[b]));
-        }
+        self.refill()?;
         let k = self.heap.pop()?;
         self.len -= 1;
         Some(k)
@@ -864,6 +880,16 @@ impl SplitQueue {
 
     /// Removes and returns the cell with the largest key if that key is at least `floor`.
     fn pop_at_least(&mut self, floor: f64) -> Option<ByError> {
+        self.refill()?;
+        if self.heap.peek()?.0 < floor {
+            return None;
+        }
+        self.pop()
+    }
+
+    /// Moves the highest non-empty bin into the heap when the heap is empty; `None` when the
+    /// queue is empty.
+    fn refill(&mut self) -> Option<()> {
         if self.heap.is_empty() {
             let b = (0..self.current)
                 .rev()
@@ -871,10 +897,7 @@ impl SplitQueue {
             self.current = b;
             self.heap = BinaryHeap::from(std::mem::take(&mut self.bins[b]));
         }
-        if self.heap.peek()?.0 < floor {
-            return None;
-        }
-        self.pop()
+        Some(())
     }
 
     fn len(&self) -> usize {

@@ -13,7 +13,8 @@ use rayon::prelude::*;
 use tessd_mesh::Mesh;
 
 /// Clusters whose quadrics are summed at once (80 bytes each, so 0.65 MB): the quadric
-/// representatives are placed chunk by chunk, and no quadric is held for every cluster.
+/// representatives are placed chunk by chunk (a chunk per core at a time), and no quadric is
+/// held for every cluster.
 const CHUNK: usize = 1 << 13;
 
 /// Where the clusters' vertices, hence their statistics, come from.
@@ -70,7 +71,9 @@ pub(crate) fn place(
         }
         Representative::Quadric => {
             let touched = chunks_touched(mesh, cluster_of, n);
-            for (k, out) in reps.chunks_mut(CHUNK).enumerate() {
+            // Chunks are independent (their own clusters, their own partial sums): several
+            // at once, since one chunk's clusters meet only the few blocks of faces around them.
+            reps.par_chunks_mut(CHUNK).enumerate().for_each(|(k, out)| {
                 let first = k * CHUNK;
                 let quadrics = chunk_quadrics(mesh, cluster_of, &touched, k, out.len());
                 each_cluster(out, first, |c, out, scratch| {
@@ -83,7 +86,7 @@ pub(crate) fn place(
                         *out = x0.map(|x| x as f32);
                     }
                 });
-            }
+            });
         }
     }
     reps
