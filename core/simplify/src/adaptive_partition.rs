@@ -265,20 +265,14 @@ impl<'a> Adaptive<'a> {
     /// sums added in block order, so the result does not depend on the thread count.
     fn evaluate(&self, verts: &[Point]) -> Eval {
         let acc = if verts.len() > PARALLEL_CELL {
-            blocks::map(verts.len(), |r| {
-                let mut acc = Acc::default();
-                verts[r].iter().for_each(|q| acc.add(q));
-                acc
-            })
-            .iter()
-            .fold(Acc::default(), |mut all, part| {
-                all.merge(part);
-                all
-            })
+            blocks::map(verts.len(), |r| Acc::of(&verts[r]))
+                .iter()
+                .fold(Acc::default(), |mut all, part| {
+                    all.merge(part);
+                    all
+                })
         } else {
-            let mut acc = Acc::default();
-            verts.iter().for_each(|q| acc.add(q));
-            acc
+            Acc::of(verts)
         };
         self.finish_eval(&acc, verts)
     }
@@ -360,9 +354,7 @@ impl<'a> Adaptive<'a> {
             mid = verts.len() / 2;
             verts.select_nth_unstable_by(mid, |a, b| a.p[axis].total_cmp(&b.p[axis]));
             at = verts[mid].p[axis];
-            (left_acc, right_acc) = (Acc::default(), Acc::default());
-            verts[..mid].iter().for_each(|q| left_acc.add(q));
-            verts[mid..].iter().for_each(|q| right_acc.add(q));
+            (left_acc, right_acc) = (Acc::of(&verts[..mid]), Acc::of(&verts[mid..]));
         }
         let (left, right) = verts.split_at(mid);
         let (le, re) = (
@@ -979,6 +971,13 @@ impl Acc {
         if q.w > self.best.0 || (q.w == self.best.0 && q.id < self.best.1) {
             self.best = (q.w, q.id);
         }
+    }
+
+    /// The sums of `points`, added in order.
+    fn of(points: &[Point]) -> Acc {
+        let mut acc = Acc::default();
+        points.iter().for_each(|q| acc.add(q));
+        acc
     }
 
     /// Adds the sums of `other` (taken over other vertices).

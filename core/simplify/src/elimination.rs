@@ -407,7 +407,7 @@ fn write_faces(
 ///
 /// Duplicates share their smallest cluster, so faces are bucketed by it and only faces within
 /// a bucket are compared; a bucket is the fan of faces around one output vertex, a handful of
-/// faces, and the few large ones are sorted instead of compared pairwise. The bucketing is a
+/// faces, sorted by a key of their other clusters (equal keys are duplicates). The bucketing is a
 /// two-level counting sort that every core takes part in: faces are first spread, in face
 /// order, over [`DUPLICATE_RANGES`] ranges of clusters (a count and a scatter pass over blocks
 /// of faces), then each range — a few thousand faces, in cache — is bucketed and compared on

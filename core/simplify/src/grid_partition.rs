@@ -160,15 +160,15 @@ pub(crate) fn grid_partition(
         binned = Some(local);
     }
     binned.into_iter().for_each(&mut number);
-    // Cluster list starts (an exclusive prefix sum of the counts).
-    let mut start = Vec::with_capacity(count.len() + 1);
+    // Cluster list starts: the counts turned, in place, into their exclusive prefix sum.
+    let mut start = count;
     let mut total = 0u32;
-    for &n in &count {
-        start.push(total);
+    for s in &mut start {
+        let n = *s;
+        *s = total;
         total += n;
     }
     start.push(total);
-    drop(count);
     // Pass 3 (parallel): block-local ids to cluster ids, and every vertex into its list.
     let mut ids = vec![0u32; total as usize];
     // The places of a block's vertices in the lists are fixed by pass 2 (cluster start +
