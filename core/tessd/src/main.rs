@@ -172,6 +172,42 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Compress a mesh losslessly at a quantisation into a progressive .tsc file (paper 003:
+    /// Gandoin-Devillers kd-tree codes in an nSP-tree).
+    Compress {
+        /// Input mesh (OBJ, PLY, STL, OFF, or a USD stage .usda); polygons are fan-triangulated.
+        input: PathBuf,
+        /// Output .tsc file.
+        output: PathBuf,
+        /// Bits per coordinate of the quantisation grid (1-20).
+        #[arg(long, default_value_t = 12)]
+        bits: u32,
+        /// nSP-tree subdivisions per axis (2 or 4).
+        #[arg(long, default_value_t = 4)]
+        cell_split: u32,
+        /// Fewest triangles an nSP-cell must hold to be subdivided.
+        #[arg(long, default_value_t = 8000)]
+        min_cell: u64,
+        /// Precision in bits the root cell reaches before it is subdivided.
+        #[arg(long, default_value_t = 7)]
+        root_bits: u32,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Decode a .tsc file into a mesh, whole or up to a precision.
+    Decompress {
+        /// Input .tsc file.
+        input: PathBuf,
+        /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
+        output: PathBuf,
+        /// Decode only up to this many bits per coordinate (a prefix of the refinement).
+        #[arg(long)]
+        max_bits: Option<u32>,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure the surface distance between two meshes: both one-sided distances, the
     /// symmetric Hausdorff distance and RMS (Metro-style sampling).
     Compare {
@@ -511,6 +547,60 @@ fn run(cli: Cli) -> Result<()> {
             });
             cluster.add_to(&mut params);
             report_or_json(run_local("lod", params)?, json, print_lod)
+        }
+        Command::Compress {
+            input,
+            output,
+            bits,
+            cell_split,
+            min_cell,
+            root_bits,
+            json,
+        } => {
+            let params = serde_json::json!({
+                "input": input,
+                "output": output,
+                "bits": bits,
+                "cell_split": cell_split,
+                "min_cell": min_cell,
+                "root_bits": root_bits,
+            });
+            report_or_json(run_local("codec.compress", params)?, json, |r| {
+                let r = &r.result;
+                println!(
+                    "compress: {} vertices, {} triangles at {} bits -> {} ({} bytes, {:.2} bits/vertex, {} nSP-cells) in {:.0} ms",
+                    r["input_vertices"],
+                    r["input_triangles"],
+                    r["bits"],
+                    output.display(),
+                    r["bytes"],
+                    r["bits_per_vertex"].as_f64().unwrap_or(0.0),
+                    r["nsp_cells"],
+                    r["elapsed_ms"].as_f64().unwrap_or(0.0)
+                )
+            })
+        }
+        Command::Decompress {
+            input,
+            output,
+            max_bits,
+            json,
+        } => {
+            let params =
+                serde_json::json!({"input": input, "output": output, "max_bits": max_bits});
+            report_or_json(run_local("codec.decompress", params)?, json, |r| {
+                let r = &r.result;
+                println!(
+                    "decompress: {} bits -> {} vertices, {} triangles -> {} ({} of {} bytes read) in {:.0} ms",
+                    r["bits"],
+                    r["vertices"],
+                    r["triangles"],
+                    output.display(),
+                    r["bytes_read"],
+                    r["file_bytes"],
+                    r["elapsed_ms"].as_f64().unwrap_or(0.0)
+                )
+            })
         }
         Command::Compare {
             a,

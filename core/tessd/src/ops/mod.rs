@@ -2,6 +2,7 @@
 //! into the [`Registry`] that the server and job files share.
 
 pub mod brep_load;
+pub mod codec;
 pub mod common;
 pub mod compare;
 pub mod debug_echo;
@@ -31,6 +32,8 @@ pub fn registry() -> Registry {
         .register("tessellate", tessellate::run)
         .register("trim.classify", trim_classify::run)
         .register("render", render::run)
+        .register("codec.compress", codec::compress)
+        .register("codec.decompress", codec::decompress)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [

@@ -1,0 +1,265 @@
+//! The simplicial complex on the leaves of a kd-tree (paper 003 §3, §5.2a): vertices are kd-cells,
+//! simplices are oriented triangles over them (a repeated vertex is allowed: a triangle whose
+//! corners fell into one cell is the edge or point it became) and isolated points.
+//!
+//! Both the encoder (merging cells bottom-up) and the decoder (splitting them top-down) work on
+//! this structure, so that the two sides see exactly the same state between two codes.
+
+use rustc_hash::FxHashMap;
+
+/// Marks an isolated point in [`Simplex::kind`].
+pub const POINT: u8 = 0;
+/// Marks a triangle in [`Simplex::kind`].
+pub const TRIANGLE: u8 = 1;
+
+/// A top simplex over vertex ids: a triangle `(a, b, c)` up to rotation (orientation kept), or an
+/// isolated point `(a, a, a)` with kind [`POINT`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Simplex {
+    /// Vertex ids, rotated so that the sequence is the smallest of its three rotations.
+    pub v: [u32; 3],
+    /// [`TRIANGLE`] or [`POINT`].
+    pub kind: u8,
+}
+
+impl Simplex {
+    /// The triangle `(a, b, c)` in its canonical rotation.
+    pub fn triangle(a: u32, b: u32, c: u32) -> Self {
+        let r = [[a, b, c], [b, c, a], [c, a, b]];
+        Simplex {
+            v: *r.iter().min().unwrap(),
+            kind: TRIANGLE,
+        }
+    }
+
+    /// The isolated point `a`.
+    pub fn point(a: u32) -> Self {
+        Simplex {
+            v: [a, a, a],
+            kind: POINT,
+        }
+    }
+
+    /// The same simplex over the vertices `f` gives, in canonical rotation again.
+    pub fn map(self, f: impl Fn(u32) -> u32) -> Self {
+        match self.kind {
+            POINT => Simplex::point(f(self.v[0])),
+            _ => Simplex::triangle(f(self.v[0]), f(self.v[1]), f(self.v[2])),
+        }
+    }
+
+    /// The same simplex with every `from` replaced by `to`.
+    pub fn renamed(self, from: u32, to: u32) -> Self {
+        self.map(|x| if x == from { to } else { x })
+    }
+
+    /// How many of its corners are `v` (points count once).
+    pub fn multiplicity(&self, v: u32) -> usize {
+        match self.kind {
+            POINT => (self.v[0] == v) as usize,
+            _ => self.v.iter().filter(|&&x| x == v).count(),
+        }
+    }
+}
+
+/// A kd-cell in the complex: its lower corner on the full-precision grid and its kd level (the
+/// number of binary splits, cycling x, y, z, that made it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Vertex {
+    /// Lower corner, in grid units of the full precision `p`.
+    pub corner: [u32; 3],
+    /// kd level: the cell has `level / 3` (+1 for the first `level % 3` axes) bits per axis.
+    pub level: u8,
+}
+
+/// Bits along `axis` of a cell at kd `level`.
+pub fn axis_bits(level: usize, axis: usize) -> u32 {
+    (level / 3 + usize::from(axis < level % 3)) as u32
+}
+
+impl Vertex {
+    /// The cell's side along `axis`, in grid units, for a grid of `bits` bits.
+    pub fn extent(&self, axis: usize, bits: u32) -> u64 {
+        1u64 << (bits - axis_bits(self.level as usize, axis))
+    }
+
+    /// The cell's centre on the grid (the position a decoder shows for it).
+    pub fn centre(&self, bits: u32) -> [f64; 3] {
+        std::array::from_fn(|a| self.corner[a] as f64 + (self.extent(a, bits) - 1) as f64 / 2.0)
+    }
+}
+
+/// Vertices, live simplices and who touches whom.
+#[derive(Clone, Debug, Default)]
+pub struct Complex {
+    /// Every vertex ever made; dead ones stay (their ids are not reused).
+    pub vertices: Vec<Vertex>,
+    /// Simplex slots; `None` once removed.
+    pub simplices: Vec<Option<Simplex>>,
+    /// Per vertex, the slots of simplices that held it at some point (stale entries are dropped
+    /// lazily by [`Complex::incident`]).
+    incident: Vec<Vec<u32>>,
+    /// Live simplex → slot, to merge duplicates.
+    index: FxHashMap<Simplex, u32>,
+    /// Live simplices.
+    pub live: usize,
+}
+
+impl Complex {
+    /// Adds a vertex and returns its id.
+    pub fn add_vertex(&mut self, v: Vertex) -> u32 {
+        self.vertices.push(v);
+        self.incident.push(Vec::new());
+        (self.vertices.len() - 1) as u32
+    }
+
+    /// Adds `s` unless it is already there.
+    pub fn add(&mut self, s: Simplex) {
+        if self.index.contains_key(&s) {
+            return;
+        }
+        let slot = self.simplices.len() as u32;
+        self.simplices.push(Some(s));
+        self.index.insert(s, slot);
+        self.live += 1;
+        let n = if s.kind == POINT { 1 } else { 3 };
+        for (i, &x) in s.v[..n].iter().enumerate() {
+            if !s.v[..i].contains(&x) {
+                self.incident[x as usize].push(slot);
+            }
+        }
+    }
+
+    /// Removes the simplex in `slot`.
+    pub fn remove(&mut self, slot: u32) {
+        if let Some(s) = self.simplices[slot as usize].take() {
+            self.index.remove(&s);
+            self.live -= 1;
+        }
+    }
+
+    /// The live simplices holding `v`, each once, and forgets the stale entries.
+    pub fn incident(&mut self, v: u32) -> Vec<u32> {
+        let simplices = &self.simplices;
+        let list = &mut self.incident[v as usize];
+        list.retain(|&s| simplices[s as usize].is_some_and(|x| x.multiplicity(v) > 0));
+        list.sort_unstable();
+        list.dedup();
+        list.clone()
+    }
+
+    /// Ids of the vertices that still hold a simplex, in id order.
+    pub fn used_vertices(&self) -> Vec<u32> {
+        let mut used = vec![false; self.vertices.len()];
+        for s in self.simplices.iter().flatten() {
+            for &x in &s.v {
+                used[x as usize] = true;
+            }
+        }
+        (0..self.vertices.len() as u32)
+            .filter(|&i| used[i as usize])
+            .collect()
+    }
+
+    /// The live simplices.
+    pub fn live_simplices(&self) -> impl Iterator<Item = Simplex> + '_ {
+        self.simplices.iter().flatten().copied()
+    }
+}
+
+/// Roles of the corners of a fine simplex in a split of `v` into `v1` (low) and `v2` (high):
+/// 1 or 2 for the children, 0 for another vertex.
+fn role(x: u32, v1: u32, v2: u32) -> u8 {
+    if x == v1 {
+        1
+    } else if x == v2 {
+        2
+    } else {
+        0
+    }
+}
+
+/// Which candidate preimage of its coarse simplex the fine simplex `s` is (§3, the connectivity
+/// codes of a vertex split): the coarse simplex is `s` with `v2` renamed `v1`; the candidates are
+/// numbered as [`candidates`] lists them.
+pub fn candidate_of(s: &Simplex, v1: u32, v2: u32) -> usize {
+    if s.kind == POINT {
+        return (role(s.v[0], v1, v2) - 1) as usize;
+    }
+    let r = s.v.map(|x| role(x, v1, v2));
+    match r.iter().filter(|&&x| x != 0).count() {
+        1 => {
+            let i = r.iter().position(|&x| x != 0).unwrap();
+            (r[i] - 1) as usize
+        }
+        2 => {
+            // rotate so that the other vertex is last: (r0, r1, x)
+            let i = r.iter().position(|&x| x == 0).unwrap();
+            let (r0, r1) = (r[(i + 1) % 3], r[(i + 2) % 3]);
+            ((r0 - 1) * 2 + (r1 - 1)) as usize
+        }
+        _ => match r.iter().filter(|&&x| x == 1).count() {
+            3 => 0,
+            0 => 1,
+            2 => 2,
+            _ => 3,
+        },
+    }
+}
+
+/// The candidate preimages of coarse simplex `c` (holding `v`) when `v` splits into `v1` = `v`
+/// and `v2`, in the numbering of [`candidate_of`].
+pub fn candidates(c: &Simplex, v: u32, v2: u32) -> Vec<Simplex> {
+    let v1 = v;
+    if c.kind == POINT {
+        return vec![Simplex::point(v1), Simplex::point(v2)];
+    }
+    match c.multiplicity(v) {
+        1 => {
+            let i = c.v.iter().position(|&x| x == v).unwrap();
+            let (a, b) = (c.v[(i + 1) % 3], c.v[(i + 2) % 3]);
+            vec![Simplex::triangle(v1, a, b), Simplex::triangle(v2, a, b)]
+        }
+        2 => {
+            let x = *c.v.iter().find(|&&x| x != v).unwrap();
+            let pair = [(v1, v1), (v1, v2), (v2, v1), (v2, v2)];
+            pair.iter()
+                .map(|&(a, b)| Simplex::triangle(a, b, x))
+                .collect()
+        }
+        _ => vec![
+            Simplex::triangle(v1, v1, v1),
+            Simplex::triangle(v2, v2, v2),
+            Simplex::triangle(v1, v1, v2),
+            Simplex::triangle(v1, v2, v2),
+        ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidates_and_their_numbers_agree() {
+        // v = 0 splits into 0 and 9; others 5, 6
+        let (v, v2) = (0u32, 9u32);
+        for c in [
+            Simplex::triangle(v, 5, 6),
+            Simplex::triangle(5, v, v),
+            Simplex::triangle(v, v, v),
+            Simplex::point(v),
+        ] {
+            for (i, f) in candidates(&c, v, v2).iter().enumerate() {
+                assert_eq!(candidate_of(f, v, v2), i, "{c:?} {f:?}");
+                assert_eq!(f.renamed(v2, v), c);
+            }
+        }
+    }
+
+    #[test]
+    fn rotation_is_canonical_and_keeps_orientation() {
+        assert_eq!(Simplex::triangle(3, 1, 2), Simplex::triangle(1, 2, 3));
+        assert_ne!(Simplex::triangle(1, 3, 2), Simplex::triangle(1, 2, 3));
+    }
+}

@@ -1,0 +1,302 @@
+//! Decoding (paper 003 §6.1): read the header, the tables and the index at the end, start from
+//! one vertex at zero precision, and apply the cells' codes top-down. A cell that reaches its
+//! full precision hands each child the part of its complex that belongs to it (§4, steps 7–8),
+//! and the children continue independently from their own chunks.
+//!
+//! [`Tsc::decode`] decodes every cell up to a precision (`--max-bits`: any prefix of the
+//! refinement, the whole file when it equals `p`).
+
+use rustc_hash::{FxHashMap, FxHashSet};
+
+use crate::complex::{Complex, POINT, Simplex, Vertex};
+use crate::entropy::{Counts, Models, SymbolReader};
+use crate::error::CodecError;
+use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
+use crate::kd_coder::{self, Limits, kd_key};
+use crate::nsp_tree::Node;
+
+/// An opened `.tsc` file: its header, models and tree, over the file's bytes.
+pub struct Tsc<'a> {
+    /// The header.
+    pub header: Header,
+    /// The nSP-tree, pre-order.
+    pub nodes: Vec<Node>,
+    models: Models,
+    bytes: &'a [u8],
+}
+
+/// A decoded mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Decoded {
+    /// Precision in bits per coordinate of every vertex.
+    pub bits: u32,
+    /// Each vertex's cell: lower corner on the full-precision grid (the grid point itself at
+    /// full precision), in kd order.
+    pub corners: Vec<[u32; 3]>,
+    /// Each vertex's position (the grid point, or the cell's centre below full precision).
+    pub positions: Vec<[f64; 3]>,
+    /// Oriented triangles; at full precision degenerate ones too, as the input had them.
+    pub triangles: Vec<[u32; 3]>,
+    /// Vertices no triangle uses (isolated points of the input).
+    pub isolated: Vec<u32>,
+    /// Bytes of the file the decode read: header, tables, index and the chunks it used.
+    pub bytes_read: u64,
+    /// nSP-cells decoded.
+    pub cells: u64,
+}
+
+impl<'a> Tsc<'a> {
+    /// Parses the header, tables and index of a `.tsc` file held in memory.
+    pub fn open(bytes: &'a [u8]) -> Result<Self, CodecError> {
+        let header = Header::from_bytes(bytes, bytes.len() as u64)?;
+        let (to, tl) = header.tables;
+        let counts = Counts::from_bytes(&bytes[to as usize..(to + tl) as usize], to)?;
+        let (io, il) = header.index;
+        let nodes = format::index_from_bytes(
+            &bytes[io as usize..(io + il) as usize],
+            io,
+            &header.params,
+            (to + tl, io),
+        )?;
+        if nodes.is_empty() != (header.vertices == 0) {
+            return Err(CodecError::corrupt(
+                96,
+                "the index and the vertex count disagree on emptiness",
+            ));
+        }
+        Ok(Tsc {
+            header,
+            nodes,
+            models: counts.models(),
+            bytes,
+        })
+    }
+
+    /// Bytes every decode reads: header, tables, index.
+    fn fixed_bytes(&self) -> u64 {
+        HEADER_LEN as u64 + self.header.tables.1 + self.header.index.1
+    }
+
+    /// Decodes every cell up to `max_bits` bits per coordinate (the file's `p` when `None`).
+    pub fn decode(&self, max_bits: Option<u32>) -> Result<Decoded, CodecError> {
+        let p = self.header.params.bits;
+        let bits = max_bits.unwrap_or(p).min(p);
+        let mut out = Assembly::default();
+        let mut bytes_read = self.fixed_bytes();
+        let mut cells = 0;
+        if !self.nodes.is_empty() {
+            let mut root = Complex::default();
+            let v = root.add_vertex(Vertex {
+                corner: [0; 3],
+                level: 0,
+            });
+            if self.header.flags & ROOT_TRIANGLE != 0 {
+                root.add(Simplex::triangle(v, v, v));
+            }
+            if self.header.flags & ROOT_POINT != 0 {
+                root.add(Simplex::point(v));
+            }
+            let mut stack = vec![(0usize, root, vec![v])];
+            while let Some((i, mut cx, mut alive)) = stack.pop() {
+                let node = &self.nodes[i];
+                let leaf = node.children.is_empty();
+                let (start, end) = self.header.params.precision(node.depth);
+                let end = if leaf { p } else { end };
+                let stop = end.min(bits);
+                let reader = &mut SymbolReader::new(
+                    &self.bytes[node.offset as usize..(node.offset + node.len) as usize],
+                    &self.models,
+                    node.offset,
+                )?;
+                bytes_read += node.len;
+                cells += 1;
+                let limits = Limits {
+                    vertices: node.end_vertices as usize,
+                    simplices: node.end_simplices as usize,
+                };
+                kd_coder::decode(
+                    &mut cx,
+                    &mut alive,
+                    p,
+                    3 * start as usize,
+                    3 * stop as usize,
+                    reader,
+                    limits,
+                )?;
+                if leaf || stop < end {
+                    if stop == end
+                        && (alive.len() as u64 != node.end_vertices
+                            || cx.live as u64 != node.end_simplices)
+                    {
+                        return Err(CodecError::corrupt(
+                            node.offset,
+                            format!(
+                                "cell {i} decodes to {} vertices and {} simplices, its index says {} and {}",
+                                alive.len(),
+                                cx.live,
+                                node.end_vertices,
+                                node.end_simplices
+                            ),
+                        ));
+                    }
+                    out.add(&cx);
+                    continue;
+                }
+                let parts = self.partition(i, &cx, &alive);
+                for (child, part) in node.children.iter().zip(parts).rev() {
+                    stack.push((*child, part.0, part.1));
+                }
+            }
+        }
+        Ok(out.finish(self, bits, bytes_read, cells))
+    }
+
+    /// Gives each child of cell `i` the simplices one of whose vertices lies in it, over fresh
+    /// copies of their vertices (kd order kept).
+    fn partition(&self, i: usize, cx: &Complex, alive: &[u32]) -> Vec<(Complex, Vec<u32>)> {
+        let node = &self.nodes[i];
+        let params = &self.header.params;
+        let positions: Vec<usize> = (0..64)
+            .filter(|&c| node.child_mask & (1 << c) != 0)
+            .collect();
+        let slot_of: FxHashMap<usize, usize> =
+            positions.iter().enumerate().map(|(k, &c)| (c, k)).collect();
+        let mut lists: Vec<Vec<Simplex>> = vec![Vec::new(); positions.len()];
+        for s in cx.live_simplices() {
+            let mut seen = [usize::MAX; 3];
+            for (k, &x) in s.v.iter().enumerate() {
+                let Some(c) =
+                    params.child_of(node.depth, node.cell, cx.vertices[x as usize].corner)
+                else {
+                    continue;
+                };
+                if let (false, Some(&slot)) = (seen.contains(&c), slot_of.get(&c)) {
+                    lists[slot].push(s);
+                }
+                seen[k] = c;
+            }
+        }
+        lists
+            .into_iter()
+            .map(|list| {
+                let mut used = vec![false; cx.vertices.len()];
+                for s in &list {
+                    for &x in &s.v {
+                        used[x as usize] = true;
+                    }
+                }
+                let mut part = Complex::default();
+                let mut map = vec![u32::MAX; cx.vertices.len()];
+                let mut order = Vec::new();
+                for &v in alive.iter().filter(|&&v| used[v as usize]) {
+                    map[v as usize] = part.add_vertex(cx.vertices[v as usize]);
+                    order.push(map[v as usize]);
+                }
+                for s in list {
+                    part.add(rename(s, &map));
+                }
+                (part, order)
+            })
+            .collect()
+    }
+}
+
+/// `s` over other vertex ids.
+fn rename(s: Simplex, map: &[u32]) -> Simplex {
+    s.map(|x| map[x as usize])
+}
+
+/// The union of the cells' complexes, duplicates along borders removed.
+#[derive(Default)]
+struct Assembly {
+    corners: Vec<[u32; 3]>,
+    levels: Vec<u8>,
+    by_corner: FxHashMap<[u32; 3], u32>,
+    simplices: FxHashSet<Simplex>,
+}
+
+impl Assembly {
+    fn add(&mut self, cx: &Complex) {
+        let mut map = vec![u32::MAX; cx.vertices.len()];
+        for v in cx.used_vertices() {
+            let vx = cx.vertices[v as usize];
+            map[v as usize] = *self.by_corner.entry(vx.corner).or_insert_with(|| {
+                self.corners.push(vx.corner);
+                self.levels.push(vx.level);
+                (self.corners.len() - 1) as u32
+            });
+        }
+        for s in cx.live_simplices() {
+            self.simplices.insert(rename(s, &map));
+        }
+    }
+
+    fn finish(self, tsc: &Tsc, bits: u32, bytes_read: u64, cells: u64) -> Decoded {
+        let p = tsc.header.params.bits;
+        let full = bits == p;
+        let level = 3 * bits as usize;
+        let mut order: Vec<u32> = (0..self.corners.len() as u32).collect();
+        order.sort_by_key(|&v| kd_key(self.corners[v as usize], level, p));
+        let mut rank = vec![0u32; order.len()];
+        for (r, &v) in order.iter().enumerate() {
+            rank[v as usize] = r as u32;
+        }
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        let mut isolated: Vec<u32> = Vec::new();
+        let mut used = vec![false; order.len()];
+        let mut simplices: Vec<Simplex> = self
+            .simplices
+            .into_iter()
+            .map(|s| rename(s, &rank))
+            .collect();
+        simplices.sort_unstable();
+        for s in simplices {
+            if s.kind == POINT {
+                if full {
+                    isolated.push(s.v[0]);
+                    used[s.v[0] as usize] = true;
+                }
+            } else if full || (s.v[0] != s.v[1] && s.v[1] != s.v[2] && s.v[2] != s.v[0]) {
+                triangles.push(s.v);
+                for x in s.v {
+                    used[x as usize] = true;
+                }
+            }
+        }
+        // below full precision, drop the vertices only degenerate simplices used
+        let keep: Vec<u32> = (0..order.len() as u32)
+            .filter(|&r| used[r as usize])
+            .collect();
+        let mut new_id = vec![u32::MAX; order.len()];
+        for (i, &r) in keep.iter().enumerate() {
+            new_id[r as usize] = i as u32;
+        }
+        let corners: Vec<[u32; 3]> = keep
+            .iter()
+            .map(|&r| self.corners[order[r as usize] as usize])
+            .collect();
+        let positions = keep
+            .iter()
+            .map(|&r| {
+                let v = order[r as usize] as usize;
+                let vx = Vertex {
+                    corner: self.corners[v],
+                    level: self.levels[v],
+                };
+                tsc.header.grid.position(vx.centre(p))
+            })
+            .collect();
+        Decoded {
+            bits,
+            corners,
+            positions,
+            triangles: triangles
+                .iter()
+                .map(|t| t.map(|x| new_id[x as usize]))
+                .collect(),
+            isolated: isolated.iter().map(|&x| new_id[x as usize]).collect(),
+            bytes_read,
+            cells,
+        }
+    }
+}

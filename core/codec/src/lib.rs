@@ -1,0 +1,35 @@
+//! tessd's mesh codec: lossless, progressive and out-of-core, after Jamin, Gandoin & Akkouche,
+//! *Compression out-of-core pour la visualisation interactive de maillages volumineux*
+//! (REFIG 2009, paper 003), itself built on Gandoin & Devillers' kd-tree coder (GD02).
+//!
+//! The pipeline follows the paper's sections, one step per module:
+//!
+//! | step | module | paper |
+//! |---|---|---|
+//! | quantisation to `p` bits in the cubic box | [`quantize`] | §5.1 |
+//! | nSP-tree: cells, precisions, duplication | [`nsp_tree`] | §5.1 |
+//! | the complex on the kd-tree's leaves | [`complex`] | §3, §5.2a |
+//! | kd split / merge codes, interleaved | [`kd_coder`] | §3, §5.2b |
+//! | symbols and their contexts | [`symbols`] | §5.3 |
+//! | range coding with per-level tables | [`entropy`] | §5.2c, §5.3 |
+//! | file layout, index at the end | [`format`] | §5.1, §5.3 |
+//! | compression pipeline | [`encode`] | §5.2 |
+//! | decoding | [`decode`] | §6.1 |
+
+pub mod complex;
+pub mod decode;
+pub mod encode;
+pub mod entropy;
+pub mod error;
+pub mod format;
+pub mod kd_coder;
+pub mod nsp_tree;
+pub mod quantize;
+pub mod symbols;
+mod varint;
+
+pub use decode::{Decoded, Tsc};
+pub use encode::{CompressReport, compress};
+pub use error::CodecError;
+pub use nsp_tree::Params;
+pub use quantize::Quantizer;

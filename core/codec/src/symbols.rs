@@ -1,0 +1,147 @@
+//! The code alphabet shared by the kd coder, the entropy coder and the file: which family a symbol
+//! belongs to, which prediction context it was coded in, at which level, and how many values it
+//! can take.
+//!
+//! Paper 003 §5.3: "La fréquence des codes géométriques variant selon le niveau de détail, les
+//! probabilités sont calculées indépendamment pour chaque niveau" — every (family, sub-context,
+//! level) triple is its own context with its own probability table. Geometry codes use the kd
+//! level; connectivity codes the precision in bits (a level of detail of the viewer).
+
+/// Most kd-tree levels a file can have: 3 axes × [`crate::quantize::MAX_BITS`], rounded up.
+pub const MAX_LEVELS: usize = 64;
+
+/// What a symbol describes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Family {
+    /// kd-cell subdivision (§3): 0 = only the half the neighbours predict is non-empty, 1 = only
+    /// the other half, 2 = both. Sub-context: the cell holds a collapsed triangle (×7) and how
+    /// far the neighbours' centroid is from the split plane (no neighbours, then six margins).
+    Split = 0,
+    /// Where a triangle holding the split vertex once goes: 0 = the predicted child, 1 = the
+    /// other, 2 = both. Sub-context: which children its other vertices are already linked to by
+    /// decoded triangles (none, one, both) and on which sides of the split plane they lie.
+    TriangleOnce = 1,
+    /// The preimages of a triangle holding the split vertex twice, as a mask of four candidates
+    /// minus one. Sub-context: the links of its third vertex and the orientation its neighbours
+    /// imply.
+    Twice = 2,
+    /// The preimages of a triangle made of the split vertex alone (mask of four, minus one).
+    /// Sub-context: whether either child already holds a collapsed edge.
+    Thrice = 3,
+    /// Where an isolated point goes: 0 = low child, 1 = high child, 2 = both.
+    Point = 4,
+}
+
+/// Every family, in order.
+pub const ALL: [Family; 5] = [
+    Family::Split,
+    Family::TriangleOnce,
+    Family::Twice,
+    Family::Thrice,
+    Family::Point,
+];
+
+/// Number of families.
+pub const FAMILIES: usize = ALL.len();
+
+impl Family {
+    /// Number of values a symbol of this family takes.
+    pub const fn alphabet(self) -> usize {
+        match self {
+            Family::Twice | Family::Thrice => 15,
+            _ => 3,
+        }
+    }
+
+    /// Number of sub-contexts.
+    pub const fn subs(self) -> usize {
+        match self {
+            Family::Split => 14,
+            Family::TriangleOnce => 10,
+            Family::Twice => 9,
+            Family::Thrice => 4,
+            Family::Point => 1,
+        }
+    }
+
+    /// First context slot of this family (slots × [`MAX_LEVELS`] = contexts).
+    const fn first_slot(self) -> usize {
+        let mut slot = 0;
+        let mut i = 0;
+        while i < self as usize {
+            slot += ALL[i].subs();
+            i += 1;
+        }
+        slot
+    }
+}
+
+/// Number of contexts.
+pub const CONTEXTS: usize = (Family::Point.first_slot() + 1) * MAX_LEVELS;
+
+/// Widest alphabet.
+pub const MAX_ALPHABET: usize = 16;
+
+/// The context of a symbol of `family`, sub-context `sub`, emitted at kd level `level`.
+pub fn context(family: Family, sub: usize, level: usize) -> usize {
+    debug_assert!(sub < family.subs());
+    let level = if family == Family::Split {
+        level
+    } else {
+        level / 3
+    };
+    (family.first_slot() + sub) * MAX_LEVELS + level
+}
+
+/// The family of context `ctx`.
+pub fn family_of(ctx: usize) -> Family {
+    let slot = ctx / MAX_LEVELS;
+    *ALL.iter().rev().find(|f| f.first_slot() <= slot).unwrap()
+}
+
+/// A symbol as stored in the semi-coded temporary stream (§5.2c): context and value in 16 bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Symbol(pub u16);
+
+impl Symbol {
+    /// Packs a value in context `ctx`.
+    pub fn new(ctx: usize, value: u8) -> Self {
+        debug_assert!((value as usize) < family_of(ctx).alphabet());
+        Symbol(((ctx as u16) << 4) | value as u16)
+    }
+
+    /// The symbol's context.
+    pub fn context(self) -> usize {
+        (self.0 >> 4) as usize
+    }
+
+    /// The symbol's value.
+    pub fn value(self) -> u8 {
+        (self.0 & 15) as u8
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contexts_are_distinct_and_fit_a_symbol() {
+        // a symbol keeps its context in 12 bits
+        const { assert!(CONTEXTS <= 1 << 12) };
+        let mut seen = std::collections::HashSet::new();
+        for f in ALL {
+            for sub in 0..f.subs() {
+                for level in 0..MAX_LEVELS {
+                    let c = context(f, sub, level);
+                    assert_eq!(family_of(c), f);
+                    if f == Family::Split || level % 3 == 0 {
+                        assert!(seen.insert(c), "{f:?} {sub} {level}");
+                    }
+                    assert!(c < CONTEXTS, "{c}");
+                }
+            }
+        }
+    }
+}

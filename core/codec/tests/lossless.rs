@@ -1,0 +1,209 @@
+//! decode(encode(m)) equals the quantised m on every shared mesh: the set of grid points, the set
+//! of oriented triangles (degenerate ones included) and the isolated points, with one cell and with
+//! an nSP-tree of many cells. The expectation is computed here from the input, independently of
+//! the codec's own quantisation and re-indexing.
+
+use std::collections::BTreeSet;
+use std::io::Cursor;
+
+use tessd_codec::{Params, Quantizer, Tsc, compress};
+
+type P = [u32; 3];
+
+/// The fan triangulation of every face.
+fn triangles(mesh: &tessd_mesh::Mesh) -> Vec<[u32; 3]> {
+    let mut out = Vec::new();
+    for f in mesh.faces() {
+        for i in 1..f.len() - 1 {
+            out.push([f[0], f[i], f[i + 1]]);
+        }
+    }
+    out
+}
+
+fn canonical(t: [P; 3]) -> [P; 3] {
+    *[t, [t[1], t[2], t[0]], [t[2], t[0], t[1]]]
+        .iter()
+        .min()
+        .unwrap()
+}
+
+/// What a lossless decode must give: points, triangles and isolated points on the grid.
+fn expected(
+    positions: &[[f32; 3]],
+    tris: &[[u32; 3]],
+    bits: u32,
+) -> (BTreeSet<P>, BTreeSet<[P; 3]>, BTreeSet<P>) {
+    let mut min = [f64::INFINITY; 3];
+    let mut max = [f64::NEG_INFINITY; 3];
+    for p in positions {
+        for a in 0..3 {
+            min[a] = min[a].min(p[a] as f64);
+            max[a] = max[a].max(p[a] as f64);
+        }
+    }
+    if positions.is_empty() {
+        (min, max) = ([0.0; 3], [1.0; 3]);
+    }
+    let grid = Quantizer::new(min, max, bits).unwrap();
+    let q: Vec<P> = positions
+        .iter()
+        .map(|p| grid.quantize(p.map(f64::from)))
+        .collect();
+    let points: BTreeSet<P> = q.iter().copied().collect();
+    let tri: BTreeSet<[P; 3]> = tris
+        .iter()
+        .map(|t| canonical(t.map(|i| q[i as usize])))
+        .collect();
+    let used: BTreeSet<P> = tri.iter().flatten().copied().collect();
+    let isolated = points.difference(&used).copied().collect();
+    (points, tri, isolated)
+}
+
+fn round_trip(name: &str, positions: &[[f32; 3]], tris: &[[u32; 3]], params: Params) -> (u64, u64) {
+    let mut file = Cursor::new(Vec::new());
+    let report = compress(positions, tris, params, &mut file, &mut |_| {}).unwrap();
+    let bytes = file.into_inner();
+    assert_eq!(report.bytes, bytes.len() as u64);
+    let tsc = Tsc::open(&bytes).unwrap();
+    let d = tsc.decode(None).unwrap();
+    let (points, tri, isolated) = expected(positions, tris, params.bits);
+    let got_points: BTreeSet<P> = d.corners.iter().copied().collect();
+    assert_eq!(
+        got_points.len(),
+        d.corners.len(),
+        "{name}: a point decoded twice"
+    );
+    assert_eq!(got_points, points, "{name}: points differ");
+    let got_tri: BTreeSet<[P; 3]> = d
+        .triangles
+        .iter()
+        .map(|t| canonical(t.map(|i| d.corners[i as usize])))
+        .collect();
+    assert_eq!(
+        got_tri.len(),
+        d.triangles.len(),
+        "{name}: a triangle decoded twice"
+    );
+    assert_eq!(got_tri, tri, "{name}: triangles differ");
+    let got_iso: BTreeSet<P> = d.isolated.iter().map(|&i| d.corners[i as usize]).collect();
+    assert_eq!(got_iso, isolated, "{name}: isolated points differ");
+    assert_eq!(report.vertices, points.len() as u64);
+    (bytes.len() as u64, report.nsp_cells)
+}
+
+#[test]
+fn every_shared_mesh_round_trips_at_12_and_16_bits_in_one_cell_and_in_many() {
+    let dir = tessd_testdata::shared("mesh");
+    let mut names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    names.sort();
+    assert!(
+        names.len() >= 10,
+        "shared meshes missing in {}",
+        dir.display()
+    );
+    for path in names {
+        let mesh = tessd_mesh::io::read_path(&path, &Default::default()).unwrap();
+        let tris = triangles(&mesh);
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        for bits in [12, 16] {
+            let one = Params {
+                bits,
+                min_cell: u64::MAX,
+                ..Params::default()
+            };
+            let (bytes, cells) = round_trip(&name, &mesh.positions, &tris, one);
+            assert_eq!(cells, 1);
+            let many = Params {
+                bits,
+                min_cell: 200,
+                cell_split: 2,
+                root_bits: 3,
+            };
+            let (_, cells) = round_trip(&name, &mesh.positions, &tris, many);
+            if tris.len() > 1000 {
+                assert!(cells > 8, "{name}: {cells} cells with N_min 200");
+            }
+            println!(
+                "{name}: {} vertices, {bits} bits: {:.2} bits/vertex in one cell",
+                mesh.positions.len(),
+                8.0 * bytes as f64 / mesh.positions.len() as f64
+            );
+        }
+    }
+}
+
+#[test]
+fn soups_degenerate_and_non_manifold_triangles_round_trip() {
+    // a soup: the same corner positions in separate vertices; a triangle with a repeated index;
+    // one whose corners quantise onto one point; both orientations of one triangle; a duplicate;
+    // an edge shared by four triangles; isolated points
+    let positions: Vec<[f32; 3]> = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0], // 0-2
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0], // 3-5 soup copies
+        [0.5, 0.5, 0.5],
+        [0.5000001, 0.5, 0.5],
+        [0.5, 0.5000001, 0.5], // 6-8 collapse at 12 bits
+        [1.0, 1.0, 1.0],
+        [0.3, 0.9, 0.1],
+        [0.9, 0.2, 0.7], // 9-11
+        [0.25, 0.25, 0.75],
+        [0.75, 0.75, 0.25], // 12-13 isolated
+    ];
+    let tris = vec![
+        [0, 1, 2],
+        [3, 4, 5],
+        [0, 0, 9],
+        [6, 7, 8],
+        [1, 2, 9],
+        [1, 9, 2],
+        [1, 2, 9],
+        [0, 1, 10],
+        [0, 1, 11],
+        [1, 0, 9],
+        [4, 3, 11],
+    ];
+    for bits in [4, 12, 16] {
+        round_trip(
+            "soup",
+            &positions,
+            &tris,
+            Params {
+                bits,
+                min_cell: u64::MAX,
+                root_bits: 2,
+                ..Params::default()
+            },
+        );
+        round_trip(
+            "soup",
+            &positions,
+            &tris,
+            Params {
+                bits,
+                min_cell: 1,
+                cell_split: 2,
+                root_bits: 1,
+            },
+        );
+    }
+}
+
+#[test]
+fn empty_and_point_only_inputs_round_trip() {
+    round_trip("empty", &[], &[], Params::default());
+    round_trip("one point", &[[1.0, 2.0, 3.0]], &[], Params::default());
+    round_trip(
+        "points",
+        &[[1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [4.0, 0.0, 3.0]],
+        &[],
+        Params::default(),
+    );
+}
