@@ -51,4 +51,16 @@ export TESSD_BIN="$WORK/tessd"
 rm -f "$RESULTS/codec_raw.jsonl"
 "$PY" bench/codec/run_codec.py run --data "$DATA" --work "$WORK" --jsonl "$RESULTS/codec_raw.jsonl" \
     --out "$RESULTS" --command "bash bench/run_codec.sh $*" "$@"
+# View-dependent refinement along a camera path through the daemon (paper 003 §6.2, Figure 9).
+{
+    echo "# View-dependent refinement along a camera path (\`bench/codec/view_path.py\`)"
+    echo
+    echo "Run $(date -u '+%Y-%m-%d %H:%M UTC'), \`bash bench/run_codec.sh\`. Zoom in from 20 radii to 1.2, half an orbit, zoom out;"
+    echo "60 frames, 1280x720, 30° vertical, 1 pixel; one daemon keeps the decoder states between frames."
+    echo
+    for m in bun_zipper.ply fandisk.obj; do
+        "$PY" bench/codec/view_path.py "$TESSD_BIN" "$DATA/mesh/$m" --frames 60 --jsonl "$WORK/view_$m.jsonl"
+        echo
+    done
+} > "$RESULTS/codec_view.md"
 echo "codec benchmark: $(( $(date +%s) - start )) s"

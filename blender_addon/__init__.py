@@ -5,12 +5,15 @@ The add-on is thin on purpose: it converts Blender meshes to the protocol's arra
 operators and menus. All geometry is computed by the `tessd` daemon, reached through the
 `tessd` Python client that build.py bundles as the `vendor` subpackage.
 
-Scripting contract (public API): bpy.ops.tessd.simplify, generate_lods, subdivide, export_usd.
+Scripting contract (public API): bpy.ops.tessd.simplify, generate_lods, subdivide, export_usd,
+import_compressed.
 """
 
-from . import daemon, jobs, menus, ops_export, ops_lods, ops_simplify, ops_subdivide, preferences
+from . import (daemon, jobs, menus, ops_export, ops_import_compressed, ops_lods, ops_simplify,
+               ops_subdivide, preferences)
 
-_MODULES = (preferences, jobs, ops_simplify, ops_lods, ops_subdivide, ops_export, menus)
+_MODULES = (preferences, jobs, ops_simplify, ops_lods, ops_subdivide, ops_export,
+            ops_import_compressed, menus)
 
 
 def register():

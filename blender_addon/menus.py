@@ -15,6 +15,7 @@ class VIEW3D_MT_tessd(bpy.types.Menu):
         layout.operator("tessd.subdivide", text="Subdivide…")
         layout.separator()
         layout.operator("tessd.export_usd", text="Export USD via tessd…")
+        layout.operator("tessd.import_compressed", text="Import compressed mesh (view-dependent)…")
 
 
 def _draw(self, context):
@@ -22,13 +23,19 @@ def _draw(self, context):
     self.layout.menu(VIEW3D_MT_tessd.bl_idname)
 
 
+def _draw_import(self, context):
+    self.layout.operator("tessd.import_compressed", text="Compressed mesh (.tsc, view-dependent)")
+
+
 def register():
     bpy.utils.register_class(VIEW3D_MT_tessd)
+    bpy.types.TOPBAR_MT_file_import.append(_draw_import)
     bpy.types.VIEW3D_MT_object.append(_draw)
     bpy.types.VIEW3D_MT_object_context_menu.append(_draw)
 
 
 def unregister():
+    bpy.types.TOPBAR_MT_file_import.remove(_draw_import)
     bpy.types.VIEW3D_MT_object_context_menu.remove(_draw)
     bpy.types.VIEW3D_MT_object.remove(_draw)
     bpy.utils.unregister_class(VIEW3D_MT_tessd)

@@ -298,3 +298,59 @@ def test_export_usd_as_lods(bpy, tmp_path):
     prim = stage.GetPrimAtPath("/Scene/Suzanne")
     vset = prim.GetVariantSets().GetVariantSet("LOD")
     assert vset.GetVariantNames() == ["LOD0", "LOD1", "LOD2"]
+
+
+def _scene_camera(bpy, eye, fov_deg, size):
+    """A perspective camera at `eye` looking down −Z with +Y up (Blender's identity rotation),
+    `fov_deg` vertical, rendering at `size`."""
+    import math
+
+    data = bpy.data.cameras.new("Cam")
+    data.sensor_fit = 'VERTICAL'
+    data.angle = math.radians(fov_deg)
+    cam = bpy.data.objects.new("Cam", data)
+    bpy.context.scene.collection.objects.link(cam)
+    cam.location = eye
+    cam.rotation_euler = (0.0, 0.0, 0.0)
+    bpy.context.view_layer.update()
+    scene = bpy.context.scene
+    scene.camera = cam
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    return cam
+
+
+def test_import_compressed_decodes_what_the_camera_needs(bpy, tmp_path):
+    import locate
+
+    mesh = locate.shared_data() / "mesh" / "bun_zipper.ply"
+    tsc = tmp_path / "bunny.tsc"
+    cli("compress", str(mesh), str(tsc), "--bits", "12", "--min-cell", "3000")
+    centre = (-0.0168, 0.110, -0.0015)  # the bunny's bounding-box centre, about
+    results = {}
+    for label, distance in (("near", 0.25), ("far", 4.0)):
+        scenes.empty_scene()
+        eye = (centre[0], centre[1], centre[2] + distance)
+        _scene_camera(bpy, eye, 30.0, (640, 480))
+        assert bpy.ops.tessd.import_compressed(filepath=str(tsc), pixel_error=1.0) == {'FINISHED'}
+        obj = bpy.data.objects["bunny"]
+        # the same camera through the CLI gives the same mesh
+        ref = cli("view-decode", str(tsc), str(tmp_path / ("%s.ply" % label)),
+                  "--eye", "%r,%r,%r" % eye, "--target", "%r,%r,%r" % (eye[0], eye[1], eye[2] - 1.0),
+                  "--up", "0,1,0", "--fov", "30", "--size", "640x480", "--pixel-error", "1")
+        assert counts(obj) == (ref["vertices"], ref["triangles"])
+        assert obj["tessd_tsc"] == str(tsc)
+        results[label] = ref
+    assert results["far"]["triangles"] * 4 < results["near"]["triangles"]
+    assert results["far"]["bytes_read"] < results["near"]["bytes_read"]
+
+
+def test_import_compressed_without_a_camera_is_refused(bpy, tmp_path):
+    import locate
+
+    tsc = tmp_path / "spot.tsc"
+    cli("compress", str(locate.shared_data() / "mesh" / "spot_triangulated.obj"), str(tsc))
+    before = scene_state()
+    with pytest.raises(RuntimeError, match="no active camera"):
+        bpy.ops.tessd.import_compressed(filepath=str(tsc))
+    assert scene_state() == before

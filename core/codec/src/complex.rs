@@ -5,8 +5,6 @@
 //! Both the encoder (merging cells bottom-up) and the decoder (splitting them top-down) work on
 //! this structure, so that the two sides see exactly the same state between two codes.
 
-use rustc_hash::FxHashMap;
-
 /// Marks an isolated point in [`Simplex::kind`].
 pub const POINT: u8 = 0;
 /// Marks a triangle in [`Simplex::kind`].
@@ -96,11 +94,10 @@ pub struct Complex {
     pub vertices: Vec<Vertex>,
     /// Simplex slots; `None` once removed.
     pub simplices: Vec<Option<Simplex>>,
-    /// Per vertex, the slots of simplices that held it at some point (stale entries are dropped
-    /// lazily by [`Complex::incident`]).
+    /// Per vertex, the slots of simplices that held it at some point, each once (slots are never
+    /// reused, so a live slot listed here still holds the vertex; dead ones are dropped lazily by
+    /// [`Complex::incident`]).
     incident: Vec<Vec<u32>>,
-    /// Live simplex → slot, to merge duplicates.
-    index: FxHashMap<Simplex, u32>,
     /// Live simplices.
     pub live: usize,
 }
@@ -113,14 +110,11 @@ impl Complex {
         (self.vertices.len() - 1) as u32
     }
 
-    /// Adds `s` unless it is already there.
+    /// Adds `s`, which the caller knows is not there yet (no duplicate check: every caller adds
+    /// distinct simplices, and [`crate::encode`]'s union of cells removes its duplicates first).
     pub fn add(&mut self, s: Simplex) {
-        if self.index.contains_key(&s) {
-            return;
-        }
         let slot = self.simplices.len() as u32;
         self.simplices.push(Some(s));
-        self.index.insert(s, slot);
         self.live += 1;
         let n = if s.kind == POINT { 1 } else { 3 };
         for (i, &x) in s.v[..n].iter().enumerate() {
@@ -132,20 +126,26 @@ impl Complex {
 
     /// Removes the simplex in `slot`.
     pub fn remove(&mut self, slot: u32) {
-        if let Some(s) = self.simplices[slot as usize].take() {
-            self.index.remove(&s);
+        if self.simplices[slot as usize].take().is_some() {
             self.live -= 1;
         }
     }
 
-    /// The live simplices holding `v`, each once, and forgets the stale entries.
-    pub fn incident(&mut self, v: u32) -> Vec<u32> {
+    /// The slots of the live simplices holding `v`, each once (stale entries forgotten).
+    pub fn incident(&mut self, v: u32) -> &[u32] {
+        self.prune(v);
+        &self.incident[v as usize]
+    }
+
+    /// Forgets the dead slots listed for `v`.
+    pub fn prune(&mut self, v: u32) {
         let simplices = &self.simplices;
-        let list = &mut self.incident[v as usize];
-        list.retain(|&s| simplices[s as usize].is_some_and(|x| x.multiplicity(v) > 0));
-        list.sort_unstable();
-        list.dedup();
-        list.clone()
+        self.incident[v as usize].retain(|&s| simplices[s as usize].is_some());
+    }
+
+    /// The slots listed for `v`, live once [`Complex::prune`] ran for it.
+    pub fn listed(&self, v: u32) -> &[u32] {
+        &self.incident[v as usize]
     }
 
     /// Ids of the vertices that still hold a simplex, in id order.

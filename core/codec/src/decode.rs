@@ -6,6 +6,8 @@
 //! [`Tsc::decode`] decodes every cell up to a precision (`--max-bits`: any prefix of the
 //! refinement, the whole file when it equals `p`).
 
+use std::sync::Arc;
+
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::complex::{Complex, POINT, Simplex, Vertex};
@@ -15,14 +17,31 @@ use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_coder::{self, Limits, kd_key};
 use crate::nsp_tree::Node;
 
-/// An opened `.tsc` file: its header, models and tree, over the file's bytes.
-pub struct Tsc<'a> {
+/// An opened `.tsc` file: its header, models and tree, with the file's bytes.
+pub struct Tsc {
     /// The header.
     pub header: Header,
     /// The nSP-tree, pre-order.
     pub nodes: Vec<Node>,
-    models: Models,
-    bytes: &'a [u8],
+    pub(crate) models: Arc<Models>,
+    pub(crate) bytes: Arc<[u8]>,
+}
+
+/// The fully coarsened mesh every decode starts from (§6.1): one vertex at zero precision with
+/// the simplex kinds the header records.
+pub(crate) fn root_complex(header: &Header) -> (Complex, Vec<u32>) {
+    let mut root = Complex::default();
+    let v = root.add_vertex(Vertex {
+        corner: [0; 3],
+        level: 0,
+    });
+    if header.flags & ROOT_TRIANGLE != 0 {
+        root.add(Simplex::triangle(v, v, v));
+    }
+    if header.flags & ROOT_POINT != 0 {
+        root.add(Simplex::point(v));
+    }
+    (root, vec![v])
 }
 
 /// A decoded mesh.
@@ -45,10 +64,15 @@ pub struct Decoded {
     pub cells: u64,
 }
 
-impl<'a> Tsc<'a> {
-    /// Parses the header, tables and index of a `.tsc` file held in memory.
-    pub fn open(bytes: &'a [u8]) -> Result<Self, CodecError> {
-        let header = Header::from_bytes(bytes, bytes.len() as u64)?;
+impl Tsc {
+    /// Parses the header, tables and index of a `.tsc` file held in memory (copied).
+    pub fn open(bytes: &[u8]) -> Result<Self, CodecError> {
+        Tsc::from_shared(Arc::from(bytes))
+    }
+
+    /// As [`Tsc::open`], keeping `bytes` without a copy.
+    pub fn from_shared(bytes: Arc<[u8]>) -> Result<Self, CodecError> {
+        let header = Header::from_bytes(&bytes, bytes.len() as u64)?;
         let (to, tl) = header.tables;
         let counts = Counts::from_bytes(&bytes[to as usize..(to + tl) as usize], to)?;
         let (io, il) = header.index;
@@ -67,9 +91,14 @@ impl<'a> Tsc<'a> {
         Ok(Tsc {
             header,
             nodes,
-            models: counts.models(),
+            models: Arc::new(counts.models()),
             bytes,
         })
+    }
+
+    /// Size of the whole file.
+    pub fn bytes_len(&self) -> u64 {
+        self.bytes.len() as u64
     }
 
     /// Bytes every decode reads: header, tables, index.
@@ -85,18 +114,8 @@ impl<'a> Tsc<'a> {
         let mut bytes_read = self.fixed_bytes();
         let mut cells = 0;
         if !self.nodes.is_empty() {
-            let mut root = Complex::default();
-            let v = root.add_vertex(Vertex {
-                corner: [0; 3],
-                level: 0,
-            });
-            if self.header.flags & ROOT_TRIANGLE != 0 {
-                root.add(Simplex::triangle(v, v, v));
-            }
-            if self.header.flags & ROOT_POINT != 0 {
-                root.add(Simplex::point(v));
-            }
-            let mut stack = vec![(0usize, root, vec![v])];
+            let (root, alive) = root_complex(&self.header);
+            let mut stack = vec![(0usize, root, alive)];
             while let Some((i, mut cx, mut alive)) = stack.pop() {
                 let node = &self.nodes[i];
                 let leaf = node.children.is_empty();
@@ -105,7 +124,7 @@ impl<'a> Tsc<'a> {
                 let stop = end.min(bits);
                 let reader = &mut SymbolReader::new(
                     &self.bytes[node.offset as usize..(node.offset + node.len) as usize],
-                    &self.models,
+                    self.models.clone(),
                     node.offset,
                 )?;
                 bytes_read += node.len;
@@ -153,7 +172,12 @@ impl<'a> Tsc<'a> {
 
     /// Gives each child of cell `i` the simplices one of whose vertices lies in it, over fresh
     /// copies of their vertices (kd order kept).
-    fn partition(&self, i: usize, cx: &Complex, alive: &[u32]) -> Vec<(Complex, Vec<u32>)> {
+    pub(crate) fn partition(
+        &self,
+        i: usize,
+        cx: &Complex,
+        alive: &[u32],
+    ) -> Vec<(Complex, Vec<u32>)> {
         let node = &self.nodes[i];
         let params = &self.header.params;
         let positions: Vec<usize> = (0..64)

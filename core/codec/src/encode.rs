@@ -6,7 +6,7 @@
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::time::Instant;
 
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::complex::{Complex, POINT, Simplex, Vertex};
 use crate::entropy::{self, Counts};
@@ -293,6 +293,7 @@ fn leaf_complex(q: &Quantised, ids: &[u32], bits: u32) -> (Complex, Vec<u32>) {
 fn union(parts: Vec<(Complex, Vec<u32>)>, level: usize, bits: u32) -> (Complex, Vec<u32>) {
     let mut cx = Complex::default();
     let mut by_corner: FxHashMap<[u32; 3], u32> = FxHashMap::default();
+    let mut seen: FxHashSet<Simplex> = FxHashSet::default();
     for (part, alive) in &parts {
         let mut map = vec![u32::MAX; part.vertices.len()];
         for &v in alive {
@@ -302,7 +303,10 @@ fn union(parts: Vec<(Complex, Vec<u32>)>, level: usize, bits: u32) -> (Complex, 
                 .or_insert_with(|| cx.add_vertex(vx));
         }
         for s in part.live_simplices() {
-            cx.add(s.map(|x| map[x as usize]));
+            let s = s.map(|x| map[x as usize]);
+            if seen.insert(s) {
+                cx.add(s);
+            }
         }
     }
     let mut alive: Vec<u32> = (0..cx.vertices.len() as u32).collect();

@@ -190,18 +190,22 @@ pub fn encode(symbols: &[Symbol], models: &Models) -> Vec<u8> {
 }
 
 /// Reads one cell's symbols back, in the order the kd coder asks for them.
-pub struct SymbolReader<'m> {
+pub struct SymbolReader {
     decoder: DefaultRangeDecoder,
-    models: &'m Models,
+    models: std::sync::Arc<Models>,
     /// Offset of the cell's code chunk in the file, for error messages.
     pub offset: u64,
     /// Symbols read so far.
     pub read: u64,
 }
 
-impl<'m> SymbolReader<'m> {
+impl SymbolReader {
     /// A reader over one cell's chunk, which starts at `offset` in the file.
-    pub fn new(chunk: &[u8], models: &'m Models, offset: u64) -> Result<Self, CodecError> {
+    pub fn new(
+        chunk: &[u8],
+        models: std::sync::Arc<Models>,
+        offset: u64,
+    ) -> Result<Self, CodecError> {
         if !chunk.len().is_multiple_of(4) {
             return Err(CodecError::corrupt(
                 offset,
@@ -272,9 +276,9 @@ mod tests {
         let mut counts = Counts::default();
         counts.add(&syms);
         let counts = Counts::from_bytes(&counts.quantised().to_bytes(), 0).unwrap();
-        let models = counts.models();
+        let models = std::sync::Arc::new(counts.models());
         let bytes = encode(&syms, &models);
-        let mut r = SymbolReader::new(&bytes, &models, 0).unwrap();
+        let mut r = SymbolReader::new(&bytes, models, 0).unwrap();
         for s in &syms {
             assert_eq!(r.next(s.context()).unwrap(), s.value());
         }

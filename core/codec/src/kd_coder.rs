@@ -147,7 +147,8 @@ fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
     let h = half(level, bits) as f64;
     let mut collapsed = false;
     let mut others: Vec<u32> = Vec::new();
-    for slot in cx.incident(v) {
+    cx.prune(v);
+    for &slot in cx.listed(v) {
         let s = cx.simplices[slot as usize].expect("live");
         if s.kind != POINT && s.multiplicity(v) >= 2 {
             collapsed = true;
@@ -200,11 +201,11 @@ impl Masks for Known<'_> {
 }
 
 /// Decoder side: masks read from the stream.
-struct Read<'a, 'm> {
-    reader: &'a mut SymbolReader<'m>,
+struct Read<'a> {
+    reader: &'a mut SymbolReader,
 }
 
-impl Masks for Read<'_, '_> {
+impl Masks for Read<'_> {
     fn mask(&mut self, _c: &Simplex, coding: Coding) -> Result<u8, CodecError> {
         Ok(coding.mask(self.reader.next(coding.ctx)?))
     }
@@ -441,8 +442,8 @@ pub fn encode(
 /// Merges `v2` (high child) into `v1` (low child) and appends the connectivity codes of the
 /// inverse split, in the decoder's order.
 fn merge(cx: &mut Complex, v1: u32, v2: u32, level: usize, bits: u32, out: &mut Vec<Symbol>) {
-    let mut fine_slots = cx.incident(v1);
-    fine_slots.extend(cx.incident(v2));
+    let mut fine_slots = cx.incident(v1).to_vec();
+    fine_slots.extend_from_slice(cx.incident(v2));
     fine_slots.sort_unstable();
     fine_slots.dedup();
     let mut masks: FxHashMap<Simplex, u8> = FxHashMap::default();
@@ -549,7 +550,7 @@ fn split_vertex(
     bits: u32,
     reader: &mut SymbolReader,
 ) -> Result<(), CodecError> {
-    let slots = cx.incident(v);
+    let slots = cx.incident(v).to_vec();
     let coarse: Vec<Simplex> = slots
         .iter()
         .map(|&s| cx.simplices[s as usize].expect("live"))

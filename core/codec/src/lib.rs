@@ -15,6 +15,7 @@
 //! | file layout, index at the end | [`format`] | §5.1, §5.3 |
 //! | compression pipeline | [`encode`] | §5.2 |
 //! | decoding | [`decode`] | §6.1 |
+//! | view-dependent refinement, borders between precisions | [`view`] | §6.2, §6.3 |
 
 pub mod complex;
 pub mod decode;
@@ -27,9 +28,11 @@ pub mod nsp_tree;
 pub mod quantize;
 pub mod symbols;
 mod varint;
+pub mod view;
 
 pub use decode::{Decoded, Tsc};
 pub use encode::{CompressReport, compress};
 pub use error::CodecError;
 pub use nsp_tree::Params;
 pub use quantize::Quantizer;
+pub use view::{Camera, ViewMesh, ViewSession};

@@ -208,6 +208,35 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Decode what a camera needs from a .tsc file: each cell refined until its vertices'
+    /// error projects within --pixel-error pixels, cells out of view left out.
+    ViewDecode {
+        /// Input .tsc file.
+        input: PathBuf,
+        /// Output mesh (OBJ, PLY, STL, OFF, or a USD stage for .usda).
+        output: PathBuf,
+        /// Eye position, X,Y,Z.
+        #[arg(long, allow_hyphen_values = true)]
+        eye: String,
+        /// The point looked at, X,Y,Z.
+        #[arg(long, allow_hyphen_values = true)]
+        target: String,
+        /// The up direction, X,Y,Z.
+        #[arg(long, allow_hyphen_values = true)]
+        up: String,
+        /// Vertical field of view in degrees.
+        #[arg(long, default_value_t = 30.0)]
+        fov: f64,
+        /// Image size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "1280x720")]
+        size: String,
+        /// Largest projected error of a vertex, in pixels.
+        #[arg(long, default_value_t = 1.0)]
+        pixel_error: f64,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure the surface distance between two meshes: both one-sided distances, the
     /// symmetric Hausdorff distance and RMS (Metro-style sampling).
     Compare {
@@ -593,6 +622,41 @@ fn run(cli: Cli) -> Result<()> {
                 println!(
                     "decompress: {} bits -> {} vertices, {} triangles -> {} ({} of {} bytes read) in {:.0} ms",
                     r["bits"],
+                    r["vertices"],
+                    r["triangles"],
+                    output.display(),
+                    r["bytes_read"],
+                    r["file_bytes"],
+                    r["elapsed_ms"].as_f64().unwrap_or(0.0)
+                )
+            })
+        }
+        Command::ViewDecode {
+            input,
+            output,
+            eye,
+            target,
+            up,
+            fov,
+            size,
+            pixel_error,
+            json,
+        } => {
+            let params = serde_json::json!({
+                "input": input,
+                "output": output,
+                "eye": vec3_arg(&eye),
+                "target": vec3_arg(&target),
+                "up": vec3_arg(&up),
+                "fov": fov,
+                "size": size,
+                "pixel_error": pixel_error,
+            });
+            report_or_json(run_local("codec.view", params)?, json, |r| {
+                let r = &r.result;
+                println!(
+                    "view-decode: {} cells -> {} vertices, {} triangles -> {} ({} of {} bytes read) in {:.0} ms",
+                    r["cells"],
                     r["vertices"],
                     r["triangles"],
                     output.display(),

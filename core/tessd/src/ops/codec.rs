@@ -1,11 +1,14 @@
-//! `codec.compress` and `codec.decompress`: the progressive lossless codec of paper 003
-//! (`tessd-codec`), on files (`.tsc` out, any mesh format in) or arrays.
+//! `codec.compress`, `codec.decompress` and `codec.view`: the progressive lossless codec of
+//! paper 003 (`tessd-codec`), on files (`.tsc` out, any mesh format in) or arrays, and its
+//! view-dependent decoding for a moving camera.
 
 use std::io::Write;
-use std::time::Instant;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::{Instant, SystemTime};
 
 use serde_json::json;
-use tessd_codec::{CodecError, Params, Tsc};
+use tessd_codec::{Camera, CodecError, Params, Tsc, ViewSession};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
@@ -13,6 +16,7 @@ use tessd_mesh::Mesh;
 
 use super::common::{file_dropped, u64_param, write_mesh_file};
 use super::mesh_arrays::{input_mesh, mesh_error, mesh_to_arrays, output_path};
+use super::render::{parse_size, vec3_param};
 
 /// A codec error as the protocol names it: bad parameters are the request's fault, a corrupt
 /// file the input's, the rest I/O.
@@ -152,7 +156,7 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
     for t in &decoded.triangles {
         mesh.push_face(t);
     }
-    let mut result = json!({
+    let result = json!({
         "vertices": mesh.positions.len(),
         "triangles": decoded.triangles.len(),
         "isolated_points": decoded.isolated.len(),
@@ -162,9 +166,34 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
         "nsp_cells": decoded.cells,
     });
     ctx.progress(0.9, "write", "")?;
-    let response = match output {
+    let mut response = mesh_response(&request, mesh, output, result)?;
+    ctx.progress(1.0, "done", "")?;
+    response.result["elapsed_ms"] = json!(started.elapsed().as_secs_f64() * 1e3);
+    Ok(response)
+}
+
+/// A decoded mesh for the host: f32 positions, one face per triangle.
+fn to_mesh(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Mesh {
+    let mut mesh = Mesh {
+        positions: positions.iter().map(|p| p.map(|x| x as f32)).collect(),
+        ..Mesh::default()
+    };
+    for t in triangles {
+        mesh.push_face(t);
+    }
+    mesh
+}
+
+/// The response holding a decoded mesh: written to `output` (atomically), or as arrays.
+fn mesh_response(
+    request: &Request,
+    mesh: Mesh,
+    output: Option<PathBuf>,
+    mut result: serde_json::Value,
+) -> Result<Response, OpError> {
+    Ok(match output {
         Some(path) => {
-            write_mesh_file(&request, &mesh, &path, "mesh")?;
+            write_mesh_file(request, &mesh, &path, "mesh")?;
             result["output"] = json!(path.display().to_string());
             result["dropped_attributes"] = json!(file_dropped(&mesh, &path));
             Response {
@@ -178,9 +207,95 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
             arrays: mesh_to_arrays(mesh),
             files: Vec::new(),
         },
+    })
+}
+
+/// Which file a kept session decodes: its path, size and modification time (a rewritten file
+/// starts a new session).
+type SessionKey = (PathBuf, u64, Option<SystemTime>);
+
+/// View sessions kept between `codec.view` requests, most recent last.
+static SESSIONS: Mutex<Vec<(SessionKey, Arc<Mutex<ViewSession>>)>> = Mutex::new(Vec::new());
+
+/// How many files keep their decoder states between views.
+const KEPT_SESSIONS: usize = 4;
+
+/// The kept session of `path`, or a new one (the oldest is dropped past [`KEPT_SESSIONS`]).
+fn session(path: &std::path::Path) -> Result<Arc<Mutex<ViewSession>>, OpError> {
+    let io =
+        |e: std::io::Error| OpError::new(ErrorCode::Io, format!("reading {}: {e}", path.display()));
+    let meta = std::fs::metadata(path).map_err(io)?;
+    let key: SessionKey = (path.to_path_buf(), meta.len(), meta.modified().ok());
+    let mut sessions = SESSIONS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(k) = sessions.iter().position(|(k, _)| *k == key) {
+        let entry = sessions.remove(k);
+        let s = entry.1.clone();
+        sessions.push(entry);
+        return Ok(s);
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
+    let tsc = Tsc::from_shared(Arc::from(bytes)).map_err(codec_error)?;
+    let s = Arc::new(Mutex::new(ViewSession::new(Arc::new(tsc))));
+    sessions.retain(|(k, _)| k.0 != key.0);
+    sessions.push((key, s.clone()));
+    if sessions.len() > KEPT_SESSIONS {
+        sessions.remove(0);
+    }
+    Ok(s)
+}
+
+/// `codec.view`: params `input` (a `.tsc` file), `eye`, `target`, `up` ([x, y, z]), `fov`
+/// (vertical, degrees, default 30), `size` ("WxH" or [w, h]), `pixel_error` (default 1),
+/// `output` (a mesh file; without it the mesh comes back as arrays). The decoder states of the
+/// file are kept between requests, so a moving camera refines from the previous view
+/// (paper 003 §6.2).
+///
+/// # Errors
+/// `invalid_request` for a bad camera; `invalid_mesh` naming the byte offset of a corrupt file;
+/// `io` when reading or writing fails.
+pub fn view(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
+    let started = Instant::now();
+    let input = request
+        .str_param("input")?
+        .map(|p| request.resolve(p))
+        .ok_or_else(|| OpError::request("parameter `input` (the .tsc file) is required"))?;
+    let need = |key: &str| {
+        vec3_param(&request, key)?
+            .ok_or_else(|| OpError::request(format!("parameter `{key}` ([x, y, z]) is required")))
     };
+    let (width, height) = parse_size(request.params.get("size"))?;
+    let camera = Camera {
+        eye: need("eye")?,
+        target: need("target")?,
+        up: need("up")?,
+        fov: request.f64_param("fov")?.unwrap_or(30.0),
+        width,
+        height,
+    };
+    let pixel_error = request.f64_param("pixel_error")?.unwrap_or(1.0);
+    let output = output_path(&request)?;
+    ctx.progress(0.0, "open", "")?;
+    let session = session(&input)?;
+    let mut session = session.lock().unwrap_or_else(|e| e.into_inner());
+    ctx.progress(0.1, "refine", "")?;
+    let view = session.view(&camera, pixel_error).map_err(codec_error)?;
+    let decode_ms = started.elapsed().as_secs_f64() * 1e3;
+    let file_bytes = session.file().bytes_len();
+    drop(session);
+    let mesh = to_mesh(&view.positions, &view.triangles);
+    let result = json!({
+        "vertices": view.positions.len(),
+        "triangles": view.triangles.len(),
+        "cells": view.cells.len(),
+        "cell_bits": view.cells.iter().map(|&(_, b)| b).collect::<Vec<_>>(),
+        "bytes_read": view.bytes_read,
+        "file_bytes": file_bytes,
+        "symbols": view.symbols,
+        "decode_ms": decode_ms,
+    });
+    ctx.progress(0.9, "write", "")?;
+    let mut response = mesh_response(&request, mesh, output, result)?;
     ctx.progress(1.0, "done", "")?;
-    let mut response = response;
     response.result["elapsed_ms"] = json!(started.elapsed().as_secs_f64() * 1e3);
     Ok(response)
 }

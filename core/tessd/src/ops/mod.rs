@@ -34,6 +34,7 @@ pub fn registry() -> Registry {
         .register("render", render::run)
         .register("codec.compress", codec::compress)
         .register("codec.decompress", codec::decompress)
+        .register("codec.view", codec::view)
         .register("debug.sleep", debug_sleep::run)
         .register("debug.echo", debug_echo::run);
     for cap in [

@@ -93,7 +93,7 @@ pub fn parse_size(v: Option<&Value>) -> Result<(u32, u32), OpError> {
 }
 
 /// An optional `[x, y, z]` of finite numbers.
-fn vec3_param(request: &Request, key: &str) -> Result<Option<[f64; 3]>, OpError> {
+pub fn vec3_param(request: &Request, key: &str) -> Result<Option<[f64; 3]>, OpError> {
     match request.params.get(key) {
         None | Some(Value::Null) => Ok(None),
         Some(v) => {
