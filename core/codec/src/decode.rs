@@ -24,7 +24,44 @@ pub struct Tsc {
     /// The nSP-tree, pre-order.
     pub nodes: Vec<Node>,
     pub(crate) models: Arc<Models>,
-    pub(crate) bytes: Arc<[u8]>,
+    pub(crate) bytes: Storage,
+}
+
+/// Where a `.tsc` file's chunks are read from: memory, or the file itself (one read per cell,
+/// so that a decode's memory does not grow with the file).
+pub(crate) enum Storage {
+    Memory(Arc<[u8]>),
+    File(std::fs::File, u64),
+}
+
+impl Storage {
+    fn len(&self) -> u64 {
+        match self {
+            Storage::Memory(b) => b.len() as u64,
+            Storage::File(_, len) => *len,
+        }
+    }
+
+    /// `len` bytes at `offset` (already checked against the file's size).
+    pub(crate) fn read(
+        &self,
+        offset: u64,
+        len: u64,
+    ) -> Result<std::borrow::Cow<'_, [u8]>, CodecError> {
+        match self {
+            Storage::Memory(b) => Ok(std::borrow::Cow::Borrowed(
+                &b[offset as usize..(offset + len) as usize],
+            )),
+            Storage::File(f, _) => {
+                use std::os::unix::fs::FileExt;
+                let mut buf = vec![0u8; len as usize];
+                f.read_exact_at(&mut buf, offset).map_err(|e| {
+                    CodecError::io(format!("reading {len} bytes at offset {offset}"), e)
+                })?;
+                Ok(std::borrow::Cow::Owned(buf))
+            }
+        }
+    }
 }
 
 /// The fully coarsened mesh every decode starts from (§6.1): one vertex at zero precision with
@@ -43,6 +80,10 @@ pub(crate) fn root_complex(header: &Header) -> (Complex, Vec<u32>) {
     }
     (root, vec![v])
 }
+
+/// What [`Tsc::visit`] hands over per finished cell: its index, its complex, its vertices in kd
+/// order.
+pub(crate) type CellFn<'a> = dyn FnMut(usize, &Complex, &[u32]) -> Result<(), CodecError> + 'a;
 
 /// A decoded mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -72,16 +113,27 @@ impl Tsc {
 
     /// As [`Tsc::open`], keeping `bytes` without a copy.
     pub fn from_shared(bytes: Arc<[u8]>) -> Result<Self, CodecError> {
-        let header = Header::from_bytes(&bytes, bytes.len() as u64)?;
+        Tsc::from_storage(Storage::Memory(bytes))
+    }
+
+    /// Opens a `.tsc` file on disk, reading its header, tables and index now and each cell's
+    /// chunk when a decode reaches it.
+    pub fn open_file(path: &std::path::Path) -> Result<Self, CodecError> {
+        let io = |e| CodecError::io(format!("reading {}", path.display()), e);
+        let f = std::fs::File::open(path).map_err(io)?;
+        let len = f.metadata().map_err(io)?.len();
+        Tsc::from_storage(Storage::File(f, len))
+    }
+
+    fn from_storage(bytes: Storage) -> Result<Self, CodecError> {
+        let len = bytes.len();
+        let head = bytes.read(0, len.min(HEADER_LEN as u64))?;
+        let header = Header::from_bytes(&head, len)?;
         let (to, tl) = header.tables;
-        let counts = Counts::from_bytes(&bytes[to as usize..(to + tl) as usize], to)?;
+        let counts = Counts::from_bytes(&bytes.read(to, tl)?, to)?;
         let (io, il) = header.index;
-        let nodes = format::index_from_bytes(
-            &bytes[io as usize..(io + il) as usize],
-            io,
-            &header.params,
-            (to + tl, io),
-        )?;
+        let nodes =
+            format::index_from_bytes(&bytes.read(io, il)?, io, &header.params, (to + tl, io))?;
         if nodes.is_empty() != (header.vertices == 0) {
             return Err(CodecError::corrupt(
                 96,
@@ -98,7 +150,17 @@ impl Tsc {
 
     /// Size of the whole file.
     pub fn bytes_len(&self) -> u64 {
-        self.bytes.len() as u64
+        self.bytes.len()
+    }
+
+    /// A reader over cell `i`'s chunk.
+    pub(crate) fn reader(&self, i: usize) -> Result<SymbolReader, CodecError> {
+        let node = &self.nodes[i];
+        SymbolReader::new(
+            &self.bytes.read(node.offset, node.len)?,
+            self.models.clone(),
+            node.offset,
+        )
     }
 
     /// Bytes every decode reads: header, tables, index.
@@ -111,63 +173,73 @@ impl Tsc {
         let p = self.header.params.bits;
         let bits = max_bits.unwrap_or(p).min(p);
         let mut out = Assembly::default();
+        let (bytes_read, cells) = self.visit(bits, &mut |_, cx, _| {
+            out.add(cx);
+            Ok(())
+        })?;
+        Ok(out.finish(self, bits, bytes_read, cells))
+    }
+
+    /// Decodes the tree depth first up to `bits` bits and hands each finished cell (a leaf, or
+    /// a cell that stops below its last precision) to `f` with its complex and its vertices in
+    /// kd order; only the cells on the way down are in memory. Returns the bytes read and the
+    /// cells decoded.
+    pub(crate) fn visit(&self, bits: u32, f: &mut CellFn<'_>) -> Result<(u64, u64), CodecError> {
+        let p = self.header.params.bits;
         let mut bytes_read = self.fixed_bytes();
         let mut cells = 0;
-        if !self.nodes.is_empty() {
-            let (root, alive) = root_complex(&self.header);
-            let mut stack = vec![(0usize, root, alive)];
-            while let Some((i, mut cx, mut alive)) = stack.pop() {
-                let node = &self.nodes[i];
-                let leaf = node.children.is_empty();
-                let (start, end) = self.header.params.precision(node.depth);
-                let end = if leaf { p } else { end };
-                let stop = end.min(bits);
-                let reader = &mut SymbolReader::new(
-                    &self.bytes[node.offset as usize..(node.offset + node.len) as usize],
-                    self.models.clone(),
+        if self.nodes.is_empty() {
+            return Ok((bytes_read, cells));
+        }
+        let (root, alive) = root_complex(&self.header);
+        let mut stack = vec![(0usize, root, alive)];
+        while let Some((i, mut cx, mut alive)) = stack.pop() {
+            let node = &self.nodes[i];
+            let leaf = node.children.is_empty();
+            let (start, end) = self.header.params.precision(node.depth);
+            let end = if leaf { p } else { end };
+            let stop = end.min(bits);
+            let reader = &mut self.reader(i)?;
+            bytes_read += node.len;
+            cells += 1;
+            let limits = Limits {
+                vertices: node.end_vertices as usize,
+                simplices: node.end_simplices as usize,
+            };
+            kd_coder::decode(
+                &mut cx,
+                &mut alive,
+                p,
+                3 * start as usize,
+                3 * stop as usize,
+                reader,
+                limits,
+            )?;
+            if stop == end
+                && (alive.len() as u64 != node.end_vertices || cx.live as u64 != node.end_simplices)
+            {
+                return Err(CodecError::corrupt(
                     node.offset,
-                )?;
-                bytes_read += node.len;
-                cells += 1;
-                let limits = Limits {
-                    vertices: node.end_vertices as usize,
-                    simplices: node.end_simplices as usize,
-                };
-                kd_coder::decode(
-                    &mut cx,
-                    &mut alive,
-                    p,
-                    3 * start as usize,
-                    3 * stop as usize,
-                    reader,
-                    limits,
-                )?;
-                if leaf || stop < end {
-                    if stop == end
-                        && (alive.len() as u64 != node.end_vertices
-                            || cx.live as u64 != node.end_simplices)
-                    {
-                        return Err(CodecError::corrupt(
-                            node.offset,
-                            format!(
-                                "cell {i} decodes to {} vertices and {} simplices, its index says {} and {}",
-                                alive.len(),
-                                cx.live,
-                                node.end_vertices,
-                                node.end_simplices
-                            ),
-                        ));
-                    }
-                    out.add(&cx);
-                    continue;
-                }
-                let parts = self.partition(i, &cx, &alive);
-                for (child, part) in node.children.iter().zip(parts).rev() {
-                    stack.push((*child, part.0, part.1));
-                }
+                    format!(
+                        "cell {i} decodes to {} vertices and {} simplices, its index says {} and {}",
+                        alive.len(),
+                        cx.live,
+                        node.end_vertices,
+                        node.end_simplices
+                    ),
+                ));
+            }
+            if leaf || stop < end {
+                f(i, &cx, &alive)?;
+                continue;
+            }
+            let parts = self.partition(i, &cx, &alive);
+            drop(cx);
+            for (child, part) in node.children.iter().zip(parts).rev() {
+                stack.push((*child, part.0, part.1));
             }
         }
-        Ok(out.finish(self, bits, bytes_read, cells))
+        Ok((bytes_read, cells))
     }
 
     /// Gives each child of cell `i` the simplices one of whose vertices lies in it, over fresh

@@ -1,11 +1,17 @@
-//! Compression (paper 003 §5): quantise, partition into the nSP-tree, run the kd coder in every
-//! cell in post-order (each cell's complex merged into its parent's, duplicates removed), keep
-//! every cell's symbols in a semi-coded temporary file, then write the final file with the
-//! probability tables first and the index last.
+//! Compression (paper 003 §5): partition the mesh into the nSP-tree out of core
+//! ([`crate::partition`]), run the kd coder in every cell in post-order — a cell's complex merged
+//! into its parent's with duplicates removed (§5.2d), sibling subtrees on different cores
+//! (§5.4) — keep every cell's symbols in a semi-coded temporary file (§5.2c), then write the
+//! final file: header, probability tables, one range-coded chunk per cell, index (§5.3).
+//!
+//! The output is the same whatever the number of threads: the tables are sums, and the chunks
+//! are written in pre-order from the temporary file.
 
 use std::io::{Read, Seek, SeekFrom, Write};
+use std::sync::Mutex;
 use std::time::Instant;
 
+use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::complex::{Complex, POINT, Simplex, Vertex};
@@ -13,8 +19,10 @@ use crate::entropy::{self, Counts};
 use crate::error::CodecError;
 use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_coder::{self, kd_key};
-use crate::nsp_tree::{Node, Params};
+use crate::nsp_tree::Params;
+use crate::partition::{self, POINT_MARK, Partition};
 use crate::quantize::Quantizer;
+use crate::source::{MeshSource, Slices};
 use crate::symbols::Symbol;
 
 /// What a compression did, for the CLI and the benchmark.
@@ -22,7 +30,7 @@ use crate::symbols::Symbol;
 pub struct CompressReport {
     /// Vertices of the input.
     pub input_vertices: u64,
-    /// Triangles of the input.
+    /// Triangles of the input (after fan triangulation).
     pub input_triangles: u64,
     /// Distinct quantised points.
     pub vertices: u64,
@@ -34,107 +42,27 @@ pub struct CompressReport {
     pub grid: Quantizer,
     /// Cells of the nSP-tree.
     pub nsp_cells: u64,
-    /// Simplices coded in more than one leaf (border duplication, §5.1).
+    /// Simplex copies coded in a second or third leaf (border duplication, §5.1).
     pub duplicated_simplices: u64,
     /// Bits spent on each symbol family ([`crate::symbols::Family`] order): geometry first.
     pub family_bits: [f64; crate::symbols::FAMILIES],
     /// Symbols of each family.
     pub family_symbols: [u64; crate::symbols::FAMILIES],
-    /// Milliseconds per step: quantisation and partition, codes (§5.2), final write (§5.3).
+    /// Milliseconds per step: partition (§5.1: box, quantisation, tree, raw index file), codes
+    /// (§5.2), final write (§5.3).
     pub steps_ms: [f64; 3],
 }
 
-/// A mesh quantised to the grid: distinct points in kd order and simplices over them.
-pub(crate) struct Quantised {
-    pub grid: Quantizer,
-    pub points: Vec<[u32; 3]>,
-    pub simplices: Vec<Simplex>,
-}
-
-/// Quantises `positions` and re-indexes `triangles` onto the distinct grid points; a point no
-/// triangle uses becomes an isolated-point simplex.
-pub(crate) fn quantise(
-    positions: &[[f32; 3]],
-    triangles: &[[u32; 3]],
-    bits: u32,
-) -> Result<Quantised, CodecError> {
-    for (i, p) in positions.iter().enumerate() {
-        if p.iter().any(|c| !c.is_finite()) {
-            return Err(CodecError::Input(format!(
-                "vertex {i} has a non-finite coordinate {p:?}"
-            )));
-        }
-    }
-    let n = positions.len() as u32;
-    for (i, t) in triangles.iter().enumerate() {
-        if let Some(&bad) = t.iter().find(|&&x| x >= n) {
-            return Err(CodecError::Input(format!(
-                "triangle {i} uses vertex {bad}, but there are {n} vertices"
-            )));
-        }
-    }
-    let mut min = [f64::INFINITY; 3];
-    let mut max = [f64::NEG_INFINITY; 3];
-    for p in positions {
-        for a in 0..3 {
-            min[a] = min[a].min(p[a] as f64);
-            max[a] = max[a].max(p[a] as f64);
-        }
-    }
-    if positions.is_empty() {
-        (min, max) = ([0.0; 3], [1.0; 3]);
-    }
-    let grid = Quantizer::new(min, max, bits)?;
-    let q: Vec<[u32; 3]> = positions
-        .iter()
-        .map(|p| grid.quantize(p.map(f64::from)))
-        .collect();
-    let full = 3 * bits as usize;
-    let mut order: Vec<(u64, u32)> = q
-        .iter()
-        .enumerate()
-        .map(|(i, &c)| (kd_key(c, full, bits), i as u32))
-        .collect();
-    order.sort_unstable();
-    let mut uid = vec![0u32; q.len()];
-    let mut points: Vec<[u32; 3]> = Vec::new();
-    let mut last = None;
-    for &(key, i) in &order {
-        if last != Some(key) {
-            points.push(q[i as usize]);
-            last = Some(key);
-        }
-        uid[i as usize] = points.len() as u32 - 1;
-    }
-    let mut simplices: Vec<Simplex> = triangles
-        .iter()
-        .map(|t| Simplex::triangle(uid[t[0] as usize], uid[t[1] as usize], uid[t[2] as usize]))
-        .collect();
-    let mut used = vec![false; points.len()];
-    for s in &simplices {
-        for &x in &s.v {
-            used[x as usize] = true;
-        }
-    }
-    simplices.extend(
-        (0..points.len() as u32)
-            .filter(|&i| !used[i as usize])
-            .map(Simplex::point),
-    );
-    simplices.sort_unstable();
-    simplices.dedup();
-    Ok(Quantised {
-        grid,
-        points,
-        simplices,
-    })
-}
-
-/// The semi-coded temporary file (§5.2c): every cell's symbols, raw, in post-order.
+/// The semi-coded temporary file (§5.2c): every cell's symbols in completion order, each cell
+/// deflated on its own (fast level: the contexts repeat, a cell shrinks several times), so that
+/// a mesh of hundreds of millions of triangles does not need tens of gigabytes of scratch disk.
 struct Spill {
     file: std::io::BufWriter<std::fs::File>,
     written: u64,
 }
+
+/// Where a cell's symbols are in the spill: byte offset, deflated length, symbol count.
+type Span = (u64, u64, u64);
 
 impl Spill {
     fn new() -> Result<Self, CodecError> {
@@ -146,15 +74,14 @@ impl Spill {
         })
     }
 
-    /// Appends `symbols`, returning their (offset, count) in symbols.
-    fn put(&mut self, symbols: &[Symbol]) -> Result<(u64, u64), CodecError> {
+    /// Appends `symbols` (deflated by the caller's thread: see [`deflate`]).
+    fn put(&mut self, deflated: &[u8], symbols: u64) -> Result<Span, CodecError> {
         let at = self.written;
-        let bytes: Vec<u8> = symbols.iter().flat_map(|s| s.0.to_le_bytes()).collect();
         self.file
-            .write_all(&bytes)
+            .write_all(deflated)
             .map_err(|e| CodecError::io("writing the temporary code file", e))?;
-        self.written += symbols.len() as u64;
-        Ok((at, symbols.len() as u64))
+        self.written += deflated.len() as u64;
+        Ok((at, deflated.len() as u64, symbols))
     }
 
     fn reader(self) -> Result<std::fs::File, CodecError> {
@@ -168,86 +95,63 @@ impl Spill {
     }
 }
 
-/// State of the post-order pass.
+/// A cell's symbols, deflated for the spill.
+fn deflate(symbols: &[Symbol]) -> Vec<u8> {
+    let bytes: Vec<u8> = symbols.iter().flat_map(|s| s.0.to_le_bytes()).collect();
+    let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::fast());
+    z.write_all(&bytes).expect("writing to memory");
+    z.finish().expect("writing to memory")
+}
+
+/// What the post-order pass gathers, shared by the threads.
+#[derive(Default)]
+struct Gathered {
+    counts: Counts,
+    /// Per node: span in the temporary file, final vertex and simplex counts.
+    spans: Vec<Span>,
+    ends: Vec<(u64, u64)>,
+    /// Distinct points and triangles owned by the leaves, simplex copies coded.
+    points: u64,
+    triangles: u64,
+    copies: u64,
+    distinct: u64,
+    /// Leaf entries done, for progress.
+    done: u64,
+}
+
+/// The post-order pass over a partition.
 struct Coder<'a> {
     params: Params,
-    q: &'a Quantised,
-    nodes: Vec<Node>,
-    /// Simplex ids of each leaf (empty for inner cells).
-    leaf_simplices: Vec<Vec<u32>>,
-    spans: Vec<(u64, u64)>,
-    counts: Counts,
-    spill: Spill,
-    progress: &'a mut dyn FnMut(f64),
-    coded_leaf_simplices: u64,
+    part: &'a Partition,
+    shared: Mutex<(Gathered, Spill)>,
+    total_entries: u64,
+    progress: &'a (dyn Fn(f64) -> bool + Sync),
 }
 
 impl Coder<'_> {
-    /// Builds the tree below a cell at `depth` holding `ids` (pre-order), and returns its index.
-    fn build(&mut self, depth: u32, cell: [u32; 3], ids: Vec<u32>) -> usize {
-        let i = self.nodes.len();
-        self.nodes.push(Node {
-            depth,
-            cell,
-            ..Node::default()
-        });
-        self.leaf_simplices.push(Vec::new());
-        let (_, end) = self.params.precision(depth);
-        if end >= self.params.bits || (ids.len() as u64) < self.params.min_cell {
-            self.leaf_simplices[i] = ids;
-            return i;
-        }
-        let n3 = self.params.cell_split.pow(3) as usize;
-        let mut parts: Vec<Vec<u32>> = vec![Vec::new(); n3];
-        for id in ids {
-            let s = &self.q.simplices[id as usize];
-            let mut seen = [usize::MAX; 3];
-            for (k, &x) in s.v.iter().enumerate() {
-                let Some(c) = self.params.child_of(depth, cell, self.q.points[x as usize]) else {
-                    continue;
-                };
-                if !seen.contains(&c) {
-                    parts[c].push(id);
-                }
-                seen[k] = c;
-            }
-        }
-        let mut mask = 0u64;
-        let mut children = Vec::new();
-        for (c, part) in parts.into_iter().enumerate() {
-            if !part.is_empty() {
-                mask |= 1 << c;
-                children.push(self.build(depth + 1, self.params.child_cell(cell, c), part));
-            }
-        }
-        self.nodes[i].child_mask = mask;
-        self.nodes[i].children = children;
-        i
-    }
-
     /// Codes cell `i` and its subtree; returns its complex at its start precision, with the
     /// vertices in kd order.
-    fn code(&mut self, i: usize) -> Result<(Complex, Vec<u32>), CodecError> {
+    fn code(&self, i: usize) -> Result<(Complex, Vec<u32>), CodecError> {
         let bits = self.params.bits;
-        let depth = self.nodes[i].depth;
-        let (start, end) = if self.nodes[i].children.is_empty() {
-            (self.params.precision(depth).0, bits)
+        let node = &self.part.nodes[i];
+        let leaf = node.children.is_empty();
+        let (start, end) = if leaf {
+            (self.params.precision(node.depth).0, bits)
         } else {
-            self.params.precision(depth)
+            self.params.precision(node.depth)
         };
-        let (mut cx, mut alive) = if self.nodes[i].children.is_empty() {
-            let ids = std::mem::take(&mut self.leaf_simplices[i]);
-            self.coded_leaf_simplices += ids.len() as u64;
-            leaf_complex(self.q, &ids, bits)
+        let (mut cx, mut alive, owned) = if leaf {
+            self.leaf_complex(i)?
         } else {
-            let mut parts = Vec::new();
-            for c in self.nodes[i].children.clone() {
-                parts.push(self.code(c)?);
-            }
-            union(parts, 3 * end as usize, bits)
+            let parts = node
+                .children
+                .par_iter()
+                .map(|&c| self.code(c))
+                .collect::<Result<Vec<_>, CodecError>>()?;
+            let (cx, alive) = union(parts, 3 * end as usize, bits);
+            (cx, alive, None)
         };
-        self.nodes[i].end_vertices = alive.len() as u64;
-        self.nodes[i].end_simplices = cx.live as u64;
+        let end_counts = (alive.len() as u64, cx.live as u64);
         let symbols = kd_coder::encode(
             &mut cx,
             &mut alive,
@@ -255,37 +159,99 @@ impl Coder<'_> {
             3 * start as usize,
             3 * end as usize,
         );
-        self.counts.add(&symbols);
-        self.spans[i] = self.spill.put(&symbols)?;
-        (self.progress)(self.coded_leaf_simplices as f64 / self.q.simplices.len().max(1) as f64);
+        let mut counts = Counts::default();
+        counts.add(&symbols);
+        let deflated = deflate(&symbols);
+        drop(symbols);
+        let mut guard = self.shared.lock().unwrap_or_else(|e| e.into_inner());
+        let (g, spill) = &mut *guard;
+        g.counts.merge(&counts);
+        g.spans[i] = spill.put(&deflated, counts.total())?;
+        g.ends[i] = end_counts;
+        if let Some((points, triangles, copies, distinct)) = owned {
+            g.points += points;
+            g.triangles += triangles;
+            g.copies += copies;
+            g.distinct += distinct;
+            g.done += self.part.regions[i].1;
+        }
+        let fraction = g.done as f64 / self.total_entries.max(1) as f64;
+        drop(guard);
+        if !(self.progress)(0.5 + 0.45 * fraction) {
+            return Err(CodecError::Cancelled);
+        }
         Ok(compact(&cx, &alive))
     }
-}
 
-/// The complex of a leaf: its simplices over its own copies of their vertices, in kd order.
-fn leaf_complex(q: &Quantised, ids: &[u32], bits: u32) -> (Complex, Vec<u32>) {
-    let mut uids: Vec<u32> = ids
-        .iter()
-        .flat_map(|&i| q.simplices[i as usize].v)
-        .collect();
-    uids.sort_unstable();
-    uids.dedup();
-    let mut cx = Complex::default();
-    let mut local: FxHashMap<u32, u32> = FxHashMap::default();
-    for &u in &uids {
-        let id = cx.add_vertex(Vertex {
-            corner: q.points[u as usize],
-            level: (3 * bits) as u8,
-        });
-        local.insert(u, id);
+    /// The complex of leaf `i` from its raw index entries: one vertex per grid point, each
+    /// oriented triangle once, isolated points that no triangle of the leaf uses. Also the
+    /// points and triangles the leaf owns (its own grid points; triangles whose first vertex in
+    /// kd order is its own), the entries read and the distinct simplices kept.
+    #[allow(clippy::type_complexity)]
+    fn leaf_complex(
+        &self,
+        i: usize,
+    ) -> Result<(Complex, Vec<u32>, Option<(u64, u64, u64, u64)>), CodecError> {
+        let bits = self.params.bits;
+        let full = 3 * bits as usize;
+        let node = &self.part.nodes[i];
+        let entries = self.part.leaf(i)?;
+        let mut cx = Complex::default();
+        let mut ids: FxHashMap<[u32; 3], u32> = FxHashMap::default();
+        let id = |ids: &mut FxHashMap<[u32; 3], u32>, cx: &mut Complex, q: [u32; 3]| {
+            *ids.entry(q).or_insert_with(|| {
+                cx.add_vertex(Vertex {
+                    corner: q,
+                    level: full as u8,
+                })
+            })
+        };
+        let mut simplices: FxHashSet<Simplex> = FxHashSet::default();
+        let mut points: Vec<[u32; 3]> = Vec::new();
+        let mut owned_triangles = 0;
+        let inside = |q: [u32; 3]| self.params.cell_at(node.depth, q) == node.cell;
+        for e in &entries {
+            if e[1] == POINT_MARK {
+                points.push(self.part.points.get(e[0]));
+                continue;
+            }
+            let q = e.map(|x| self.part.points.get(x));
+            let s = Simplex::triangle(
+                id(&mut ids, &mut cx, q[0]),
+                id(&mut ids, &mut cx, q[1]),
+                id(&mut ids, &mut cx, q[2]),
+            );
+            if simplices.insert(s) {
+                let first = q.iter().min_by_key(|c| kd_key(**c, full, bits)).unwrap();
+                owned_triangles += u64::from(inside(*first));
+            }
+        }
+        for q in points {
+            if !ids.contains_key(&q) {
+                let v = id(&mut ids, &mut cx, q);
+                simplices.insert(Simplex::point(v));
+            }
+        }
+        let owned_points = ids.keys().filter(|&&q| inside(q)).count() as u64;
+        let mut sorted: Vec<Simplex> = simplices.into_iter().collect();
+        sorted.sort_unstable();
+        let distinct = sorted.len() as u64;
+        for s in sorted {
+            cx.add(s);
+        }
+        let mut alive: Vec<u32> = (0..cx.vertices.len() as u32).collect();
+        alive.sort_by_key(|&v| kd_key(cx.vertices[v as usize].corner, full, bits));
+        Ok((
+            cx,
+            alive,
+            Some((
+                owned_points,
+                owned_triangles,
+                entries.len() as u64,
+                distinct,
+            )),
+        ))
     }
-    for &i in ids {
-        let s = q.simplices[i as usize];
-        let m = |x: u32| local[&x];
-        cx.add(s.map(m));
-    }
-    let alive = (0..uids.len() as u32).collect(); // uids are in kd order already
-    (cx, alive)
 }
 
 /// Merges the children's complexes into their parent's (§5.2d): vertices with the same cell are
@@ -328,37 +294,54 @@ fn compact(cx: &Complex, alive: &[u32]) -> (Complex, Vec<u32>) {
     (out, alive)
 }
 
-/// Compresses a triangle mesh into `out` (a `.tsc` stream). `progress` receives the fraction of
-/// the coding done.
+/// Compresses a triangle mesh held in memory into `out` (a `.tsc` stream).
 pub fn compress<W: Write + Seek>(
     positions: &[[f32; 3]],
     triangles: &[[u32; 3]],
     params: Params,
     out: &mut W,
-    progress: &mut dyn FnMut(f64),
+    progress: &(dyn Fn(f64) -> bool + Sync),
+) -> Result<CompressReport, CodecError> {
+    compress_source(
+        &mut Slices {
+            positions,
+            triangles,
+        },
+        params,
+        out,
+        progress,
+    )
+}
+
+/// Compresses a mesh read in passes from `src` into `out`; `progress` receives the fraction
+/// done and returns `false` to cancel.
+pub fn compress_source<W: Write + Seek>(
+    src: &mut dyn MeshSource,
+    params: Params,
+    out: &mut W,
+    progress: &(dyn Fn(f64) -> bool + Sync),
 ) -> Result<CompressReport, CodecError> {
     params.validate()?;
     let t0 = Instant::now();
-    let q = quantise(positions, triangles, params.bits)?;
-    let triangle_count = q.simplices.iter().filter(|s| s.kind != POINT).count() as u64;
-    let mut coder = Coder {
+    let part = partition::build(src, params, progress)?;
+    let t1 = Instant::now();
+    let n = part.nodes.len();
+    let coder = Coder {
         params,
-        q: &q,
-        nodes: Vec::new(),
-        leaf_simplices: Vec::new(),
-        spans: Vec::new(),
-        counts: Counts::default(),
-        spill: Spill::new()?,
+        part: &part,
+        shared: Mutex::new((
+            Gathered {
+                spans: vec![(0, 0, 0); n],
+                ends: vec![(0, 0); n],
+                ..Gathered::default()
+            },
+            Spill::new()?,
+        )),
+        total_entries: part.regions.iter().map(|r| r.1).sum(),
         progress,
-        coded_leaf_simplices: 0,
     };
     let mut flags = 0;
-    if !q.points.is_empty() {
-        coder.build(0, [0; 3], (0..q.simplices.len() as u32).collect());
-    }
-    coder.spans = vec![(0, 0); coder.nodes.len()];
-    let t1 = Instant::now();
-    if !q.points.is_empty() {
+    if n > 0 {
         let (root, _) = coder.code(0)?;
         for s in root.live_simplices() {
             flags |= if s.kind == POINT {
@@ -368,18 +351,16 @@ pub fn compress<W: Write + Seek>(
             };
         }
     }
+    let (gathered, spill) = coder.shared.into_inner().unwrap_or_else(|e| e.into_inner());
     let t2 = Instant::now();
-    let Coder {
-        mut nodes,
-        spans,
-        counts,
-        spill,
-        coded_leaf_simplices,
-        ..
-    } = coder;
-    let family_bits = counts.family_bits();
-    let family_symbols = counts.family_symbols();
-    let counts = counts.quantised();
+    let mut nodes = part.nodes.clone();
+    for (node, &(v, s)) in nodes.iter_mut().zip(&gathered.ends) {
+        node.end_vertices = v;
+        node.end_simplices = s;
+    }
+    let family_bits = gathered.counts.family_bits();
+    let family_symbols = gathered.counts.family_symbols();
+    let counts = gathered.counts.quantised();
     let tables = counts.to_bytes();
     let models = counts.models();
     let w = |e| CodecError::io("writing the compressed file", e);
@@ -388,14 +369,23 @@ pub fn compress<W: Write + Seek>(
     out.write_all(&tables).map_err(w)?;
     let mut pos = (HEADER_LEN + tables.len()) as u64;
     let mut temp = spill.reader()?;
-    let mut raw = Vec::new();
+    let mut deflated = Vec::new();
     // chunks in pre-order, each read back from the temporary file and range-coded
-    for (node, &(at, count)) in nodes.iter_mut().zip(&spans) {
-        raw.resize(2 * count as usize, 0);
-        temp.seek(SeekFrom::Start(2 * at))
-            .map_err(|e| CodecError::io("reading the temporary code file", e))?;
-        temp.read_exact(&mut raw)
-            .map_err(|e| CodecError::io("reading the temporary code file", e))?;
+    for (node, &(at, len, count)) in nodes.iter_mut().zip(&gathered.spans) {
+        deflated.resize(len as usize, 0);
+        let r = |e| CodecError::io("reading the temporary code file", e);
+        temp.seek(SeekFrom::Start(at)).map_err(r)?;
+        temp.read_exact(&mut deflated).map_err(r)?;
+        let mut raw = Vec::with_capacity(2 * count as usize);
+        flate2::read::DeflateDecoder::new(&deflated[..])
+            .read_to_end(&mut raw)
+            .map_err(r)?;
+        if raw.len() != 2 * count as usize {
+            return Err(CodecError::io(
+                "reading the temporary code file",
+                std::io::Error::other("a cell's symbols came back short"),
+            ));
+        }
         let symbols: Vec<Symbol> = raw
             .chunks_exact(2)
             .map(|b| Symbol(u16::from_le_bytes([b[0], b[1]])))
@@ -409,13 +399,13 @@ pub fn compress<W: Write + Seek>(
     let index = format::index_to_bytes(&nodes);
     out.write_all(&index).map_err(w)?;
     let header = Header {
-        grid: q.grid,
+        grid: part.grid,
         params,
         flags,
-        input_vertices: positions.len() as u64,
-        input_triangles: triangles.len() as u64,
-        vertices: q.points.len() as u64,
-        triangles: triangle_count,
+        input_vertices: part.input_vertices,
+        input_triangles: part.input_triangles,
+        vertices: gathered.points,
+        triangles: gathered.triangles,
         tables: (HEADER_LEN as u64, tables.len() as u64),
         index: (pos, index.len() as u64),
     };
@@ -424,16 +414,17 @@ pub fn compress<W: Write + Seek>(
     out.write_all(&header.to_bytes()).map_err(w)?;
     out.seek(SeekFrom::Start(start + end)).map_err(w)?;
     let t3 = Instant::now();
+    progress(1.0);
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     Ok(CompressReport {
-        input_vertices: positions.len() as u64,
-        input_triangles: triangles.len() as u64,
-        vertices: q.points.len() as u64,
-        triangles: triangle_count,
+        input_vertices: part.input_vertices,
+        input_triangles: part.input_triangles,
+        vertices: gathered.points,
+        triangles: gathered.triangles,
         bytes: end,
-        grid: q.grid,
-        nsp_cells: nodes.len() as u64,
-        duplicated_simplices: coded_leaf_simplices.saturating_sub(q.simplices.len() as u64),
+        grid: part.grid,
+        nsp_cells: n as u64,
+        duplicated_simplices: gathered.copies.saturating_sub(gathered.distinct),
         family_bits,
         family_symbols,
         steps_ms: [ms(t0, t1), ms(t1, t2), ms(t2, t3)],

@@ -34,6 +34,11 @@ impl Counts {
         }
     }
 
+    /// Number of symbols counted.
+    pub fn total(&self) -> u64 {
+        self.0.iter().sum()
+    }
+
     /// Adds another table's counts.
     pub fn merge(&mut self, other: &Counts) {
         for (a, b) in self.0.iter_mut().zip(&other.0) {

@@ -25,6 +25,9 @@ pub enum CodecError {
         /// What was wrong there.
         why: String,
     },
+    /// The caller asked to stop.
+    #[error("cancelled")]
+    Cancelled,
     /// Reading or writing a file failed.
     #[error("{context}: {source}")]
     Io {

@@ -13,9 +13,15 @@
 //! first) and the decoder top-down (splitting, first cell first), so that before each split the
 //! decoder holds exactly the complex the encoder held after the matching merge.
 //!
-//! Predictions (the contexts of [`crate::symbols`]): a triangle's other two vertices are usually
-//! on the side of the split plane of the child it goes to; a triangle holding both children
-//! (`v1 v2 x`, from an edge collapse) takes the orientation its neighbours imply.
+//! Predictions (the contexts of [`crate::symbols`]), all computed from what the decoder already
+//! has, by one function both sides run (`code_connectivity`, `split_coding`):
+//! - a split: the half the vertex's neighbours' centroid lies in, how far it is from the plane,
+//!   and whether the cell holds a collapsed triangle (then it likely holds several points);
+//! - a triangle holding the vertex once, taken breadth first through shared vertices: the child
+//!   its other vertices are already linked to, else the side of the plane they lie on;
+//! - a triangle holding both children (`v1 v2 x`, an edge collapse): the links of `x` and the
+//!   orientation the neighbouring fine triangles imply;
+//! - a triangle made of the vertex alone: whether either child already holds a collapsed edge.
 
 use rustc_hash::FxHashMap;
 
@@ -146,25 +152,49 @@ fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
     let corner = cx.vertices[v as usize].corner;
     let h = half(level, bits) as f64;
     let mut collapsed = false;
-    let mut others: Vec<u32> = Vec::new();
+    // the distinct neighbours, on the stack while they are few (the usual case)
+    let mut few = [0u32; 48];
+    let mut count = 0usize;
+    let mut many: Vec<u32> = Vec::new();
     cx.prune(v);
     for &slot in cx.listed(v) {
         let s = cx.simplices[slot as usize].expect("live");
         if s.kind != POINT && s.multiplicity(v) >= 2 {
             collapsed = true;
         }
-        others.extend(s.v.iter().copied().filter(|&x| x != v));
+        for &x in &s.v {
+            if x == v || few[..count].contains(&x) {
+                continue;
+            }
+            if count < few.len() {
+                few[count] = x;
+                count += 1;
+            } else {
+                many.push(x);
+            }
+        }
     }
-    others.sort_unstable();
-    others.dedup();
+    if !many.is_empty() {
+        many.extend_from_slice(&few);
+        many.sort_unstable();
+        many.dedup();
+    }
+    let others: &[u32] = if many.is_empty() {
+        &few[..count]
+    } else {
+        &many
+    };
     let (margin, high) = if others.is_empty() {
         (0, false)
     } else {
-        let mean = others
+        let sum: f64 = others
             .iter()
-            .map(|&x| cx.vertices[x as usize].centre(bits)[a])
-            .sum::<f64>()
-            / others.len() as f64;
+            .map(|&x| {
+                let w = &cx.vertices[x as usize];
+                w.corner[a] as f64 + (w.extent(a, bits) - 1) as f64 / 2.0
+            })
+            .sum();
+        let mean = sum / others.len() as f64;
         let d = ((mean - (corner[a] as f64 + h - 0.5)) / h).abs();
         let margin = 1 + [0.125, 0.25, 0.5, 1.0, 2.0]
             .iter()

@@ -7,14 +7,17 @@
 //! | step | module | paper |
 //! |---|---|---|
 //! | quantisation to `p` bits in the cubic box | [`quantize`] | §5.1 |
+//! | streaming mesh readers (PLY, OBJ) | [`source`] | §5.1 |
 //! | nSP-tree: cells, precisions, duplication | [`nsp_tree`] | §5.1 |
+//! | out-of-core partition: RWP points, tree by passes, RWI | [`partition`] | §5.1, §5.2a |
 //! | the complex on the kd-tree's leaves | [`complex`] | §3, §5.2a |
 //! | kd split / merge codes, interleaved | [`kd_coder`] | §3, §5.2b |
 //! | symbols and their contexts | [`symbols`] | §5.3 |
 //! | range coding with per-level tables | [`entropy`] | §5.2c, §5.3 |
 //! | file layout, index at the end | [`format`] | §5.1, §5.3 |
-//! | compression pipeline | [`encode`] | §5.2 |
+//! | compression pipeline, multi-core | [`encode`] | §5.2, §5.4 |
 //! | decoding | [`decode`] | §6.1 |
+//! | full decoding to PLY in bounded memory | [`ply_out`] | §5, §6.1 |
 //! | view-dependent refinement, borders between precisions | [`view`] | §6.2, §6.3 |
 
 pub mod complex;
@@ -25,13 +28,16 @@ pub mod error;
 pub mod format;
 pub mod kd_coder;
 pub mod nsp_tree;
+pub mod partition;
+pub mod ply_out;
 pub mod quantize;
+pub mod source;
 pub mod symbols;
 mod varint;
 pub mod view;
 
 pub use decode::{Decoded, Tsc};
-pub use encode::{CompressReport, compress};
+pub use encode::{CompressReport, compress, compress_source};
 pub use error::CodecError;
 pub use nsp_tree::Params;
 pub use quantize::Quantizer;

@@ -407,11 +407,7 @@ impl Tsc {
     /// A fresh decoder state of cell `i` from its hand-over complex.
     fn cell_state(&self, i: usize, start: (Complex, Vec<u32>)) -> Result<CellState, CodecError> {
         let node = &self.nodes[i];
-        let reader = SymbolReader::new(
-            &self.bytes[node.offset as usize..(node.offset + node.len) as usize],
-            self.models.clone(),
-            node.offset,
-        )?;
+        let reader = self.reader(i)?;
         Ok(CellState {
             cx: start.0.clone(),
             alive: start.1.clone(),

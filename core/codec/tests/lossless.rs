@@ -62,7 +62,7 @@ fn expected(
 
 fn round_trip(name: &str, positions: &[[f32; 3]], tris: &[[u32; 3]], params: Params) -> (u64, u64) {
     let mut file = Cursor::new(Vec::new());
-    let report = compress(positions, tris, params, &mut file, &mut |_| {}).unwrap();
+    let report = compress(positions, tris, params, &mut file, &|_| true).unwrap();
     let bytes = file.into_inner();
     assert_eq!(report.bytes, bytes.len() as u64);
     let tsc = Tsc::open(&bytes).unwrap();
@@ -206,4 +206,85 @@ fn empty_and_point_only_inputs_round_trip() {
         &[],
         Params::default(),
     );
+}
+
+/// Position triples of `triangles`, rotation-canonical, as f32 bit patterns.
+fn float_triangles(
+    positions: &[[f32; 3]],
+    triangles: impl Iterator<Item = [u32; 3]>,
+) -> BTreeSet<[[u32; 3]; 3]> {
+    triangles
+        .map(|t| {
+            let k = t.map(|i| positions[i as usize].map(f32::to_bits));
+            *[k, [k[1], k[2], k[0]], [k[2], k[0], k[1]]]
+                .iter()
+                .min()
+                .unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn the_bounded_memory_ply_writer_gives_the_full_decode() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, params) in [
+        (
+            "bun_zipper.ply",
+            Params {
+                min_cell: 1500,
+                ..Params::default()
+            },
+        ),
+        (
+            "stanford_bunny.obj",
+            Params {
+                bits: 16,
+                min_cell: 4000,
+                cell_split: 2,
+                root_bits: 4,
+            },
+        ),
+        (
+            "draco_test_nm.obj",
+            Params {
+                min_cell: 10,
+                cell_split: 2,
+                root_bits: 2,
+                bits: 12,
+            },
+        ),
+    ] {
+        let mesh = tessd_mesh::io::read_path(
+            &tessd_testdata::shared(&format!("mesh/{name}")),
+            &Default::default(),
+        )
+        .unwrap();
+        let tris = triangles(&mesh);
+        let mut file = Cursor::new(Vec::new());
+        compress(&mesh.positions, &tris, params, &mut file, &|_| true).unwrap();
+        let tsc_path = dir.path().join("m.tsc");
+        std::fs::write(&tsc_path, file.get_ref()).unwrap();
+        let tsc = Tsc::open_file(&tsc_path).unwrap();
+        assert!(tsc.nodes.len() > 4, "{name}: {} cells", tsc.nodes.len());
+        let ply = dir.path().join("m.ply");
+        let mut out = std::io::BufWriter::new(std::fs::File::create(&ply).unwrap());
+        let report = tsc.write_ply(&mut out, &|_| true).unwrap();
+        drop(out);
+        let back = tessd_mesh::io::read_path(&ply, &Default::default()).unwrap();
+        let whole = tsc.decode(None).unwrap();
+        let whole_pos: Vec<[f32; 3]> = whole
+            .positions
+            .iter()
+            .map(|p| p.map(|x| x as f32))
+            .collect();
+        assert_eq!(back.positions.len() as u64, report.vertices);
+        assert_eq!(report.vertices, whole.corners.len() as u64, "{name}");
+        let got: BTreeSet<[u32; 3]> = back.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+        let want: BTreeSet<[u32; 3]> = whole_pos.iter().map(|p| p.map(f32::to_bits)).collect();
+        assert_eq!(got, want, "{name}: vertices");
+        assert_eq!(back.face_count(), whole.triangles.len(), "{name}");
+        let got = float_triangles(&back.positions, back.faces().map(|f| [f[0], f[1], f[2]]));
+        let want = float_triangles(&whole_pos, whole.triangles.iter().copied());
+        assert_eq!(got, want, "{name}: triangles");
+    }
 }

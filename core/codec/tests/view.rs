@@ -14,7 +14,7 @@ fn bunny(params: Params) -> (Arc<Tsc>, [f64; 3], f64) {
     let mesh = tessd_mesh::io::read_path(&path, &Default::default()).unwrap();
     let tris: Vec<[u32; 3]> = mesh.faces().map(|f| [f[0], f[1], f[2]]).collect();
     let mut file = Cursor::new(Vec::new());
-    compress(&mesh.positions, &tris, params, &mut file, &mut |_| {}).unwrap();
+    compress(&mesh.positions, &tris, params, &mut file, &|_| true).unwrap();
     let (min, max) = mesh.bounds().unwrap();
     let centre = std::array::from_fn(|a| (min[a] as f64 + max[a] as f64) / 2.0);
     let radius = (0..3).map(|a| (max[a] - min[a]) as f64).fold(0.0, f64::max);

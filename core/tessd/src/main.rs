@@ -618,16 +618,10 @@ fn run(cli: Cli) -> Result<()> {
             let params =
                 serde_json::json!({"input": input, "output": output, "max_bits": max_bits});
             report_or_json(run_local("codec.decompress", params)?, json, |r| {
-                let r = &r.result;
-                println!(
-                    "decompress: {} bits -> {} vertices, {} triangles -> {} ({} of {} bytes read) in {:.0} ms",
-                    r["bits"],
-                    r["vertices"],
-                    r["triangles"],
-                    output.display(),
-                    r["bytes_read"],
-                    r["file_bytes"],
-                    r["elapsed_ms"].as_f64().unwrap_or(0.0)
+                print_decoded(
+                    format!("decompress: {} bits", r.result["bits"]),
+                    &r.result,
+                    &output,
                 )
             })
         }
@@ -653,16 +647,10 @@ fn run(cli: Cli) -> Result<()> {
                 "pixel_error": pixel_error,
             });
             report_or_json(run_local("codec.view", params)?, json, |r| {
-                let r = &r.result;
-                println!(
-                    "view-decode: {} cells -> {} vertices, {} triangles -> {} ({} of {} bytes read) in {:.0} ms",
-                    r["cells"],
-                    r["vertices"],
-                    r["triangles"],
-                    output.display(),
-                    r["bytes_read"],
-                    r["file_bytes"],
-                    r["elapsed_ms"].as_f64().unwrap_or(0.0)
+                print_decoded(
+                    format!("view-decode: {} cells", r.result["cells"]),
+                    &r.result,
+                    &output,
                 )
             })
         }
@@ -816,6 +804,19 @@ fn origin_param(s: &str) -> serde_json::Value {
 
 /// `X,Y,Z` as a list of three numbers (anything else is passed on as text for the op to refuse,
 /// naming it).
+/// The summary line of a decode: what was decoded, the counts, the file and the bytes read.
+fn print_decoded(what: String, r: &serde_json::Value, output: &Path) {
+    println!(
+        "{what} -> {} vertices, {} triangles -> {} ({} of {} bytes read) in {:.0} ms",
+        r["vertices"],
+        r["triangles"],
+        output.display(),
+        r["bytes_read"],
+        r["file_bytes"],
+        r["elapsed_ms"].as_f64().unwrap_or(0.0)
+    )
+}
+
 fn vec3_arg(s: &str) -> serde_json::Value {
     origin_param(s)
 }

@@ -14,6 +14,9 @@
 //! | STL | triangles (ASCII or binary), equal positions welded | binary, fan-triangulated |
 //! | OFF | positions, n-gons (`OFF`, `COFF`, `NOFF`, `STOFF` headers) | ASCII `OFF` |
 //!
+//! [`stream`] reads PLY and OBJ files in passes without holding them (positions and
+//! fan-triangulated faces only), for consumers that must stay out of core.
+//!
 //! Creases, sharp edges and generic attributes are carried by none of these formats
 //! ([`dropped_by_format`] lists what a write leaves out). Writing goes through [`write_atomic`], so a
 //! failed write never leaves a partial file behind.
@@ -24,6 +27,7 @@ mod off;
 mod ply;
 mod source;
 mod stl;
+pub mod stream;
 
 pub use atomic::write_atomic;
 

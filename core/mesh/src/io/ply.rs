@@ -24,7 +24,7 @@ const MAX_HEADER: u64 = 1 << 20;
 
 /// A PLY scalar type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Scalar {
+pub(super) enum Scalar {
     I8,
     U8,
     I16,
@@ -36,7 +36,7 @@ enum Scalar {
 }
 
 impl Scalar {
-    fn parse(name: &[u8]) -> Option<Scalar> {
+    pub(super) fn parse(name: &[u8]) -> Option<Scalar> {
         Some(match name {
             b"char" | b"int8" => Scalar::I8,
             b"uchar" | b"uint8" => Scalar::U8,
@@ -50,7 +50,7 @@ impl Scalar {
         })
     }
 
-    fn size(self) -> usize {
+    pub(super) fn size(self) -> usize {
         match self {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
@@ -65,7 +65,7 @@ impl Scalar {
 
     /// Decodes `b[..self.size()]` (the caller guarantees the length).
     #[inline]
-    fn decode(self, b: &[u8], big_endian: bool) -> f64 {
+    pub(super) fn decode(self, b: &[u8], big_endian: bool) -> f64 {
         macro_rules! get {
             ($t:ty, $n:literal) => {{
                 let mut a = [0u8; $n];

@@ -2,7 +2,6 @@
 //! paper 003 (`tessd-codec`), on files (`.tsc` out, any mesh format in) or arrays, and its
 //! view-dependent decoding for a moving camera.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::{Instant, SystemTime};
@@ -15,7 +14,7 @@ use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
 
 use super::common::{file_dropped, u64_param, write_mesh_file};
-use super::mesh_arrays::{input_mesh, mesh_error, mesh_to_arrays, output_path};
+use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use super::render::{parse_size, vec3_param};
 
 /// A codec error as the protocol names it: bad parameters are the request's fault, a corrupt
@@ -26,6 +25,7 @@ fn codec_error(e: CodecError) -> OpError {
         CodecError::Input(_) => ErrorCode::InvalidMesh,
         CodecError::Corrupt { .. } => ErrorCode::InvalidMesh,
         CodecError::Io { .. } => ErrorCode::Io,
+        CodecError::Cancelled => return OpError::cancelled(),
     };
     OpError::new(code, e.to_string())
 }
@@ -70,28 +70,35 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
     let output = output_path(&request)?
         .ok_or_else(|| OpError::request("parameter `output` (the .tsc file) is required"))?;
     ctx.progress(0.0, "read", "")?;
-    let mesh = input_mesh(&mut request, ctx)?;
-    let read_ms = started.elapsed().as_secs_f64() * 1e3;
-    let tris = triangles(&mesh);
-    let mut file = std::io::Cursor::new(Vec::new());
-    let mut cancelled = false;
-    let report = tessd_codec::compress(&mesh.positions, &tris, params, &mut file, &mut |f| {
-        cancelled |= ctx.progress(0.05 + 0.9 * f, "code", "").is_err();
-    })
-    .map_err(codec_error)?;
-    if cancelled {
-        return Err(OpError::cancelled());
-    }
-    ctx.progress(0.95, "write", "")?;
-    let bytes = file.into_inner();
-    tessd_mesh::io::write_atomic(&output, |w: &mut dyn Write| {
-        w.write_all(&bytes)
-            .map_err(|source| tessd_mesh::MeshError::Io {
-                path: output.display().to_string(),
-                source,
-            })
-    })
-    .map_err(mesh_error)?;
+    // PLY and OBJ files are streamed in passes (out of core); anything else is read first
+    let input = request.str_param("input")?.map(|p| request.resolve(p));
+    let streamed = input
+        .as_deref()
+        .is_some_and(tessd_codec::source::streamable);
+    let progress = |f: f64| ctx.progress(0.02 + 0.96 * f, "code", "").is_ok();
+    let temp = TempFile::next_to(&output)?;
+    let mut file = std::io::BufWriter::with_capacity(1 << 20, temp.create()?);
+    let (report, read_ms) = if streamed {
+        let path = input.expect("streamed inputs are paths");
+        let mut src = tessd_codec::source::open(&path).map_err(codec_error)?;
+        let report = tessd_codec::compress_source(&mut *src, params, &mut file, &progress);
+        (report, 0.0)
+    } else {
+        let mesh = input_mesh(&mut request, ctx)?;
+        let read_ms = started.elapsed().as_secs_f64() * 1e3;
+        let tris = triangles(&mesh);
+        let report = tessd_codec::compress(&mesh.positions, &tris, params, &mut file, &progress);
+        (report, read_ms)
+    };
+    let report = report.map_err(codec_error)?;
+    ctx.progress(0.99, "write", "")?;
+    let file = file.into_inner().map_err(|e| {
+        OpError::new(
+            ErrorCode::Io,
+            format!("writing {}: {}", output.display(), e.error()),
+        )
+    })?;
+    temp.persist(file, &output)?;
     ctx.progress(1.0, "done", "")?;
     let families: serde_json::Map<String, serde_json::Value> = tessd_codec::symbols::ALL
         .iter()
@@ -140,29 +147,53 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
     let max_bits = u64_param(&request, "max_bits")?.map(|b| b.min(u32::MAX as u64) as u32);
     let output = output_path(&request)?;
     ctx.progress(0.0, "read", "")?;
-    let bytes = std::fs::read(&input)
-        .map_err(|e| OpError::new(ErrorCode::Io, format!("reading {}: {e}", input.display())))?;
-    let tsc = Tsc::open(&bytes).map_err(codec_error)?;
+    let tsc = Tsc::open_file(&input).map_err(codec_error)?;
+    let p = tsc.header.params.bits;
+    let is_ply = output
+        .as_deref()
+        .and_then(|o| o.extension())
+        .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    if is_ply && max_bits.is_none_or(|b| b >= p) {
+        // the whole file into a PLY: streamed, in bounded memory
+        let path = output.expect("checked above");
+        let temp = TempFile::next_to(&path)?;
+        let mut file = std::io::BufWriter::with_capacity(1 << 20, temp.create()?);
+        let progress = |f: f64| ctx.progress(0.02 + 0.96 * f, "decode", "").is_ok();
+        let report = tsc.write_ply(&mut file, &progress).map_err(codec_error)?;
+        let file = file.into_inner().map_err(|e| {
+            OpError::new(
+                ErrorCode::Io,
+                format!("writing {}: {}", path.display(), e.error()),
+            )
+        })?;
+        temp.persist(file, &path)?;
+        ctx.progress(1.0, "done", "")?;
+        return Ok(Response {
+            result: json!({
+                "vertices": report.vertices,
+                "triangles": report.triangles,
+                "bits": p,
+                "bytes_read": tsc.bytes_len(),
+                "file_bytes": tsc.bytes_len(),
+                "nsp_cells": report.cells,
+                "output": path.display().to_string(),
+                "dropped_attributes": [],
+                "elapsed_ms": started.elapsed().as_secs_f64() * 1e3,
+            }),
+            files: vec![path],
+            ..Response::default()
+        });
+    }
     ctx.progress(0.1, "decode", "")?;
     let decoded = tsc.decode(max_bits).map_err(codec_error)?;
-    let mut mesh = Mesh {
-        positions: decoded
-            .positions
-            .iter()
-            .map(|p| p.map(|x| x as f32))
-            .collect(),
-        ..Mesh::default()
-    };
-    for t in &decoded.triangles {
-        mesh.push_face(t);
-    }
+    let mesh = to_mesh(&decoded.positions, &decoded.triangles);
     let result = json!({
         "vertices": mesh.positions.len(),
         "triangles": decoded.triangles.len(),
         "isolated_points": decoded.isolated.len(),
         "bits": decoded.bits,
         "bytes_read": decoded.bytes_read,
-        "file_bytes": bytes.len(),
+        "file_bytes": tsc.bytes_len(),
         "nsp_cells": decoded.cells,
     });
     ctx.progress(0.9, "write", "")?;
@@ -298,4 +329,56 @@ pub fn view(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(1.0, "done", "")?;
     response.result["elapsed_ms"] = json!(started.elapsed().as_secs_f64() * 1e3);
     Ok(response)
+}
+
+/// A file written beside its destination and renamed over it once complete, so that a failure
+/// or a kill never leaves half a `.tsc` where the user's file was; removed when dropped unused.
+struct TempFile {
+    path: PathBuf,
+    armed: bool,
+}
+
+impl TempFile {
+    /// A fresh name in `dest`'s folder.
+    fn next_to(dest: &std::path::Path) -> Result<Self, OpError> {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let name = dest.file_name().ok_or_else(|| {
+            OpError::request(format!("`output` {} is not a file path", dest.display()))
+        })?;
+        let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path = dest.with_file_name(format!(
+            ".{}.tessd-{}-{k}.tmp",
+            name.to_string_lossy(),
+            std::process::id()
+        ));
+        Ok(TempFile { path, armed: true })
+    }
+
+    fn io(&self, what: &str, e: std::io::Error) -> OpError {
+        OpError::new(
+            ErrorCode::Io,
+            format!("{what} {}: {e}", self.path.display()),
+        )
+    }
+
+    fn create(&self) -> Result<std::fs::File, OpError> {
+        std::fs::File::create(&self.path).map_err(|e| self.io("creating", e))
+    }
+
+    /// Flushes `file` to disk and renames it to `dest`.
+    fn persist(mut self, file: std::fs::File, dest: &std::path::Path) -> Result<(), OpError> {
+        file.sync_all().map_err(|e| self.io("flushing", e))?;
+        drop(file);
+        std::fs::rename(&self.path, dest).map_err(|e| self.io("renaming", e))?;
+        self.armed = false;
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if self.armed {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
 }

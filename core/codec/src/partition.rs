@@ -1,0 +1,398 @@
+//! Building the nSP-tree out of core (paper 003 §5.1): the points are read once for the cubic
+//! box and once to quantise them (held at 6 bytes a point up to 16 bits, the RWP of the paper);
+//! the tree grows one level per pass over the triangles, a cell being split when at least
+//! `N_min` top simplices belong to it; then every top simplex is written to the region of each
+//! leaf it belongs to in a raw index file (the paper's RWI), so that a leaf is later read back
+//! with one sequential read.
+//!
+//! Only the points, the tree and one small write buffer per leaf are in memory: the triangles
+//! stay on disk, in the input file and the RWI.
+
+use std::fs::File;
+use std::os::unix::fs::FileExt;
+
+use rustc_hash::FxHashMap;
+
+use crate::error::CodecError;
+use crate::nsp_tree::{Node, Params};
+use crate::quantize::Quantizer;
+use crate::source::{MeshSource, mesh_error};
+
+/// Marks an isolated point in the RWI: `[vertex, POINT_MARK, POINT_MARK]`.
+pub const POINT_MARK: u32 = u32::MAX;
+
+/// The quantised points (the paper's RWP), 6 bytes a point up to 16 bits, 12 beyond.
+pub enum Points {
+    /// Up to 16 bits per coordinate.
+    Narrow(Vec<[u16; 3]>),
+    /// 17 to 20 bits.
+    Wide(Vec<[u32; 3]>),
+}
+
+impl Points {
+    /// Grid coordinates of point `i`.
+    #[inline]
+    pub fn get(&self, i: u32) -> [u32; 3] {
+        match self {
+            Points::Narrow(v) => v[i as usize].map(u32::from),
+            Points::Wide(v) => v[i as usize],
+        }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        match self {
+            Points::Narrow(v) => v.len(),
+            Points::Wide(v) => v.len(),
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The partition of a mesh: grid, points, tree (pre-order) and each leaf's simplices on disk.
+pub struct Partition {
+    /// The quantisation grid.
+    pub grid: Quantizer,
+    /// The quantised points.
+    pub points: Points,
+    /// The tree in pre-order; `end_*` are filled by the coder.
+    pub nodes: Vec<Node>,
+    /// Per node: (first entry, entries) of its simplices in the RWI (leaves only).
+    pub regions: Vec<(u64, u64)>,
+    /// The raw index file: `[u32; 3]` entries (vertex indices; points marked).
+    pub rwi: File,
+    /// Vertices of the input.
+    pub input_vertices: u64,
+    /// Triangles of the input (after fan triangulation).
+    pub input_triangles: u64,
+    /// Whether each vertex is used by a triangle (bit per vertex).
+    pub referenced: Vec<u64>,
+}
+
+impl Partition {
+    /// The simplices of leaf `i`, read back from the RWI.
+    pub fn leaf(&self, i: usize) -> Result<Vec<[u32; 3]>, CodecError> {
+        let (first, count) = self.regions[i];
+        let mut bytes = vec![0u8; count as usize * 12];
+        self.rwi
+            .read_exact_at(&mut bytes, first * 12)
+            .map_err(|e| CodecError::io("reading the raw index file", e))?;
+        Ok(bytes
+            .chunks_exact(12)
+            .map(|b| {
+                std::array::from_fn(|k| u32::from_le_bytes(b[4 * k..4 * k + 4].try_into().unwrap()))
+            })
+            .collect())
+    }
+}
+
+/// Tree under construction: arena order (breadth-first).
+struct Arena {
+    nodes: Vec<Node>,
+    /// Node of each (depth, cell code).
+    by_cell: FxHashMap<(u32, u64), usize>,
+    /// Simplices belonging to each node.
+    counts: Vec<u64>,
+}
+
+fn code(c: [u32; 3]) -> u64 {
+    c[0] as u64 | (c[1] as u64) << 21 | (c[2] as u64) << 42
+}
+
+/// Distinct values among the (up to) three.
+fn distinct3<T: PartialEq + Copy>(x: [T; 3]) -> impl Iterator<Item = T> {
+    let keep = [true, x[1] != x[0], x[2] != x[0] && x[2] != x[1]];
+    (0..3).filter(move |&k| keep[k]).map(move |k| x[k])
+}
+
+/// Reads `src` in passes and builds its partition; `progress` gets the fraction done.
+pub fn build(
+    src: &mut dyn MeshSource,
+    params: Params,
+    progress: &dyn Fn(f64) -> bool,
+) -> Result<Partition, CodecError> {
+    let progress = |f: f64| {
+        if progress(f) {
+            Ok(())
+        } else {
+            Err(CodecError::Cancelled)
+        }
+    };
+    let n = src.vertex_count();
+    if n >= u32::MAX as u64 {
+        return Err(CodecError::Input(format!(
+            "{n} vertices: at most {} are supported",
+            u32::MAX - 1
+        )));
+    }
+    // pass 1: the cubic box
+    let mut min = [f64::INFINITY; 3];
+    let mut max = [f64::NEG_INFINITY; 3];
+    let mut bad: Option<(u64, [f32; 3])> = None;
+    let mut k = 0u64;
+    src.vertices(&mut |p| {
+        if bad.is_none() && p.iter().any(|c| !c.is_finite()) {
+            bad = Some((k, p));
+        }
+        for a in 0..3 {
+            min[a] = min[a].min(p[a] as f64);
+            max[a] = max[a].max(p[a] as f64);
+        }
+        k += 1;
+    })
+    .map_err(mesh_error)?;
+    if let Some((i, p)) = bad {
+        return Err(CodecError::Input(format!(
+            "vertex {i} has a non-finite coordinate {p:?}"
+        )));
+    }
+    if n == 0 {
+        (min, max) = ([0.0; 3], [1.0; 3]);
+    }
+    let grid = Quantizer::new(min, max, params.bits)?;
+    progress(0.05)?;
+    // pass 2: quantise (the RWP)
+    let mut points = if params.bits <= 16 {
+        Points::Narrow(Vec::with_capacity(n as usize))
+    } else {
+        Points::Wide(Vec::with_capacity(n as usize))
+    };
+    src.vertices(&mut |p| {
+        let q = grid.quantize(p.map(f64::from));
+        match &mut points {
+            Points::Narrow(v) => v.push(q.map(|x| x as u16)),
+            Points::Wide(v) => v.push(q),
+        }
+    })
+    .map_err(mesh_error)?;
+    progress(0.1)?;
+    // pass 3: triangle count and the referenced vertices
+    let mut referenced = vec![0u64; (n as usize).div_ceil(64)];
+    let mut triangles = 0u64;
+    src.triangles(&mut |t| {
+        for x in t {
+            referenced[x as usize / 64] |= 1 << (x % 64);
+        }
+        triangles += 1;
+    })
+    .map_err(mesh_error)?;
+    let isolated: Vec<u32> = (0..n as u32)
+        .filter(|&i| referenced[i as usize / 64] & (1 << (i % 64)) == 0)
+        .collect();
+    // the tree, one level per pass
+    let mut arena = Arena {
+        nodes: vec![Node::default()],
+        by_cell: FxHashMap::default(),
+        counts: vec![triangles + isolated.len() as u64],
+    };
+    arena.by_cell.insert((0, 0), 0);
+    if n == 0 {
+        arena.nodes.clear();
+        arena.counts.clear();
+    }
+    let mut frontier: Vec<usize> = if n == 0 { Vec::new() } else { vec![0] };
+    let mut depth = 0u32;
+    while !frontier.is_empty() {
+        let splitting: Vec<usize> = frontier
+            .iter()
+            .copied()
+            .filter(|&i| {
+                params.precision(depth).1 < params.bits && arena.counts[i] >= params.min_cell
+            })
+            .collect();
+        if splitting.is_empty() {
+            break;
+        }
+        let parents: FxHashMap<u64, usize> = splitting
+            .iter()
+            .map(|&i| (code(arena.nodes[i].cell), i))
+            .collect();
+        let mut child_counts: FxHashMap<u64, u64> = FxHashMap::default();
+        let mut count = |vertices: &mut dyn Iterator<Item = u32>| {
+            let cells: Vec<[u32; 3]> = vertices
+                .map(|x| params.cell_at(depth + 1, points.get(x)))
+                .collect();
+            for (k, c) in cells.iter().enumerate() {
+                if cells[..k].contains(c) {
+                    continue;
+                }
+                let parent = c.map(|x| x / params.cell_split);
+                if parents.contains_key(&code(parent)) {
+                    *child_counts.entry(code(*c)).or_insert(0) += 1;
+                }
+            }
+        };
+        src.triangles(&mut |t| count(&mut t.into_iter()))
+            .map_err(mesh_error)?;
+        for &i in &isolated {
+            count(&mut std::iter::once(i));
+        }
+        let mut children: Vec<(u64, u64)> = child_counts.into_iter().collect();
+        children.sort_unstable();
+        let mut next = Vec::new();
+        for (c, cnt) in children {
+            let cell = [
+                (c & 0x1f_ffff) as u32,
+                ((c >> 21) & 0x1f_ffff) as u32,
+                (c >> 42) as u32,
+            ];
+            let parent = parents[&code(cell.map(|x| x / params.cell_split))];
+            let id = arena.nodes.len();
+            arena.nodes.push(Node {
+                depth: depth + 1,
+                cell,
+                ..Node::default()
+            });
+            arena.counts.push(cnt);
+            arena.by_cell.insert((depth + 1, c), id);
+            let pos = {
+                let nn = params.cell_split;
+                let l = cell.map(|x| x % nn);
+                (l[0] + nn * (l[1] + nn * l[2])) as usize
+            };
+            arena.nodes[parent].child_mask |= 1 << pos;
+            arena.nodes[parent].children.push(id);
+            next.push(id);
+        }
+        for &i in &splitting {
+            let kids = std::mem::take(&mut arena.nodes[i].children);
+            let mut kids: Vec<(usize, usize)> = kids
+                .into_iter()
+                .map(|k| (position(&params, &arena.nodes[k]), k))
+                .collect();
+            kids.sort_unstable();
+            arena.nodes[i].children = kids.into_iter().map(|(_, k)| k).collect();
+        }
+        frontier = next;
+        depth += 1;
+        progress((0.1 + 0.05 * depth as f64).min(0.35))?;
+    }
+    // pre-order numbering
+    let mut order = Vec::with_capacity(arena.nodes.len());
+    if !arena.nodes.is_empty() {
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            order.push(i);
+            stack.extend(arena.nodes[i].children.iter().rev());
+        }
+    }
+    let mut new_id = vec![0usize; arena.nodes.len()];
+    for (k, &i) in order.iter().enumerate() {
+        new_id[i] = k;
+    }
+    let nodes: Vec<Node> = order
+        .iter()
+        .map(|&i| {
+            let mut node = arena.nodes[i].clone();
+            node.children = node.children.iter().map(|&c| new_id[c]).collect();
+            node
+        })
+        .collect();
+    // the leaf holding a point: down from the root by cell
+    let leaf_of = |q: [u32; 3]| -> usize {
+        let mut i = 0usize;
+        while !nodes[i].children.is_empty() {
+            let d = nodes[i].depth + 1;
+            match arena.by_cell.get(&(d, code(params.cell_at(d, q)))) {
+                Some(&a) => i = new_id[a],
+                None => break,
+            }
+        }
+        i
+    };
+    // pass: entries per leaf, then pass: write them (the RWI)
+    let mut sizes = vec![0u64; nodes.len()];
+    if !nodes.is_empty() {
+        let mut tally = |vs: &[u32]| {
+            for leaf in distinct3(std::array::from_fn(|k| {
+                leaf_of(points.get(vs[k.min(vs.len() - 1)]))
+            })) {
+                sizes[leaf] += 1;
+            }
+        };
+        src.triangles(&mut |t| tally(&t)).map_err(mesh_error)?;
+        for &i in &isolated {
+            tally(&[i]);
+        }
+    }
+    progress(0.4)?;
+    let mut regions = vec![(0u64, 0u64); nodes.len()];
+    let mut at = 0u64;
+    for (r, &s) in regions.iter_mut().zip(&sizes) {
+        *r = (at, s);
+        at += s;
+    }
+    let rwi = tempfile::tempfile().map_err(|e| CodecError::io("creating the raw index file", e))?;
+    rwi.set_len(at * 12)
+        .map_err(|e| CodecError::io("sizing the raw index file", e))?;
+    // one small buffer per leaf: an input in row order touches every leaf around a ring at
+    // once, so their sum, not one of them, is what memory holds (40 entries: 100 k leaves
+    // take 48 MB)
+    let mut buffers: Vec<Vec<u8>> = vec![Vec::new(); nodes.len()];
+    let mut written = vec![0u64; nodes.len()];
+    const FLUSH: usize = 12 * 40;
+    let mut failure: Option<std::io::Error> = None;
+    {
+        let mut put = |leaf: usize, e: [u32; 3]| {
+            let b = &mut buffers[leaf];
+            if b.capacity() == 0 {
+                b.reserve_exact(FLUSH);
+            }
+            for x in e {
+                b.extend_from_slice(&x.to_le_bytes());
+            }
+            if b.len() >= FLUSH {
+                let off = (regions[leaf].0 + written[leaf]) * 12;
+                if let Err(e) = rwi.write_all_at(b, off) {
+                    failure.get_or_insert(e);
+                }
+                written[leaf] += (b.len() / 12) as u64;
+                b.clear();
+            }
+        };
+        if !nodes.is_empty() {
+            src.triangles(&mut |t| {
+                for leaf in distinct3(t.map(|x| leaf_of(points.get(x)))) {
+                    put(leaf, t);
+                }
+            })
+            .map_err(mesh_error)?;
+            for &i in &isolated {
+                put(leaf_of(points.get(i)), [i, POINT_MARK, POINT_MARK]);
+            }
+        }
+    }
+    for (leaf, b) in buffers.iter().enumerate() {
+        if !b.is_empty() {
+            let off = (regions[leaf].0 + written[leaf]) * 12;
+            if let Err(e) = rwi.write_all_at(b, off) {
+                failure.get_or_insert(e);
+            }
+        }
+    }
+    if let Some(e) = failure {
+        return Err(CodecError::io("writing the raw index file", e));
+    }
+    progress(0.5)?;
+    Ok(Partition {
+        grid,
+        points,
+        nodes,
+        regions,
+        rwi,
+        input_vertices: n,
+        input_triangles: triangles,
+        referenced,
+    })
+}
+
+/// Position of `node` among its parent's children.
+fn position(params: &Params, node: &Node) -> usize {
+    let n = params.cell_split;
+    let l = node.cell.map(|x| x % n);
+    (l[0] + n * (l[1] + n * l[2])) as usize
+}
