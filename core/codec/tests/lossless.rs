@@ -288,3 +288,31 @@ fn the_bounded_memory_ply_writer_gives_the_full_decode() {
         assert_eq!(got, want, "{name}: triangles");
     }
 }
+
+#[test]
+fn the_file_is_the_same_at_any_thread_count() {
+    let mesh = tessd_mesh::io::read_path(
+        &tessd_testdata::shared("mesh/bun_zipper.ply"),
+        &Default::default(),
+    )
+    .unwrap();
+    let tris = triangles(&mesh);
+    let params = Params {
+        min_cell: 1000,
+        ..Params::default()
+    };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut file = Cursor::new(Vec::new());
+            compress(&mesh.positions, &tris, params, &mut file, &|_| true).unwrap();
+            file.into_inner()
+        })
+    };
+    let one = run(1);
+    assert_eq!(run(2), one);
+    assert_eq!(run(5), one);
+}
