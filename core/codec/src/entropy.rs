@@ -67,7 +67,10 @@ impl Counts {
     }
 
     /// The counts scaled to one byte each (the largest to 255, a non-zero count to at least
-    /// 1): what the file stores and what both sides build their models from.
+    /// 1): what the file stores and what both sides build their models from. A context whose
+    /// table would cost more bytes than it saves over a uniform model is left out (both sides
+    /// then use the uniform model): small meshes would otherwise pay more for their tables than
+    /// for their codes.
     pub fn quantised(&self) -> Counts {
         let mut q = Counts::default();
         for c in 0..CONTEXTS {
@@ -76,9 +79,24 @@ impl Counts {
             if max == 0 {
                 continue;
             }
-            for (v, &n) in counts.iter().enumerate() {
-                q.0[c * MAX_ALPHABET + v] = (n as u128 * 255).div_ceil(max) as u64;
+            let table: Vec<u64> = counts
+                .iter()
+                .map(|&n| (n as u128 * 255).div_ceil(max) as u64)
+                .collect();
+            let probs = fixed_point(&table);
+            let uniform = fixed_point(&vec![0; counts.len()]);
+            let cost = |p: &[u32]| -> f64 {
+                counts
+                    .iter()
+                    .zip(p)
+                    .map(|(&n, &p)| n as f64 * (PRECISION as f64 - (p as f64).log2()))
+                    .sum()
+            };
+            let saved = cost(&uniform) - cost(&probs);
+            if saved <= 8.0 * (1 + counts.len()) as f64 {
+                continue;
             }
+            q.0[c * MAX_ALPHABET..c * MAX_ALPHABET + counts.len()].copy_from_slice(&table);
         }
         q
     }
@@ -100,8 +118,10 @@ impl Counts {
             .filter(|&c| self.of(c).iter().any(|&n| n > 0))
             .collect();
         varint::put(&mut out, used.len() as u64);
+        let mut last = 0;
         for c in used {
-            varint::put(&mut out, c as u64);
+            varint::put(&mut out, (c - last) as u64);
+            last = c;
             for &n in self.of(c) {
                 out.push(n.min(255) as u8);
             }
@@ -120,8 +140,16 @@ impl Counts {
                 format!("{used} probability tables"),
             ));
         }
-        for _ in 0..used {
-            let c = varint::get(bytes, &mut at, base)? as usize;
+        let mut c = 0usize;
+        for k in 0..used {
+            let delta = varint::get(bytes, &mut at, base)?;
+            if delta == 0 && k > 0 {
+                return Err(CodecError::corrupt(
+                    base + at as u64,
+                    "a probability table listed twice",
+                ));
+            }
+            c = c.saturating_add(usize::try_from(delta).unwrap_or(usize::MAX));
             if c >= CONTEXTS {
                 return Err(CodecError::corrupt(
                     base + at as u64,
