@@ -42,7 +42,8 @@ pub struct CompressReport {
     pub grid: Quantizer,
     /// Cells of the nSP-tree.
     pub nsp_cells: u64,
-    /// Simplex copies coded in a second or third leaf (border duplication, §5.1).
+    /// Simplex copies beyond one per distinct simplex: border duplication (§5.1), and repeated
+    /// triangles of the input.
     pub duplicated_simplices: u64,
     /// Bits spent on each symbol family ([`crate::symbols::Family`] order): geometry first.
     pub family_bits: [f64; crate::symbols::FAMILIES],
@@ -110,11 +111,12 @@ struct Gathered {
     /// Per node: span in the temporary file, final vertex and simplex counts.
     spans: Vec<Span>,
     ends: Vec<(u64, u64)>,
-    /// Distinct points and triangles owned by the leaves, simplex copies coded.
+    /// Distinct points and triangles owned by the leaves, simplex copies coded, simplices
+    /// owned.
     points: u64,
     triangles: u64,
     copies: u64,
-    distinct: u64,
+    owned: u64,
     /// Leaf entries done, for progress.
     done: u64,
 }
@@ -168,11 +170,11 @@ impl Coder<'_> {
         g.counts.merge(&counts);
         g.spans[i] = spill.put(&deflated, counts.total())?;
         g.ends[i] = end_counts;
-        if let Some((points, triangles, copies, distinct)) = owned {
+        if let Some((points, triangles, copies, owned)) = owned {
             g.points += points;
             g.triangles += triangles;
             g.copies += copies;
-            g.distinct += distinct;
+            g.owned += owned;
             g.done += self.part.regions[i].1;
         }
         let fraction = g.done as f64 / self.total_entries.max(1) as f64;
@@ -186,7 +188,7 @@ impl Coder<'_> {
     /// The complex of leaf `i` from its raw index entries: one vertex per grid point, each
     /// oriented triangle once, isolated points that no triangle of the leaf uses. Also the
     /// points and triangles the leaf owns (its own grid points; triangles whose first vertex in
-    /// kd order is its own), the entries read and the distinct simplices kept.
+    /// kd order is its own), the entries read and the simplices it owns.
     #[allow(clippy::type_complexity)]
     fn leaf_complex(
         &self,
@@ -226,16 +228,20 @@ impl Coder<'_> {
                 owned_triangles += u64::from(inside(*first));
             }
         }
+        let mut point_simplices = 0;
         for q in points {
             if !ids.contains_key(&q) {
                 let v = id(&mut ids, &mut cx, q);
                 simplices.insert(Simplex::point(v));
+                point_simplices += 1;
             }
         }
         let owned_points = ids.keys().filter(|&&q| inside(q)).count() as u64;
         let mut sorted: Vec<Simplex> = simplices.into_iter().collect();
         sorted.sort_unstable();
-        let distinct = sorted.len() as u64;
+        // every simplex is owned by one leaf: points by their own, triangles by their first
+        // vertex's
+        let owned_simplices = owned_triangles + point_simplices;
         for s in sorted {
             cx.add(s);
         }
@@ -248,7 +254,7 @@ impl Coder<'_> {
                 owned_points,
                 owned_triangles,
                 entries.len() as u64,
-                distinct,
+                owned_simplices,
             )),
         ))
     }
@@ -424,7 +430,7 @@ pub fn compress_source<W: Write + Seek>(
         bytes: end,
         grid: part.grid,
         nsp_cells: n as u64,
-        duplicated_simplices: gathered.copies.saturating_sub(gathered.distinct),
+        duplicated_simplices: gathered.copies.saturating_sub(gathered.owned),
         family_bits,
         family_symbols,
         steps_ms: [ms(t0, t1), ms(t1, t2), ms(t2, t3)],
