@@ -326,10 +326,24 @@ fn code_connectivity(
         let flip = if e == 1 || e == 2 { e == 2 } else { sa };
         let same = sa == sb;
         let geometry_agrees = sa == flip;
+        // both other vertices a whole cell or more away from the split plane
+        let far = |x: u32| {
+            let w = &cx.vertices[x as usize];
+            let ax = level % 3;
+            let plane = corner[ax] as u64 + half(level, bits) as u64;
+            let (lo_w, hi_w) = (
+                w.corner[ax] as u64,
+                w.corner[ax] as u64 + w.extent(ax, bits),
+            );
+            hi_w + half(level, bits) as u64 <= plane || lo_w >= plane + half(level, bits) as u64
+        };
+        let remote = usize::from(far(a) && far(b));
         let sub = match e {
-            0 => usize::from(same),
-            3 => 2 + usize::from(same),
-            _ => 4 + usize::from(la == lb) * 3 + usize::from(same) + usize::from(geometry_agrees),
+            0 => usize::from(same) * 2 + remote,
+            3 => 4 + usize::from(same) * 2 + remote,
+            _ => {
+                8 + usize::from(la == lb) * 4 + usize::from(same) * 2 + usize::from(geometry_agrees)
+            }
         };
         let family = Family::TriangleOnce;
         let mask = masks.mask(

@@ -58,7 +58,7 @@ impl Family {
     pub const fn subs(self) -> usize {
         match self {
             Family::Split => 14,
-            Family::TriangleOnce => 10,
+            Family::TriangleOnce => 16,
             Family::Twice => 9,
             Family::Thrice => 4,
             Family::Point => 1,
