@@ -200,7 +200,6 @@ impl Tsc {
             let end = if leaf { p } else { end };
             let stop = end.min(bits);
             let reader = &mut self.reader(i)?;
-            bytes_read += node.len;
             cells += 1;
             let limits = Limits {
                 vertices: node.end_vertices as usize,
@@ -215,6 +214,12 @@ impl Tsc {
                 reader,
                 limits,
             )?;
+            // a cell stopped inside its chunk needed only the words read so far
+            bytes_read += if stop < end {
+                reader.consumed_bytes().min(node.len)
+            } else {
+                node.len
+            };
             if stop == end
                 && (alive.len() as u64 != node.end_vertices || cx.live as u64 != node.end_simplices)
             {

@@ -263,6 +263,14 @@ impl SymbolReader {
         })
     }
 
+    /// Bytes of the chunk the decoder has read so far (whole 32-bit words, the look-ahead
+    /// included): what a decode that stops inside this cell needed of the file.
+    pub fn consumed_bytes(&self) -> u64 {
+        use constriction::Pos;
+        let (cursor, _, _) = self.decoder.clone().into_raw_parts();
+        4 * cursor.pos() as u64
+    }
+
     /// The next value in context `ctx`.
     pub fn next(&mut self, ctx: usize) -> Result<u8, CodecError> {
         let v = self

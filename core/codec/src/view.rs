@@ -147,8 +147,8 @@ pub struct ViewMesh {
     pub triangles: Vec<[u32; 3]>,
     /// The displayed cells: (index in the tree, precision in bits).
     pub cells: Vec<(usize, u32)>,
-    /// Bytes of code chunks read for this view (chunks already read by the session for an
-    /// earlier view are not counted again).
+    /// Bytes of code chunks the decoder read for this view (what the session had read for an
+    /// earlier view is not counted again; a cell restarted to coarsen counts again).
     pub bytes_read: u64,
     /// Symbols decoded for this view.
     pub symbols: u64,
@@ -287,10 +287,12 @@ impl ViewSession {
         }
         if bits > state.bits {
             let node = &tsc.nodes[i];
-            if state.reader.read == 0 {
-                out.bytes_read += node.len;
-            }
             let before = state.reader.read;
+            let bytes_before = if before == 0 {
+                0
+            } else {
+                state.reader.consumed_bytes()
+            };
             let limits = Limits {
                 vertices: node.end_vertices as usize,
                 simplices: node.end_simplices as usize,
@@ -306,6 +308,8 @@ impl ViewSession {
                 limits,
             )?;
             out.symbols += state.reader.read - before;
+            out.bytes_read +=
+                state.reader.consumed_bytes().min(node.len) - bytes_before.min(node.len);
             state.bits = bits;
         }
         Ok(())
