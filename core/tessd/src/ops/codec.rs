@@ -133,6 +133,10 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
     })
 }
 
+/// Meshes with more vertices and triangles than this are decoded into a PLY file in bounded
+/// memory (the in-memory decode holds about 100 bytes per element).
+const STREAMED_DECODE_ELEMENTS: u64 = 4_000_000;
+
 /// `codec.decompress`: params `input` (a `.tsc` file), `output` (a mesh file; without it the
 /// mesh comes back as arrays), `max_bits` (decode only that prefix of the refinement).
 ///
@@ -153,8 +157,10 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
         .as_deref()
         .and_then(|o| o.extension())
         .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-    if is_ply && max_bits.is_none_or(|b| b >= p) {
-        // the whole file into a PLY: streamed, in bounded memory
+    // the whole of a large file into a PLY: streamed in bounded memory (two decoding passes);
+    // a small one is decoded once in memory
+    let large = tsc.header.triangles + tsc.header.vertices > STREAMED_DECODE_ELEMENTS;
+    if is_ply && large && max_bits.is_none_or(|b| b >= p) {
         let path = output.expect("checked above");
         let temp = TempFile::next_to(&path)?;
         let mut file = std::io::BufWriter::with_capacity(1 << 20, temp.create()?);
