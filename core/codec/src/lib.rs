@@ -14,7 +14,7 @@
 //! | kd split / merge codes, interleaved | [`kd_coder`] | §3, §5.2b |
 //! | symbols and their contexts | [`symbols`] | §5.3 |
 //! | range coding with per-level tables | [`entropy`] | §5.2c, §5.3 |
-//! | file layout, index at the end | [`format`] | §5.1, §5.3 |
+//! | file layout, index at the end | [`format`](mod@format) | §5.1, §5.3 |
 //! | compression pipeline, multi-core | [`encode`] | §5.2, §5.4 |
 //! | decoding | [`decode`] | §6.1 |
 //! | full decoding to PLY in bounded memory | [`ply_out`] | §5, §6.1 |

@@ -1,4 +1,4 @@
-//! View-dependent refinement (paper 003 §6.2–6.4): decode each nSP-cell only as far as the
+//! View-dependent refinement (paper 003 §6.2–6.3): decode each nSP-cell only as far as the
 //! camera needs, skip the cells outside the view, and join cells of different precisions
 //! without overlaps or cracks.
 //!
