@@ -163,6 +163,24 @@ impl Tsc {
         )
     }
 
+    /// The cell where grid point `q` stops on its way down from the root: the first cell `stop`
+    /// accepts, else the deepest cell holding `q` (a leaf, or a cell without the child `q`
+    /// would go to).
+    pub(crate) fn descend(&self, q: [u32; 3], stop: impl Fn(usize) -> bool) -> usize {
+        let mut i = 0usize;
+        while !stop(i) {
+            let node = &self.nodes[i];
+            let Some(position) = self.header.params.child_of(node.depth, node.cell, q) else {
+                break;
+            };
+            if node.child_mask & (1 << position) == 0 {
+                break;
+            }
+            i = node.children[(node.child_mask & ((1u64 << position) - 1)).count_ones() as usize];
+        }
+        i
+    }
+
     /// Bytes every decode reads: header, tables, index.
     fn fixed_bytes(&self) -> u64 {
         HEADER_LEN as u64 + self.header.tables.1 + self.header.index.1

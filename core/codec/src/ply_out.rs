@@ -33,22 +33,7 @@ const CACHED_LEAVES: usize = 256;
 impl Tsc {
     /// The leaf holding grid point `q`.
     fn leaf_of(&self, q: [u32; 3]) -> usize {
-        let params = &self.header.params;
-        let mut i = 0usize;
-        loop {
-            let node = &self.nodes[i];
-            if node.children.is_empty() {
-                return i;
-            }
-            let Some(position) = params.child_of(node.depth, node.cell, q) else {
-                return i;
-            };
-            if node.child_mask & (1 << position) == 0 {
-                return i;
-            }
-            let k = (node.child_mask & ((1u64 << position) - 1)).count_ones() as usize;
-            i = node.children[k];
-        }
+        self.descend(q, |_| false)
     }
 
     /// Whether grid point `q` lies in cell `i`.

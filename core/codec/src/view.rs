@@ -336,21 +336,8 @@ impl ViewSession {
             .collect();
         // the displayed cell holding a grid point, walking down the tree
         let owner = |q: [u32; 3]| -> Option<usize> {
-            let mut i = 0usize;
-            loop {
-                if precision.contains_key(&i) {
-                    return Some(i);
-                }
-                let node = &self.tsc.nodes[i];
-                let position = params.child_of(node.depth, node.cell, q)?;
-                let k = (0..position)
-                    .filter(|&c| node.child_mask & (1 << c) != 0)
-                    .count();
-                if node.child_mask & (1 << position) == 0 {
-                    return None;
-                }
-                i = node.children[k];
-            }
+            let i = self.tsc.descend(q, |i| precision.contains_key(&i));
+            precision.contains_key(&i).then_some(i)
         };
         let mut ids: FxHashMap<(usize, [u32; 3]), u32> = FxHashMap::default();
         for &(c, pc) in displayed {

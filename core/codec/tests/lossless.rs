@@ -10,17 +10,6 @@ use tessd_codec::{Params, Quantizer, Tsc, compress};
 
 type P = [u32; 3];
 
-/// The fan triangulation of every face.
-fn triangles(mesh: &tessd_mesh::Mesh) -> Vec<[u32; 3]> {
-    let mut out = Vec::new();
-    for f in mesh.faces() {
-        for i in 1..f.len() - 1 {
-            out.push([f[0], f[i], f[i + 1]]);
-        }
-    }
-    out
-}
-
 fn canonical(t: [P; 3]) -> [P; 3] {
     *[t, [t[1], t[2], t[0]], [t[2], t[0], t[1]]]
         .iter()
@@ -107,7 +96,7 @@ fn every_shared_mesh_round_trips_at_12_and_16_bits_in_one_cell_and_in_many() {
     );
     for path in names {
         let mesh = tessd_mesh::io::read_path(&path, &Default::default()).unwrap();
-        let tris = triangles(&mesh);
+        let tris = mesh.fan_triangles();
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         for bits in [12, 16] {
             let one = Params {
@@ -259,7 +248,7 @@ fn the_bounded_memory_ply_writer_gives_the_full_decode() {
             &Default::default(),
         )
         .unwrap();
-        let tris = triangles(&mesh);
+        let tris = mesh.fan_triangles();
         let mut file = Cursor::new(Vec::new());
         compress(&mesh.positions, &tris, params, &mut file, &|_| true).unwrap();
         let tsc_path = dir.path().join("m.tsc");
@@ -296,7 +285,7 @@ fn the_file_is_the_same_at_any_thread_count() {
         &Default::default(),
     )
     .unwrap();
-    let tris = triangles(&mesh);
+    let tris = mesh.fan_triangles();
     let params = Params {
         min_cell: 1000,
         ..Params::default()

@@ -10,12 +10,7 @@ use tessd_codec::{CodecError, Params, compress, compress_source};
 
 fn in_memory(path: &Path, params: Params) -> Vec<u8> {
     let mesh = tessd_mesh::io::read_path(path, &Default::default()).unwrap();
-    let mut tris = Vec::new();
-    for f in mesh.faces() {
-        for i in 1..f.len() - 1 {
-            tris.push([f[0], f[i], f[i + 1]]);
-        }
-    }
+    let tris = mesh.fan_triangles();
     let mut out = Cursor::new(Vec::new());
     compress(&mesh.positions, &tris, params, &mut out, &|_| true).unwrap();
     out.into_inner()

@@ -134,6 +134,18 @@ impl Mesh {
             .sum()
     }
 
+    /// The fan triangulation [`Mesh::triangle_count`] counts: face `v0 v1 … vn` gives
+    /// `(v0, vi, vi+1)` for i in 1..n−1, in face order.
+    pub fn fan_triangles(&self) -> Vec<[u32; 3]> {
+        let mut out = Vec::with_capacity(self.triangle_count());
+        for f in self.faces() {
+            for i in 1..f.len().saturating_sub(1) {
+                out.push([f[0], f[i], f[i + 1]]);
+            }
+        }
+        out
+    }
+
     /// Axis-aligned bounds `(min, max)` of the *referenced* vertices, or `None` for a mesh with
     /// no faces.
     pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {

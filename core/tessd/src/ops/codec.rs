@@ -39,17 +39,6 @@ fn u32_param(request: &Request, key: &str, default: u32) -> Result<u32, OpError>
     }
 }
 
-/// The fan triangulation of every face (the codec takes triangles).
-fn triangles(mesh: &Mesh) -> Vec<[u32; 3]> {
-    let mut out = Vec::with_capacity(mesh.triangle_count());
-    for f in mesh.faces() {
-        for i in 1..f.len() - 1 {
-            out.push([f[0], f[i], f[i + 1]]);
-        }
-    }
-    out
-}
-
 /// `codec.compress`: params `input` (a mesh file, or `positions` / `face_indices` arrays),
 /// `output` (the `.tsc` file, written atomically), `bits` (12), `cell_split` (4), `min_cell`
 /// (8000), `root_bits` (7).
@@ -86,7 +75,7 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
     } else {
         let mesh = input_mesh(&mut request, ctx)?;
         let read_ms = started.elapsed().as_secs_f64() * 1e3;
-        let tris = triangles(&mesh);
+        let tris = mesh.fan_triangles();
         let report = tessd_codec::compress(&mesh.positions, &tris, params, &mut file, &progress);
         (report, read_ms)
     };
