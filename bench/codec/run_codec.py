@@ -200,8 +200,10 @@ def parse_bits(spec):
     return out
 
 
-def rd_rows(tsc, mesh, bits, binary, min_bits=4, draco_bits=None, samples=100000, work=None):
-    """Rate-distortion rows: tessd at --max-bits B = min_bits..bits, Draco-10 at draco_bits."""
+def rd_rows(tsc, mesh, bits, binary, min_bits=4, draco_bits=None, samples=100000, work=None, tool="tessd",
+            draco=True):
+    """Rate-distortion rows: tessd at --max-bits B = min_bits..bits (labelled `tool`), Draco-10 at
+    draco_bits (unless `draco` is false)."""
     import DracoPy
 
     verts, tris, _ = peers.load_mesh(mesh)
@@ -216,7 +218,7 @@ def rd_rows(tsc, mesh, bits, binary, min_bits=4, draco_bits=None, samples=100000
             out = work / f"{Path(tsc).stem}_rd{b}.ply"
             rc, so, se, rss, wall = peers.run_child_rss(
                 [str(binary), "decompress", str(tsc), str(out), "--max-bits", str(b), "--json"], 900)
-            row = {"record": "rd", "mesh": name, "p": bits, "tool": "tessd", "max_bits": b, "input_vertices": nv}
+            row = {"record": "rd", "mesh": name, "p": bits, "tool": tool, "max_bits": b, "input_vertices": nv}
             if rc != 0:
                 row["error"] = (se or so).strip()[-1500:]
                 rows.append(row)
@@ -229,7 +231,7 @@ def rd_rows(tsc, mesh, bits, binary, min_bits=4, draco_bits=None, samples=100000
             rows.append(row)
     pts = np.ascontiguousarray(verts, dtype=np.float32)
     faces = np.ascontiguousarray(tris, dtype=np.uint32)
-    for q in draco_bits or range(min_bits, bits + 1):
+    for q in (draco_bits or range(min_bits, bits + 1)) if draco else ():
         buf = DracoPy.encode(pts, faces, quantization_bits=q, compression_level=10,
                              quantization_range=float(grid.side) if grid.side > 0 else -1,
                              quantization_origin=[float(x) for x in grid.origin])
@@ -280,6 +282,7 @@ def write_rd(rows, csv_path=None, png_path=None):
         for ai, (key, label) in enumerate((("hausdorff_rel", "Hausdorff"), ("rms_rel", "RMS"))):
             ax = axes[mi][ai]
             for tool, style, lab in (("tessd", "o-", "tessd decompress --max-bits B"),
+                                     ("tessd-ahead2", "^-", "tessd --ahead 2 (§6.4), --max-bits B"),
                                      ("draco-10", "s--", "Draco level 10, quantisation q bits")):
                 pts = sorted(((r["bits_per_vertex"], r[key], r.get("max_bits", r.get("quantization_bits")))
                               for r in good if r["mesh"] == m and r["tool"] == tool and r[key] > 0))
@@ -439,7 +442,8 @@ def report(jsonl, out, wall_s=None, command=None):
         L.append("Distance to the original (unquantised) mesh: sampled point-to-surface both ways "
                  "(100 000 area-weighted samples plus the vertices per side, exact point-to-triangle "
                  "distance), Hausdorff = larger max, RMS over both sides, ÷ the largest bbox side. tessd: "
-                 "`tessd decompress --max-bits B`, rate = `bytes_read`; Draco level 10 at q bits. Plot: "
+                 "`tessd decompress --max-bits B`, rate = `bytes_read` (tessd-ahead2: the file compressed with "
+                 "`--ahead 2`, geometry two bits ahead of the connectivity, §6.4); Draco level 10 at q bits. Plot: "
                  "`codec_rd.png`, data: `codec_rd.csv`.\n")
         L.append("| mesh | tool | B or q | bits/vertex | Hausdorff ÷ side | RMS ÷ side |")
         L.append("|---|---|---:|---:|---:|---:|")
@@ -536,6 +540,18 @@ def cmd_run(a):
             rows = rd_rows(tsc, str(rd_path), a.rd_bits, binary, a.rd_min_bits, parse_bits(a.draco_bits),
                            a.samples, work)
             append(a.jsonl, rows)
+            if tsc is not None:
+                # the same file with two bits of geometry ahead of the connectivity (§6.4)
+                ahead = work / f"{rd_path.stem}_p{a.rd_bits}_ahead2.tsc"
+                rc, so, se, _, _ = peers.run_child_rss(
+                    [str(binary), "compress", str(rd_path), str(ahead), "--bits", str(a.rd_bits),
+                     *a.tessd_args.split(), "--ahead", "2", "--json"], 900)
+                if rc == 0:
+                    append(a.jsonl, rd_rows(ahead, str(rd_path), a.rd_bits, binary, a.rd_min_bits, None,
+                                            a.samples, work, tool="tessd-ahead2", draco=False))
+                else:
+                    append(a.jsonl, [{"record": "rd", "mesh": rd_path.stem, "p": a.rd_bits, "tool": "tessd-ahead2",
+                                      "error": (se or so).strip()[-1500:]}])
     report(a.jsonl, a.out, time.time() - start, a.command)
     rows = [json.loads(l) for l in open(a.jsonl) if l.strip()]
     bad = [r for r in rows if "error" in r]

@@ -10,11 +10,12 @@ use std::sync::Arc;
 
 use rustc_hash::{FxHashMap, FxHashSet};
 
+use crate::ahead::Geometry;
 use crate::complex::{Complex, POINT, Simplex, Vertex};
 use crate::entropy::{Counts, Models, SymbolReader};
 use crate::error::CodecError;
 use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
-use crate::kd_coder::{self, Limits, kd_key};
+use crate::kd_coder::{self, Limits, Span, kd_key};
 use crate::nsp_tree::Node;
 
 /// An opened `.tsc` file: its header, models and tree, with the file's bytes.
@@ -82,8 +83,9 @@ pub(crate) fn root_complex(header: &Header) -> (Complex, Vec<u32>) {
 }
 
 /// What [`Tsc::visit`] hands over per finished cell: its index, its complex, its vertices in kd
-/// order.
-pub(crate) type CellFn<'a> = dyn FnMut(usize, &Complex, &[u32]) -> Result<(), CodecError> + 'a;
+/// order, and the geometry read ahead of its connectivity (§6.4), if any.
+pub(crate) type CellFn<'a> =
+    dyn FnMut(usize, &Complex, &[u32], Option<&Geometry>) -> Result<(), CodecError> + 'a;
 
 /// A decoded mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -93,7 +95,8 @@ pub struct Decoded {
     /// Each vertex's cell: lower corner on the full-precision grid (the grid point itself at
     /// full precision), in kd order.
     pub corners: Vec<[u32; 3]>,
-    /// Each vertex's position (the grid point, or the cell's centre below full precision).
+    /// Each vertex's position: the grid point; below full precision the cell's centre, or with
+    /// geometry ahead (§6.4) the barycentre of the cells below it that the decode read.
     pub positions: Vec<[f64; 3]>,
     /// Oriented triangles; at full precision degenerate ones too, as the input had them.
     pub triangles: Vec<[u32; 3]>,
@@ -191,8 +194,8 @@ impl Tsc {
         let p = self.header.params.bits;
         let bits = max_bits.unwrap_or(p).min(p);
         let mut out = Assembly::default();
-        let (bytes_read, cells) = self.visit(bits, &mut |_, cx, _| {
-            out.add(cx);
+        let (bytes_read, cells) = self.visit(bits, &mut |_, cx, _, geometry| {
+            out.add(cx, geometry, p);
             Ok(())
         })?;
         Ok(out.finish(self, bits, bytes_read, cells))
@@ -223,15 +226,15 @@ impl Tsc {
                 vertices: node.end_vertices as usize,
                 simplices: node.end_simplices as usize,
             };
-            kd_coder::decode(
-                &mut cx,
-                &mut alive,
-                p,
-                3 * start as usize,
-                3 * stop as usize,
-                reader,
-                limits,
-            )?;
+            let mut geometry = None;
+            let span = Span {
+                bits: p,
+                lo: 3 * start as usize,
+                hi: 3 * stop as usize,
+                end: 3 * end as usize,
+                advance: self.header.params.advance(),
+            };
+            kd_coder::decode(&mut cx, &mut alive, span, reader, limits, &mut geometry)?;
             // a cell stopped inside its chunk needed only the words read so far
             bytes_read += if stop < end {
                 reader.consumed_bytes().min(node.len)
@@ -253,7 +256,7 @@ impl Tsc {
                 ));
             }
             if leaf || stop < end {
-                f(i, &cx, &alive)?;
+                f(i, &cx, &alive, geometry.as_ref())?;
                 continue;
             }
             let parts = self.partition(i, &cx, &alive);
@@ -329,19 +332,21 @@ fn rename(s: Simplex, map: &[u32]) -> Simplex {
 #[derive(Default)]
 struct Assembly {
     corners: Vec<[u32; 3]>,
-    levels: Vec<u8>,
+    /// Where each vertex is drawn, in grid units.
+    positions: Vec<[f64; 3]>,
     by_corner: FxHashMap<[u32; 3], u32>,
     simplices: FxHashSet<Simplex>,
 }
 
 impl Assembly {
-    fn add(&mut self, cx: &Complex) {
+    fn add(&mut self, cx: &Complex, geometry: Option<&Geometry>, p: u32) {
         let mut map = vec![u32::MAX; cx.vertices.len()];
         for v in cx.used_vertices() {
             let vx = cx.vertices[v as usize];
             map[v as usize] = *self.by_corner.entry(vx.corner).or_insert_with(|| {
                 self.corners.push(vx.corner);
-                self.levels.push(vx.level);
+                self.positions
+                    .push(geometry.map_or_else(|| vx.centre(p), |g| g.position(&vx, p)));
                 (self.corners.len() - 1) as u32
             });
         }
@@ -398,11 +403,7 @@ impl Assembly {
             .iter()
             .map(|&r| {
                 let v = order[r as usize] as usize;
-                let vx = Vertex {
-                    corner: self.corners[v],
-                    level: self.levels[v],
-                };
-                tsc.header.grid.position(vx.centre(p))
+                tsc.header.grid.position(self.positions[v])
             })
             .collect();
         Decoded {

@@ -160,6 +160,7 @@ impl Coder<'_> {
             bits,
             3 * start as usize,
             3 * end as usize,
+            self.params.advance(),
         );
         let mut counts = Counts::default();
         counts.add(&symbols);

@@ -1,7 +1,7 @@
 //! The `.tsc` file layout (paper 003 §5.1 "Ecriture de l'en-tête", §5.3 "Ecriture finale"):
 //!
 //! ```text
-//! header (fixed 128 bytes)  magic, version, grid (origin, step, p), n, p_r, N_min, counts,
+//! header (fixed 128 bytes)  magic, version, grid (origin, step, p), n, p_r, m (geometry ahead), N_min, counts,
 //!                           offsets of the tables and of the index
 //! probability tables        one per (family, kd level) context, as counts
 //! code chunks               one range-coded chunk per nSP-cell
@@ -67,7 +67,7 @@ impl Header {
             self.params.bits as u8,
             self.params.cell_split as u8,
             self.params.root_bits as u8,
-            0,
+            self.params.ahead as u8,
         ]);
         b.extend_from_slice(&(self.params.min_cell.min(u32::MAX as u64) as u32).to_le_bytes());
         for v in [
@@ -123,6 +123,7 @@ impl Header {
             bits: b[40] as u32,
             cell_split: b[41] as u32,
             root_bits: b[42] as u32,
+            ahead: b[43] as u32,
             min_cell: u32::from_le_bytes(b[44..48].try_into().unwrap()) as u64,
         };
         params

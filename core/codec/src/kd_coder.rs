@@ -25,6 +25,7 @@
 
 use rustc_hash::FxHashMap;
 
+use crate::ahead::Geometry;
 use crate::complex::{Complex, POINT, Simplex, Vertex, axis_bits, candidate_of, candidates};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
@@ -42,7 +43,7 @@ pub fn kd_key(corner: [u32; 3], level: usize, bits: u32) -> u64 {
 }
 
 /// Side of the high half of a split at kd `level`, in grid units.
-fn half(level: usize, bits: u32) -> u32 {
+pub(crate) fn half(level: usize, bits: u32) -> u32 {
     1u32 << (bits - axis_bits(level, level % 3) - 1)
 }
 
@@ -97,14 +98,32 @@ fn swap_children(mask: u8) -> u8 {
 /// How a symbol's value maps to a preimage mask: for the three-valued families, which child is
 /// predicted (value 0); for the twice-held triangles, whether the children are swapped.
 #[derive(Clone, Copy, Debug)]
-struct Coding {
-    ctx: usize,
-    family: Family,
+pub(crate) struct Coding {
+    pub(crate) ctx: usize,
+    pub(crate) family: Family,
     /// Predicted child is the high one / children swapped.
-    flip: bool,
+    pub(crate) flip: bool,
 }
 
 impl Coding {
+    /// The value coding a split (0 = low half only, 1 = high half only, 2 = both).
+    pub(crate) fn split_value(self, split: u8) -> u8 {
+        if split == 2 {
+            2
+        } else {
+            u8::from((split == 1) != self.flip)
+        }
+    }
+
+    /// The split a value codes (the inverse of [`Coding::split_value`]).
+    pub(crate) fn split(self, value: u8) -> u8 {
+        if value == 2 {
+            2
+        } else {
+            u8::from((value == 1) != self.flip)
+        }
+    }
+
     fn value(self, mask: u8) -> u8 {
         match self.family {
             Family::Twice | Family::Thrice => {
@@ -196,11 +215,7 @@ fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
             .sum();
         let mean = sum / others.len() as f64;
         let d = ((mean - (corner[a] as f64 + h - 0.5)) / h).abs();
-        let margin = 1 + [0.125, 0.25, 0.5, 1.0, 2.0]
-            .iter()
-            .filter(|&&m| d >= m)
-            .count();
-        (margin, mean > corner[a] as f64 + h - 0.5)
+        (margin_context(d), mean > corner[a] as f64 + h - 0.5)
     };
     let family = Family::Split;
     Coding {
@@ -208,6 +223,15 @@ fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
         family,
         flip: high,
     }
+}
+
+/// The sub-context of a predicted split from the prediction's distance to the split plane, in
+/// half-cells: 1 (closest) to 6; 0 is left for "no prediction".
+pub(crate) fn margin_context(d: f64) -> usize {
+    1 + [0.125, 0.25, 0.5, 1.0, 2.0]
+        .iter()
+        .filter(|&&m| d >= m)
+        .count()
 }
 
 /// Where the preimage masks of a split come from: the encoder knows them, the decoder reads them.
@@ -412,7 +436,9 @@ fn code_connectivity(
     Ok(out)
 }
 
-/// Encodes one nSP-cell: merges the kd-cells of `cx` from kd level `hi` down to `lo` (§5.2b).
+/// Encodes one nSP-cell: merges the kd-cells of `cx` from kd level `hi` down to `lo` (§5.2b),
+/// with the geometry `advance` kd levels ahead of the connectivity (§6.4; 0 interleaves each
+/// split with its connectivity codes).
 ///
 /// `alive` lists the vertices at level `hi` in kd order; on return it lists those at level `lo`.
 /// The symbols come back in the decoder's order.
@@ -422,10 +448,22 @@ pub fn encode(
     bits: u32,
     lo: usize,
     hi: usize,
+    advance: usize,
 ) -> Vec<Symbol> {
-    // events are recorded in merge order and emitted reversed: (start, len) into `buffer`
+    let geometry = (advance > 0).then(|| {
+        let top = alive
+            .iter()
+            .map(|&v| cx.vertices[v as usize].corner)
+            .collect();
+        Geometry::of_cells(top, lo, hi, bits)
+    });
+    // events are recorded in merge order and emitted reversed: (start, len) into `buffer`;
+    // with geometry ahead, the connectivity events of level l end at `level_ends[l - lo]`
     let mut buffer: Vec<Symbol> = Vec::new();
     let mut events: Vec<(u32, u32)> = Vec::new();
+    let mut level_ends = vec![0usize; hi - lo];
+    // with geometry ahead: the split codes of every level, in kd order
+    let mut ahead: Vec<Vec<Symbol>> = vec![Vec::new(); hi - lo];
     let mut conn: Vec<Symbol> = Vec::new();
     for level in (lo..hi).rev() {
         let a = level % 3;
@@ -464,21 +502,54 @@ pub fn encode(
                     2
                 }
             };
-            let coding = split_coding(cx, x, level, bits);
-            let value = if split == 2 {
-                2
-            } else {
-                u8::from((split == 1) != coding.flip)
-            };
-            buffer.push(Symbol::new(coding.ctx, value));
+            if geometry.is_none() {
+                let coding = split_coding(cx, x, level, bits);
+                buffer.push(Symbol::new(coding.ctx, coding.split_value(split)));
+            }
             buffer.extend_from_slice(&conn);
             events.push((start, buffer.len() as u32 - start));
         }
         *alive = groups.iter().map(|&(x, _)| x).collect();
+        level_ends[level - lo] = events.len();
+        // the complex now stands where the decoder reads the splits of level `level + A − 1`
+        // (of levels lo..lo+A at the start)
+        if let Some(g) = &geometry {
+            let first = if level == lo { lo } else { level + advance - 1 };
+            for depth in first..(level + advance).min(hi) {
+                let splits = g.splits(depth);
+                ahead[depth - lo] = g
+                    .codings(cx, alive, depth, bits)
+                    .into_iter()
+                    .zip(splits)
+                    .map(|(c, &s)| Symbol::new(c.ctx, c.split_value(s)))
+                    .collect();
+            }
+        }
     }
-    let mut out = Vec::with_capacity(buffer.len());
-    for &(start, len) in events.iter().rev() {
-        out.extend_from_slice(&buffer[start as usize..(start + len) as usize]);
+    let mut out = Vec::with_capacity(buffer.len() + ahead.iter().map(Vec::len).sum::<usize>());
+    let emit = |out: &mut Vec<Symbol>, events: &[(u32, u32)]| {
+        for &(start, len) in events.iter().rev() {
+            out.extend_from_slice(&buffer[start as usize..(start + len) as usize]);
+        }
+    };
+    if advance == 0 {
+        emit(&mut out, &events);
+        return out;
+    }
+    for symbols in &ahead[..advance.min(hi - lo)] {
+        out.extend_from_slice(symbols);
+    }
+    for level in lo..hi {
+        // level l's events lie between level l+1's end and its own (merge order)
+        let from = if level + 1 < hi {
+            level_ends[level + 1 - lo]
+        } else {
+            0
+        };
+        emit(&mut out, &events[from..level_ends[level - lo]]);
+        if level + advance < hi {
+            out.extend_from_slice(&ahead[level + advance - lo]);
+        }
     }
     out
 }
@@ -516,29 +587,61 @@ pub struct Limits {
     pub simplices: usize,
 }
 
-/// Decodes one nSP-cell: splits the kd-cells of `cx` from kd level `lo` up to `hi` (§6.2).
+/// What part of a cell's code one [`decode`] call reads.
+#[derive(Clone, Copy, Debug)]
+pub struct Span {
+    /// Bits per coordinate of the file, `p`.
+    pub bits: u32,
+    /// kd level the complex is at.
+    pub lo: usize,
+    /// kd level to stop at.
+    pub hi: usize,
+    /// The cell's last kd level (its code ends there).
+    pub end: usize,
+    /// kd levels of geometry ahead of the connectivity (3 × `--ahead`).
+    pub advance: usize,
+}
+
+/// Decodes one nSP-cell: splits the kd-cells of `cx` from kd level `span.lo` up to `span.hi`
+/// (§6.2). With geometry ahead (§6.4), `geometry` carries what was read ahead from one call to
+/// the next (`None` at the cell's start).
 ///
 /// `alive` lists the vertices at level `lo` in kd order; on return, those at level `hi`.
 pub fn decode(
     cx: &mut Complex,
     alive: &mut Vec<u32>,
-    bits: u32,
-    lo: usize,
-    hi: usize,
+    span: Span,
     reader: &mut SymbolReader,
     limits: Limits,
+    geometry: &mut Option<Geometry>,
 ) -> Result<(), CodecError> {
+    let Span {
+        bits,
+        lo,
+        hi,
+        end,
+        advance,
+    } = span;
+    if advance > 0 && geometry.is_none() {
+        let mut g = Geometry::start(cx, alive, lo, bits);
+        for depth in lo..(lo + advance).min(end) {
+            g.read(cx, alive, depth, bits, |ctx| reader.next(ctx))?;
+        }
+        *geometry = Some(g);
+    }
     for level in lo..hi {
         let a = level % 3;
         let h = half(level, bits);
         let mut next = Vec::with_capacity(alive.len() * 2);
-        for &v in alive.iter() {
-            let coding = split_coding(cx, v, level, bits);
-            let value = reader.next(coding.ctx)?;
-            let split = if value == 2 {
-                2
-            } else {
-                u8::from((value == 1) != coding.flip)
+        for (i, &v) in alive.iter().enumerate() {
+            let split = match geometry {
+                Some(g) => *g.splits(level).get(i).ok_or_else(|| {
+                    CodecError::corrupt(reader.offset, "the geometry ahead lost a kd-cell")
+                })?,
+                None => {
+                    let coding = split_coding(cx, v, level, bits);
+                    coding.split(reader.next(coding.ctx)?)
+                }
             };
             let vx = cx.vertices[v as usize];
             let mut high = vx;
@@ -580,6 +683,12 @@ pub fn decode(
             }
         }
         *alive = next;
+        if let Some(g) = geometry {
+            g.drop_above(level + 1);
+            if level + advance < end {
+                g.read(cx, alive, level + advance, bits, |ctx| reader.next(ctx))?;
+            }
+        }
     }
     Ok(())
 }

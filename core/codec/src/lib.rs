@@ -20,6 +20,7 @@
 //! | full decoding to PLY in bounded memory | [`ply_out`] | §5, §6.1 |
 //! | view-dependent refinement, borders between precisions | [`view`] | §6.2, §6.3 |
 
+pub mod ahead;
 pub mod complex;
 pub mod decode;
 pub mod encode;

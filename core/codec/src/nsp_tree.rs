@@ -9,6 +9,9 @@
 
 use crate::error::CodecError;
 
+/// Most bits of geometry ahead of the connectivity (§6.4 shows one and two).
+pub const MAX_AHEAD: u32 = 4;
+
 /// The user's parameters of the partition and the quantisation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Params {
@@ -20,6 +23,8 @@ pub struct Params {
     pub min_cell: u64,
     /// Precision the root reaches before it is split, `p_r`.
     pub root_bits: u32,
+    /// Bits of geometry coded ahead of the connectivity, `m` (§6.4; 0 = none).
+    pub ahead: u32,
 }
 
 impl Default for Params {
@@ -31,6 +36,7 @@ impl Default for Params {
             cell_split: 4,
             min_cell: 8000,
             root_bits: 7,
+            ahead: 0,
         }
     }
 }
@@ -65,7 +71,18 @@ impl Params {
                 ),
             );
         }
+        if self.ahead > MAX_AHEAD {
+            return bad(
+                "--ahead",
+                format!("{} is outside 0..={MAX_AHEAD}", self.ahead),
+            );
+        }
         Ok(())
+    }
+
+    /// kd levels of geometry ahead of the connectivity: three per bit.
+    pub fn advance(&self) -> usize {
+        3 * self.ahead as usize
     }
 
     /// Bits each level below the root adds, `p_l = log2 n`.

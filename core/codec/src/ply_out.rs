@@ -77,7 +77,7 @@ impl Tsc {
             .count()
             .max(1) as f64;
         let mut done = 0.0;
-        let (_, cells) = self.visit(p, &mut |i, cx, alive| {
+        let (_, cells) = self.visit(p, &mut |i, cx, alive, _| {
             let base = written;
             for &v in alive {
                 let q = cx.vertices[v as usize].corner;
@@ -137,7 +137,7 @@ impl Tsc {
             };
         let mut triangles = 0u64;
         done = 0.0;
-        self.visit(p, &mut |i, cx, _alive| {
+        self.visit(p, &mut |i, cx, _alive, _| {
             load(i, &mut cache)?;
             for s in cx.live_simplices() {
                 if s.kind == POINT || !self.inside(i, Self::first_corner(cx, s.v, full, p)) {

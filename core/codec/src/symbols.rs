@@ -31,15 +31,20 @@ pub enum Family {
     Thrice = 3,
     /// Where an isolated point goes: 0 = low child, 1 = high child, 2 = both.
     Point = 4,
+    /// kd-cell subdivision coded ahead of the connectivity (§6.4, `--ahead`): values as
+    /// [`Family::Split`]. Sub-context: the vertex holding the cell holds several cells of its
+    /// level (×7), and the margin of its neighbours' descendants' centroid.
+    Ahead = 5,
 }
 
 /// Every family, in order.
-pub const ALL: [Family; 5] = [
+pub const ALL: [Family; 6] = [
     Family::Split,
     Family::TriangleOnce,
     Family::Twice,
     Family::Thrice,
     Family::Point,
+    Family::Ahead,
 ];
 
 /// Number of families.
@@ -62,6 +67,7 @@ impl Family {
             Family::Twice => 9,
             Family::Thrice => 4,
             Family::Point => 1,
+            Family::Ahead => 14,
         }
     }
 
@@ -78,7 +84,7 @@ impl Family {
 }
 
 /// Number of contexts.
-pub const CONTEXTS: usize = (Family::Point.first_slot() + 1) * MAX_LEVELS;
+pub const CONTEXTS: usize = (Family::Ahead.first_slot() + Family::Ahead.subs()) * MAX_LEVELS;
 
 /// Widest alphabet.
 pub const MAX_ALPHABET: usize = 16;
@@ -86,7 +92,7 @@ pub const MAX_ALPHABET: usize = 16;
 /// The context of a symbol of `family`, sub-context `sub`, emitted at kd level `level`.
 pub fn context(family: Family, sub: usize, level: usize) -> usize {
     debug_assert!(sub < family.subs());
-    let level = if family == Family::Split {
+    let level = if matches!(family, Family::Split | Family::Ahead) {
         level
     } else {
         level / 3
@@ -136,7 +142,7 @@ mod tests {
                 for level in 0..MAX_LEVELS {
                     let c = context(f, sub, level);
                     assert_eq!(family_of(c), f);
-                    if f == Family::Split || level % 3 == 0 {
+                    if matches!(f, Family::Split | Family::Ahead) || level % 3 == 0 {
                         assert!(seen.insert(c), "{f:?} {sub} {level}");
                     }
                     assert!(c < CONTEXTS, "{c}");

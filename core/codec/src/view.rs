@@ -21,11 +21,12 @@ use std::sync::Arc;
 
 use rustc_hash::{FxHashMap, FxHashSet};
 
+use crate::ahead::Geometry;
 use crate::complex::{Complex, POINT, Vertex};
 use crate::decode::{Tsc, root_complex};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
-use crate::kd_coder::{self, Limits};
+use crate::kd_coder::{self, Limits, Span};
 
 /// A perspective camera, the convention of `tessd render`: eye, target, up hint, vertical
 /// field of view in degrees, image size in pixels.
@@ -161,6 +162,8 @@ struct CellState {
     cx: Complex,
     alive: Vec<u32>,
     reader: SymbolReader,
+    /// Geometry read ahead of the connectivity (§6.4).
+    geometry: Option<Geometry>,
     /// Precision reached, in bits.
     bits: u32,
     /// The children's hand-over complexes, once this cell reached its last precision.
@@ -297,15 +300,26 @@ impl ViewSession {
                 vertices: node.end_vertices as usize,
                 simplices: node.end_simplices as usize,
             };
-            let p = tsc.header.params.bits;
+            let params = &tsc.header.params;
+            let end = if node.children.is_empty() {
+                params.bits
+            } else {
+                params.precision(node.depth).1
+            };
+            let span = Span {
+                bits: params.bits,
+                lo: 3 * state.bits as usize,
+                hi: 3 * bits as usize,
+                end: 3 * end as usize,
+                advance: params.advance(),
+            };
             kd_coder::decode(
                 &mut state.cx,
                 &mut state.alive,
-                p,
-                3 * state.bits as usize,
-                3 * bits as usize,
+                span,
                 &mut state.reader,
                 limits,
+                &mut state.geometry,
             )?;
             out.symbols += state.reader.read - before;
             out.bytes_read +=
@@ -370,7 +384,11 @@ impl ViewSession {
                         _ => (c, cx.vertices[s.v[k] as usize]),
                     };
                     tri[k] = *ids.entry((owner_cell, vx.corner)).or_insert_with(|| {
-                        out.positions.push(grid.position(vx.centre(p)));
+                        let at = match &self.states[&owner_cell].geometry {
+                            Some(g) => g.position(&vx, p),
+                            None => vx.centre(p),
+                        };
+                        out.positions.push(grid.position(at));
                         (out.positions.len() - 1) as u32
                     });
                 }
@@ -404,6 +422,7 @@ impl Tsc {
             alive: start.1.clone(),
             start,
             reader,
+            geometry: None,
             bits: self.header.params.precision(node.depth).0,
             parts: None,
         })

@@ -6,7 +6,8 @@ use std::io::Cursor;
 use proptest::prelude::*;
 use tessd_codec::{CodecError, Params, Tsc, compress};
 
-fn sample() -> Vec<u8> {
+/// The sample file, with `ahead` bits of geometry ahead of the connectivity (§6.4).
+fn sample(ahead: u32) -> Vec<u8> {
     let path = tessd_testdata::shared("mesh/spot_triangulated.obj");
     let mesh = tessd_mesh::io::read_path(&path, &Default::default()).unwrap();
     let tris: Vec<[u32; 3]> = mesh.faces().map(|f| [f[0], f[1], f[2]]).collect();
@@ -15,6 +16,7 @@ fn sample() -> Vec<u8> {
         min_cell: 1000,
         cell_split: 2,
         root_bits: 4,
+        ahead,
     };
     let mut file = Cursor::new(Vec::new());
     compress(&mesh.positions, &tris, params, &mut file, &|_| true).unwrap();
@@ -29,19 +31,23 @@ fn decode(bytes: &[u8]) -> Result<usize, CodecError> {
 
 #[test]
 fn the_sample_decodes_and_has_several_cells() {
-    let bytes = sample();
-    let tsc = Tsc::open(&bytes).unwrap();
-    assert!(tsc.nodes.len() > 4, "{} cells", tsc.nodes.len());
-    assert_eq!(decode(&bytes).unwrap(), 5856);
+    for ahead in [0, 1] {
+        let bytes = sample(ahead);
+        let tsc = Tsc::open(&bytes).unwrap();
+        assert!(tsc.nodes.len() > 4, "{} cells", tsc.nodes.len());
+        assert_eq!(decode(&bytes).unwrap(), 5856);
+    }
 }
 
 #[test]
 fn every_truncation_is_an_error_naming_an_offset() {
-    let bytes = sample();
-    for len in (0..bytes.len()).step_by(7) {
-        match decode(&bytes[..len]) {
-            Err(CodecError::Corrupt { offset, .. }) => assert!(offset <= bytes.len() as u64),
-            other => panic!("truncated to {len} bytes: {other:?}"),
+    for ahead in [0, 1] {
+        let bytes = sample(ahead);
+        for len in (0..bytes.len()).step_by(7) {
+            match decode(&bytes[..len]) {
+                Err(CodecError::Corrupt { offset, .. }) => assert!(offset <= bytes.len() as u64),
+                other => panic!("ahead {ahead}, truncated to {len} bytes: {other:?}"),
+            }
         }
     }
 }
@@ -52,8 +58,9 @@ proptest! {
     #[test]
     fn flipped_and_overwritten_bytes_never_panic(
         flips in proptest::collection::vec((any::<prop::sample::Index>(), 1u8..=255), 1..6),
+        ahead in 0u32..2,
     ) {
-        let mut bytes = sample();
+        let mut bytes = sample(ahead);
         let n = bytes.len();
         for (at, x) in flips {
             bytes[at.index(n)] ^= x;

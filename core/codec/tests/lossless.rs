@@ -111,11 +111,17 @@ fn every_shared_mesh_round_trips_at_12_and_16_bits_in_one_cell_and_in_many() {
                 min_cell: 200,
                 cell_split: 2,
                 root_bits: 3,
+                ..Params::default()
             };
             let (_, cells) = round_trip(&name, &mesh.positions, &tris, many);
             if tris.len() > 1000 {
                 assert!(cells > 8, "{name}: {cells} cells with N_min 200");
             }
+            // geometry ahead of connectivity (§6.4): one bit in one cell, two in many
+            let ahead_one = Params { ahead: 1, ..one };
+            round_trip(&name, &mesh.positions, &tris, ahead_one);
+            let ahead_many = Params { ahead: 2, ..many };
+            round_trip(&name, &mesh.positions, &tris, ahead_many);
             println!(
                 "{name}: {} vertices, {bits} bits: {:.2} bits/vertex in one cell",
                 mesh.positions.len(),
@@ -180,8 +186,23 @@ fn soups_degenerate_and_non_manifold_triangles_round_trip() {
                 min_cell: 1,
                 cell_split: 2,
                 root_bits: 1,
+                ..Params::default()
             },
         );
+        for ahead in [1, 3] {
+            round_trip(
+                "soup",
+                &positions,
+                &tris,
+                Params {
+                    bits,
+                    min_cell: 1,
+                    cell_split: 2,
+                    root_bits: 1,
+                    ahead,
+                },
+            );
+        }
     }
 }
 
@@ -231,6 +252,7 @@ fn the_bounded_memory_ply_writer_gives_the_full_decode() {
                 min_cell: 4000,
                 cell_split: 2,
                 root_bits: 4,
+                ahead: 2,
             },
         ),
         (
@@ -240,6 +262,7 @@ fn the_bounded_memory_ply_writer_gives_the_full_decode() {
                 cell_split: 2,
                 root_bits: 2,
                 bits: 12,
+                ahead: 0,
             },
         ),
     ] {

@@ -1,7 +1,7 @@
 //! View-dependent decoding (§6.2–6.3): a camera that needs every bit gives the whole mesh, each
 //! triangle once; a far camera reads less of the file and shows fewer triangles; a camera looking
 //! away shows nothing; and a session that moves between cameras shows what a fresh decode of each
-//! camera shows.
+//! camera shows — with geometry ahead of the connectivity (§6.4) too.
 
 use std::collections::BTreeSet;
 use std::io::Cursor;
@@ -55,8 +55,15 @@ fn triangle_set(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> BTreeSet<Tri>
 
 #[test]
 fn a_camera_needing_every_bit_sees_the_whole_mesh_once() {
+    for ahead in [0, 2] {
+        a_camera_needing_every_bit_sees_the_whole_mesh_once_with(ahead);
+    }
+}
+
+fn a_camera_needing_every_bit_sees_the_whole_mesh_once_with(ahead: u32) {
     let params = Params {
         min_cell: 3000,
+        ahead,
         ..Params::default()
     };
     let (tsc, centre, radius) = bunny(params);
@@ -111,8 +118,15 @@ fn a_far_camera_reads_less_and_shows_less_and_looking_away_shows_nothing() {
 
 #[test]
 fn a_moving_session_shows_what_a_fresh_decode_shows() {
+    for ahead in [0, 1] {
+        a_moving_session_shows_what_a_fresh_decode_shows_with(ahead);
+    }
+}
+
+fn a_moving_session_shows_what_a_fresh_decode_shows_with(ahead: u32) {
     let (tsc, centre, radius) = bunny(Params {
         min_cell: 2000,
+        ahead,
         ..Params::default()
     });
     let side = [centre[0] + radius, centre[1], centre[2]];
@@ -127,11 +141,11 @@ fn a_moving_session_shows_what_a_fresh_decode_shows() {
     for (k, cam) in cameras.iter().enumerate() {
         let moved = session.view(cam, 1.0).unwrap();
         let fresh = ViewSession::new(tsc.clone()).view(cam, 1.0).unwrap();
-        assert_eq!(moved.cells, fresh.cells, "camera {k}");
+        assert_eq!(moved.cells, fresh.cells, "ahead {ahead}, camera {k}");
         assert_eq!(
             triangle_set(&moved.positions, &moved.triangles),
             triangle_set(&fresh.positions, &fresh.triangles),
-            "camera {k}"
+            "ahead {ahead}, camera {k}"
         );
     }
 }

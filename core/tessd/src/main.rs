@@ -191,6 +191,11 @@ enum Command {
         /// Precision in bits the root cell reaches before it is subdivided.
         #[arg(long, default_value_t = 7)]
         root_bits: u32,
+        /// Bits of geometry coded ahead of the connectivity (paper 003 §6.4, 0-4): a partial
+        /// decode draws each vertex at the barycentre of the points it will split into, for a
+        /// few more bits per vertex.
+        #[arg(long, default_value_t = 0)]
+        ahead: u32,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -584,6 +589,7 @@ fn run(cli: Cli) -> Result<()> {
             cell_split,
             min_cell,
             root_bits,
+            ahead,
             json,
         } => {
             let params = serde_json::json!({
@@ -593,6 +599,7 @@ fn run(cli: Cli) -> Result<()> {
                 "cell_split": cell_split,
                 "min_cell": min_cell,
                 "root_bits": root_bits,
+                "ahead": ahead,
             });
             report_or_json(run_local("codec.compress", params)?, json, |r| {
                 let r = &r.result;

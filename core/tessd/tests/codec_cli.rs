@@ -24,6 +24,8 @@ fn compress_then_decompress_gives_the_quantised_mesh_back() {
         "14",
         "--min-cell",
         "1000",
+        "--ahead",
+        "1",
     ]));
     assert_eq!(c["input_triangles"], json!(5856));
     assert_eq!(
@@ -93,6 +95,16 @@ fn bad_parameters_and_a_corrupt_file_are_clear_errors_and_leave_nothing() {
         )
         .unwrap_err();
     assert!(e.to_string().contains("--cell-split"), "{e}");
+    assert!(!tsc.exists());
+    let e = c
+        .call(
+            "codec.compress",
+            json!({"input": spot, "output": tsc, "ahead": 7}),
+            &[],
+            |_| {},
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("--ahead"), "{e}");
     assert!(!tsc.exists());
     c.call(
         "codec.compress",

@@ -41,7 +41,7 @@ fn u32_param(request: &Request, key: &str, default: u32) -> Result<u32, OpError>
 
 /// `codec.compress`: params `input` (a mesh file, or `positions` / `face_indices` arrays),
 /// `output` (the `.tsc` file, written atomically), `bits` (12), `cell_split` (4), `min_cell`
-/// (8000), `root_bits` (7).
+/// (8000), `root_bits` (7), `ahead` (0: bits of geometry ahead of the connectivity, §6.4).
 ///
 /// # Errors
 /// `invalid_request` for parameters out of range or no output; `invalid_mesh` for a mesh the
@@ -54,6 +54,7 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
         cell_split: u32_param(&request, "cell_split", defaults.cell_split)?,
         min_cell: u64_param(&request, "min_cell")?.unwrap_or(defaults.min_cell),
         root_bits: u32_param(&request, "root_bits", defaults.root_bits)?,
+        ahead: u32_param(&request, "ahead", defaults.ahead)?,
     };
     params.validate().map_err(codec_error)?;
     let output = output_path(&request)?
