@@ -19,6 +19,7 @@
 //! | decoding | [`decode`] | §6.1 |
 //! | full decoding to PLY in bounded memory | [`ply_out`] | §5, §6.1 |
 //! | view-dependent refinement, borders between precisions | [`view`] | §6.2, §6.3 |
+//! | geometry ahead of connectivity (`--ahead`) | [`ahead`] | §6.4 |
 
 pub mod ahead;
 pub mod complex;
