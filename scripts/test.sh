@@ -13,6 +13,8 @@ echo "== pytest (daemon, USD, demo, simplification)"
 .venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
   --ignore=tests/brep_build123d --ignore=tests/brep_freecad --ignore=tests/render_reference \
   --ignore=tests/freecad_plugin --ignore=tests/batch
+echo "== soak (32 clients, every op, valid and invalid inputs, cancels; 60 s here, 10 min in docs/reliability.md)"
+bash scripts/soak.sh 60
 echo "== pytest (cross-checks against peer tools)"
 .venv-bench/bin/python -m pytest tests/compare -q -p no:cacheprovider
 # tests/brep (the exporter, the daemon's B-Rep ops against OCP, the real-file fixtures) needs

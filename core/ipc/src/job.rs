@@ -39,10 +39,41 @@ impl CancelToken {
     }
 }
 
-/// What an operation gets besides its request: a progress sink and a cancel token.
+/// What one job may use, set by the daemon's operator (`tessd serve --max-mesh-elements`,
+/// `--max-job-memory`) so that no single request can take the machine down.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JobLimits {
+    /// Most vertices, faces or face corners an input mesh may have.
+    pub max_mesh_elements: u64,
+    /// Most bytes a job's estimated working set may reach; a job whose estimate, computed
+    /// before it allocates, is larger is refused with `too_large`.
+    pub max_job_memory: u64,
+}
+
+impl Default for JobLimits {
+    /// The readers' own element cap (2^31) and the machine's physical memory.
+    fn default() -> Self {
+        JobLimits {
+            max_mesh_elements: 1 << 31,
+            max_job_memory: physical_memory().unwrap_or(u64::MAX),
+        }
+    }
+}
+
+/// The machine's physical memory in bytes (`MemTotal` of /proc/meminfo), where known.
+pub fn physical_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// What an operation gets besides its request: a progress sink, a cancel token and the limits
+/// it is held to.
 pub struct JobContext<'a> {
     sink: &'a (dyn Fn(Progress) + Sync),
     cancel: CancelToken,
+    limits: JobLimits,
     last: std::sync::Mutex<Option<Instant>>,
 }
 
@@ -56,8 +87,39 @@ impl<'a> JobContext<'a> {
         JobContext {
             sink,
             cancel,
+            limits: JobLimits::default(),
             last: std::sync::Mutex::new(None),
         }
+    }
+
+    /// Holds the job to `limits` instead of the defaults.
+    pub fn with_limits(mut self, limits: JobLimits) -> Self {
+        self.limits = limits;
+        self
+    }
+
+    /// The limits the job is held to.
+    pub fn limits(&self) -> &JobLimits {
+        &self.limits
+    }
+
+    /// Refuses a job whose working set, estimated at `bytes` for `what` before anything is
+    /// allocated, exceeds [`JobLimits::max_job_memory`].
+    ///
+    /// # Errors
+    /// `too_large`, naming `what`, the estimate and the limit.
+    pub fn admit_memory(&self, what: &str, bytes: u64) -> Result<(), OpError> {
+        if bytes > self.limits.max_job_memory {
+            return Err(OpError::new(
+                crate::error::ErrorCode::TooLarge,
+                format!(
+                    "{what} needs about {bytes} bytes, above the daemon's per-job limit of {} \
+                     bytes (tessd serve --max-job-memory)",
+                    self.limits.max_job_memory
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// Reports progress (rate-limited), then checks for cancellation.

@@ -13,7 +13,7 @@ use crate::frame::{
     Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame,
 };
 use crate::holders::Holders;
-use crate::job::{CancelToken, JobContext, Progress};
+use crate::job::{CancelToken, JobContext, JobLimits, Progress};
 use crate::registry::{Registry, Request, Response, run_guarded, unknown_op};
 use interprocess::local_socket::{Listener, Stream, traits::ListenerExt as _};
 use serde_json::{Map, Value, json};
@@ -42,6 +42,10 @@ pub struct ServerOptions {
     pub limits: Limits,
     /// Most requests one connection may have running at once.
     pub max_in_flight_per_connection: usize,
+    /// Most requests the whole daemon runs at once, over every connection.
+    pub max_jobs: usize,
+    /// What each request may use.
+    pub job_limits: JobLimits,
     /// How long `shutdown` waits for running requests before the server returns anyway.
     pub shutdown_grace: Duration,
 }
@@ -51,6 +55,8 @@ impl Default for ServerOptions {
         ServerOptions {
             limits: Limits::default(),
             max_in_flight_per_connection: 64,
+            max_jobs: 64,
+            job_limits: JobLimits::default(),
             shutdown_grace: Duration::from_secs(10),
         }
     }
@@ -60,6 +66,18 @@ impl ServerOptions {
     /// Sets the frame limits.
     pub fn with_limits(mut self, limits: Limits) -> Self {
         self.limits = limits;
+        self
+    }
+
+    /// Sets the most requests the daemon runs at once.
+    pub fn with_max_jobs(mut self, max_jobs: usize) -> Self {
+        self.max_jobs = max_jobs;
+        self
+    }
+
+    /// Sets what each request may use.
+    pub fn with_job_limits(mut self, limits: JobLimits) -> Self {
+        self.job_limits = limits;
         self
     }
 }
@@ -347,9 +365,30 @@ impl Connection {
                     )),
                 );
             }
+            // the daemon-wide count is taken and checked in one step, so that concurrent
+            // connections cannot together pass the limit
+            let max_jobs = self.shared.options.max_jobs;
+            let admitted =
+                self.shared
+                    .in_flight
+                    .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+                        (n < max_jobs).then_some(n + 1)
+                    });
+            if admitted.is_err() {
+                drop(jobs);
+                return self.reply(
+                    &raw_id,
+                    Err(OpError::new(
+                        ErrorCode::TooLarge,
+                        format!(
+                            "the daemon already runs {max_jobs} requests, the most allowed \
+                             (tessd serve --max-jobs); retry when one finishes"
+                        ),
+                    )),
+                );
+            }
             jobs.insert(id, token.clone());
         }
-        self.shared.in_flight.fetch_add(1, Ordering::SeqCst);
         let this = Connection {
             stream: self.stream.clone(),
             write_lock: self.write_lock.clone(),
@@ -365,7 +404,7 @@ impl Connection {
                     "fraction": p.fraction, "stage": p.stage, "message": p.message}});
                     this.send(msg, &[]);
                 };
-                let ctx = JobContext::new(&sink, token);
+                let ctx = JobContext::new(&sink, token).with_limits(this.shared.options.job_limits);
                 let request = Request {
                     params,
                     arrays,
@@ -378,7 +417,9 @@ impl Connection {
                 }
                 lock(&this.jobs).remove(&id);
                 this.reply_timed(&Value::from(id), result, Some(started.elapsed()));
-                this.shared.in_flight.fetch_sub(1, Ordering::SeqCst);
+                if this.shared.in_flight.fetch_sub(1, Ordering::SeqCst) == 1 {
+                    crate::memory::release_free_memory();
+                }
             });
         if let Err(e) = spawned {
             lock(&self.jobs).remove(&id);

@@ -9,7 +9,7 @@ use report::{print_compare, print_lod, print_simplify, print_stats};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use tessd_ipc::arrays::{Arrays, OwnedArray};
-use tessd_ipc::job::{CancelToken, JobContext, Progress};
+use tessd_ipc::job::{CancelToken, JobContext, JobLimits, Progress};
 use tessd_ipc::registry::{Request, Response};
 use tessd_ipc::server::{Server, ServerOptions};
 
@@ -39,6 +39,16 @@ enum Command {
         /// Largest request payload in bytes.
         #[arg(long, default_value_t = 4u64 << 30)]
         max_payload: u64,
+        /// Most requests running at once, over every client (more are refused, `too_large`).
+        #[arg(long, default_value_t = 64)]
+        max_jobs: usize,
+        /// Most vertices, faces or face corners of one input mesh.
+        #[arg(long, default_value_t = 1u64 << 31)]
+        max_mesh_elements: u64,
+        /// Most bytes one request's estimated working set may need (default: the machine's
+        /// physical memory).
+        #[arg(long)]
+        max_job_memory: Option<u64>,
     },
     /// Run operations from job files.
     Job {
@@ -452,7 +462,21 @@ fn run(cli: Cli) -> Result<()> {
             socket,
             log,
             max_payload,
-        } => serve(socket.as_deref(), log.as_deref(), max_payload),
+            max_jobs,
+            max_mesh_elements,
+            max_job_memory,
+        } => {
+            let defaults = JobLimits::default();
+            let limits = JobLimits {
+                max_mesh_elements,
+                max_job_memory: max_job_memory.unwrap_or(defaults.max_job_memory),
+            };
+            let options = ServerOptions::default()
+                .with_limits(tessd_ipc::frame::Limits::default().with_max_payload(max_payload))
+                .with_max_jobs(max_jobs)
+                .with_job_limits(limits);
+            serve(socket.as_deref(), log.as_deref(), options)
+        }
         Command::Job {
             action: JobAction::Run { file },
         } => job_run(&file),
@@ -828,12 +852,10 @@ fn vec3_arg(s: &str) -> serde_json::Value {
     origin_param(s)
 }
 
-fn serve(socket: Option<&str>, log_file: Option<&Path>, max_payload: u64) -> Result<()> {
+fn serve(socket: Option<&str>, log_file: Option<&Path>, options: ServerOptions) -> Result<()> {
     tessd::logging::init(log_file).context("opening the log file")?;
     let path = tessd_ipc::socket::resolve(socket, true).context("choosing the socket path")?;
     let listener = tessd_ipc::socket::bind(&path)?;
-    let options = ServerOptions::default()
-        .with_limits(tessd_ipc::frame::Limits::default().with_max_payload(max_payload));
     let server = Server::new(listener, &path, tessd::ops::registry(), options);
     let handle = server.shutdown_handle();
     let mut signals = signal_hook::iterator::Signals::new([

@@ -1,14 +1,13 @@
 //! Helpers several operations share: typed parameters, USD stage options, writing a mesh to
 //! the format its path names, and the USD writer's errors.
 
-use super::mesh_arrays::{mesh_error, read_mesh_file};
+use super::mesh_arrays::{admit_mesh, mesh_error, read_mesh_file, read_options};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::Request;
 use tessd_mesh::Mesh;
-use tessd_mesh::io::ReadOptions;
 use tessd_usd::{MeshPrimOptions, StageOptions, UpAxis};
 
 /// Maps a USD writer or reader error onto the protocol's codes (a stage that cannot be read
@@ -135,8 +134,8 @@ pub fn read_mesh_param(
         .str_param(key)?
         .map(|p| request.resolve(p))
         .ok_or_else(|| OpError::request(format!("`{key}` (a mesh file path) is required")))?;
-    let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
-    let mesh = read_mesh_file(&path, &options)?;
+    let mesh = read_mesh_file(&path, &read_options(ctx))?;
+    admit_mesh(&mesh, &format!("`{key}`"), ctx)?;
     Ok((mesh, path))
 }
 

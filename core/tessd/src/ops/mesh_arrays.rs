@@ -37,11 +37,8 @@ fn invalid(message: String) -> OpError {
 /// `invalid_request` when there is neither; `invalid_mesh`, `io`, `too_large`, `unsupported`
 /// as the input deserves, naming the element at fault.
 pub fn input_mesh(request: &mut Request, ctx: &JobContext) -> Result<Mesh, OpError> {
-    match request.str_param("input")? {
-        Some(path) => {
-            let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
-            read_mesh_file(&request.resolve(path), &options)
-        }
+    let mesh = match request.str_param("input")? {
+        Some(path) => read_mesh_file(&request.resolve(path), &read_options(ctx))?,
         None if request.arrays.desc("positions").is_some() => {
             let group_names = match request.params.get("group_names") {
                 None => Vec::new(),
@@ -50,12 +47,57 @@ pub fn input_mesh(request: &mut Request, ctx: &JobContext) -> Result<Mesh, OpErr
             };
             let mesh = mesh_from_arrays(&mut request.arrays, group_names)?;
             mesh.validate().map_err(mesh_error)?;
-            Ok(mesh)
+            mesh
         }
-        None => Err(OpError::request(
-            "no input mesh: give `params.input` (a file path) or the `positions` and `face_indices` arrays",
-        )),
+        None => {
+            return Err(OpError::request(
+                "no input mesh: give `params.input` (a file path) or the `positions` and `face_indices` arrays",
+            ));
+        }
+    };
+    admit_mesh(&mesh, "the input mesh", ctx)?;
+    Ok(mesh)
+}
+
+/// Reader options for a job: stop when it is cancelled, refuse more elements than the
+/// daemon's `--max-mesh-elements` while reading (before the arrays grow).
+pub fn read_options(ctx: &JobContext) -> ReadOptions {
+    ReadOptions::default()
+        .with_cancel(ctx.cancel_token().flag())
+        .with_max_elements(ctx.limits().max_mesh_elements)
+}
+
+/// Working set of a mesh operation as a multiple of its input mesh's bytes: the largest
+/// measured is simplification's (input, clusters and output: at most 1.75× the input extra,
+/// bench/results/simplify.md), subdivision estimates its own output; 8 leaves headroom for
+/// the reply's copies.
+const WORKING_SET_PER_INPUT_BYTE: u64 = 8;
+
+/// Holds a mesh to the job's limits: `--max-mesh-elements` for mesh arrays (files are held
+/// while they are read) and `--max-job-memory` for the estimated working set.
+///
+/// # Errors
+/// `too_large`, naming `what`, the count or estimate, and the limit.
+pub fn admit_mesh(mesh: &Mesh, what: &str, ctx: &JobContext) -> Result<(), OpError> {
+    let max = ctx.limits().max_mesh_elements;
+    for (count, name) in [
+        (mesh.vertex_count(), "vertices"),
+        (mesh.face_count(), "faces"),
+        (mesh.face_indices.len(), "face corners"),
+    ] {
+        if count as u64 > max {
+            return Err(OpError::new(
+                ErrorCode::TooLarge,
+                format!(
+                    "{what} has {count} {name}, above the daemon's limit of {max} \
+                     (tessd serve --max-mesh-elements)"
+                ),
+            ));
+        }
     }
+    let bytes = 12 * mesh.positions.len() as u64
+        + 4 * (mesh.face_indices.len() + mesh.face_offsets.len()) as u64;
+    ctx.admit_memory(what, bytes.saturating_mul(WORKING_SET_PER_INPUT_BYTE))
 }
 
 /// Reads a mesh file, format from the extension: a USD stage (`.usda`; also `.usd`, `.usdc`

@@ -9,7 +9,7 @@
 
 use super::brep_load::{brep_error, is_brep_path, request_brep};
 use super::common::{bool_param, stem, u64_param, usd_error};
-use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file};
+use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file, read_options};
 use super::tessellate::parse_tolerance;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -20,7 +20,6 @@ use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
-use tessd_mesh::io::ReadOptions;
 use tessd_render::camera::{DEFAULT_FOV, Vec3};
 use tessd_render::{
     Bounds, BrepReport, BrepScene, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
@@ -281,6 +280,18 @@ fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
         .collect())
 }
 
+/// Everything `render` does with a request before it reads the input or opens the GPU: parses
+/// and checks the parameters, then places the frames' cameras (the standard view fitted to
+/// `bounds`, or the explicit eye; one per turntable frame) around a part inside `bounds`. The
+/// fuzzer's entry to the op's parameters (fuzz/fuzz_targets/render_params.rs).
+///
+/// # Errors
+/// As [`run`] for bad parameters: `invalid_request` naming the parameter and the value,
+/// `unsupported` for outputs that are not `.png`.
+pub fn plan_cameras(request: &Request, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
+    cameras(&parse(request)?, bounds)
+}
+
 /// One mesh panel: its label (file stem, or LOD variant), triangles on the device and count.
 struct MeshPanel {
     label: String,
@@ -308,7 +319,7 @@ fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, M
                     items.len()
                 )));
             }
-            let options = ReadOptions::default().with_cancel(ctx.cancel_token().flag());
+            let options = read_options(ctx);
             let mut out = Vec::with_capacity(items.len());
             for (i, item) in items.iter().enumerate() {
                 let path = item.as_str().map(|p| request.resolve(p)).ok_or_else(|| {

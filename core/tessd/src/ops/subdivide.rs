@@ -100,7 +100,9 @@ enum UsdOutput {
 /// USD with a scheme USD cannot name, `io` when writing fails.
 pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let options = parse_options(&request)?;
+    let mut options = parse_options(&request)?;
+    // the refiner's own estimate of its tables and output, held to the daemon's per-job limit
+    options.memory_limit = options.memory_limit.min(ctx.limits().max_job_memory);
     let gpu = bool_param(&request, "gpu")?.unwrap_or(false);
     let output = output_path(&request)?;
     if let Some(path) = output.as_deref() {
