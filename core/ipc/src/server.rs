@@ -21,7 +21,7 @@ use std::collections::HashMap;
 use std::io::{self, BufReader};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, Weak};
 use std::time::{Duration, Instant};
 
 /// Operations the server answers itself.
@@ -89,6 +89,37 @@ struct Shared {
     stopping: AtomicBool,
     in_flight: AtomicUsize,
     holders: Holders,
+    /// Every live connection's running requests, so that shutdown can cancel them all.
+    connections: Mutex<Vec<Weak<JobMap>>>,
+}
+
+/// A connection's running requests: request id → its cancel token.
+type JobMap = Mutex<HashMap<u64, CancelToken>>;
+
+impl Shared {
+    /// Keeps `jobs` (a new connection's requests) for [`Shared::cancel_all`], forgetting the
+    /// connections that have ended.
+    fn track(&self, jobs: &Arc<JobMap>) {
+        let mut connections = lock(&self.connections);
+        connections.retain(|c| c.strong_count() > 0);
+        connections.push(Arc::downgrade(jobs));
+    }
+
+    /// Cancels every running request of every connection; returns how many there were.
+    fn cancel_all(&self) -> usize {
+        let connections: Vec<Arc<JobMap>> = lock(&self.connections)
+            .iter()
+            .filter_map(Weak::upgrade)
+            .collect();
+        let mut n = 0;
+        for jobs in connections {
+            for token in lock(&jobs).values() {
+                token.cancel();
+                n += 1;
+            }
+        }
+        n
+    }
 }
 
 /// Stops a running server from another thread (signal handler, `shutdown` op).
@@ -96,7 +127,8 @@ struct Shared {
 pub struct ShutdownHandle(Arc<Shared>);
 
 impl ShutdownHandle {
-    /// Stops accepting connections; the server then waits for running requests and returns.
+    /// Stops accepting connections; the server then cancels the running requests, waits for
+    /// their answers and returns.
     pub fn trigger(&self) {
         if !self.0.stopping.swap(true, Ordering::SeqCst) {
             log::info!("shutting down");
@@ -127,6 +159,7 @@ impl Server {
             stopping: AtomicBool::new(false),
             in_flight: AtomicUsize::new(0),
             holders: Holders::new(),
+            connections: Mutex::new(Vec::new()),
         });
         Server { shared, listener }
     }
@@ -136,7 +169,9 @@ impl Server {
         ShutdownHandle(self.shared.clone())
     }
 
-    /// Serves until shut down, then waits (up to the grace period) for running requests.
+    /// Serves until shut down, then cancels the running requests and waits (up to the grace
+    /// period) for each to answer (`cancelled`, or its result when it was past its last
+    /// checkpoint).
     /// The socket file is removed when the server is dropped.
     ///
     /// # Errors
@@ -169,11 +204,24 @@ impl Server {
                 }
             }
         }
+        // Running requests are cancelled, and each answers `cancelled` at its next checkpoint
+        // before its count drops; a request that a connection admitted after the first pass
+        // is caught by the next one.
+        let cancelled = self.shared.cancel_all();
+        if cancelled > 0 {
+            log::info!("cancelling {cancelled} running request(s)");
+        }
         let deadline = Instant::now() + self.shared.options.shutdown_grace;
         while self.shared.in_flight.load(Ordering::SeqCst) > 0 && Instant::now() < deadline {
             std::thread::sleep(Duration::from_millis(10));
+            self.shared.cancel_all();
         }
-        log::info!("stopped");
+        let left = self.shared.in_flight.load(Ordering::SeqCst);
+        if left > 0 {
+            log::warn!("stopped with {left} request(s) still running past the grace period");
+        } else {
+            log::info!("stopped");
+        }
         Ok(())
     }
 }
@@ -188,10 +236,12 @@ struct Connection {
 
 impl Connection {
     fn new(stream: Stream, shared: Arc<Shared>) -> Connection {
+        let jobs = Arc::new(Mutex::new(HashMap::new()));
+        shared.track(&jobs);
         Connection {
             stream: Arc::new(stream),
             write_lock: Arc::new(Mutex::new(())),
-            jobs: Arc::new(Mutex::new(HashMap::new())),
+            jobs,
             shared,
         }
     }
@@ -343,49 +393,41 @@ impl Connection {
         let token = CancelToken::default();
         {
             let mut jobs = lock(&self.jobs);
-            if jobs.contains_key(&id) {
-                drop(jobs);
-                return self.reply(
-                    &raw_id,
-                    Err(OpError::request(format!(
-                        "request id {id} is already running"
-                    ))),
-                );
-            }
-            if jobs.len() >= self.shared.options.max_in_flight_per_connection {
-                drop(jobs);
-                return self.reply(
-                    &raw_id,
-                    Err(OpError::new(
-                        ErrorCode::TooLarge,
-                        format!(
-                            "this connection already runs {} requests, the most allowed",
-                            self.shared.options.max_in_flight_per_connection
-                        ),
-                    )),
-                );
-            }
-            // the daemon-wide count is taken and checked in one step, so that concurrent
-            // connections cannot together pass the limit
-            let max_jobs = self.shared.options.max_jobs;
-            let admitted =
-                self.shared
-                    .in_flight
-                    .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
-                        (n < max_jobs).then_some(n + 1)
-                    });
-            if admitted.is_err() {
-                drop(jobs);
-                return self.reply(
-                    &raw_id,
-                    Err(OpError::new(
+            let refusal = if jobs.contains_key(&id) {
+                Some(OpError::request(format!(
+                    "request id {id} is already running"
+                )))
+            } else if jobs.len() >= self.shared.options.max_in_flight_per_connection {
+                Some(OpError::new(
+                    ErrorCode::TooLarge,
+                    format!(
+                        "this connection already runs {} requests, the most allowed",
+                        self.shared.options.max_in_flight_per_connection
+                    ),
+                ))
+            } else {
+                // the daemon-wide count is taken and checked in one step, so that concurrent
+                // connections cannot together pass the limit
+                let max_jobs = self.shared.options.max_jobs;
+                let admitted =
+                    self.shared
+                        .in_flight
+                        .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+                            (n < max_jobs).then_some(n + 1)
+                        });
+                admitted.is_err().then(|| {
+                    OpError::new(
                         ErrorCode::TooLarge,
                         format!(
                             "the daemon already runs {max_jobs} requests, the most allowed \
                              (tessd serve --max-jobs); retry when one finishes"
                         ),
-                    )),
-                );
+                    )
+                })
+            };
+            if let Some(e) = refusal {
+                drop(jobs);
+                return self.reply(&raw_id, Err(e));
             }
             jobs.insert(id, token.clone());
         }
