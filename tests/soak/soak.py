@@ -90,7 +90,14 @@ class Mix:
     def pick(self, rng: random.Random):
         spot = str(self.mesh / "spot_triangulated.obj")
         cube = str(Path(self.mesh).parent / "subdiv" / "catmark_cube_level0.obj")
-        r = rng.randrange(25)
+        r = rng.randrange(28)
+        if r == 25:
+            return "debug.echo", {"n": rng.random()}, grid_arrays(rng.randrange(2, 50)), "ok"
+        if r == 26:
+            return rng.choice(["session.hold", "session.release"]), {"host": "soak", "pid": os.getpid()}, None, "ok"
+        if r == 27:
+            return "codec.compress", {"input": spot, "output": self.out_path(rng, ".tsc"), "bits": 99}, None, \
+                {"invalid_request"}
         if r == 0:
             return "ping", {"echo": rng.random()}, None, "ok"
         if r == 1:
