@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import shutil
 import socket
 import struct
@@ -13,7 +14,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -40,22 +41,42 @@ def short_tmpdir():
 
 
 class DaemonProcess:
-    """A `tessd serve --socket PATH` child process with its output in PATH's folder."""
+    """A `tessd serve --socket PATH` child process with its output in PATH's folder.
 
-    def __init__(self, binary: str, socket_path: str, args: Tuple[str, ...] = ()):
+    `socket_arg=False` leaves `--socket` out (the daemon picks its default socket, which
+    `socket_path` must then name); `env` replaces the environment, `umask` is set in the child,
+    and `user` (a uid) runs it as that user (with the user's primary group and no others),
+    its output then going to `log_path` (default: beside the socket).
+    """
+
+    def __init__(self, binary: str, socket_path: str, args: Tuple[str, ...] = (), *,
+                 socket_arg: bool = True, env: Optional[Mapping[str, str]] = None,
+                 umask: Optional[int] = None, user: Optional[int] = None,
+                 log_path: Optional[str] = None):
         self.binary = binary
         self.socket = socket_path
         self.args = tuple(args)
-        self.log_path = socket_path + ".out"
+        self.socket_arg = socket_arg
+        self.env = dict(env) if env is not None else None
+        self.umask = umask
+        self.user = user
+        self.log_path = log_path or socket_path + ".out"
         self.proc: Optional[subprocess.Popen] = None
 
     def spawn(self) -> subprocess.Popen:
         """Starts the process without waiting for it to answer."""
+        socket_args = ["--socket", self.socket] if self.socket_arg else []
+        extra: Dict[str, Any] = {}
+        if self.user is not None:
+            import pwd
+            extra = {"user": self.user, "group": pwd.getpwuid(self.user).pw_gid,
+                     "extra_groups": []}
         with open(self.log_path, "ab") as log:
             self.proc = subprocess.Popen(
-                [self.binary, "serve", "--socket", self.socket, *self.args],
+                [self.binary, "serve", *socket_args, *self.args],
                 stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-                start_new_session=True)
+                start_new_session=True, env=self.env, umask=-1 if self.umask is None else self.umask,
+                **extra)
         return self.proc
 
     def start(self, timeout: float = 20.0) -> "DaemonProcess":
@@ -93,6 +114,23 @@ class DaemonProcess:
             self.proc.kill()
             self.proc.wait()
 
+    def log_text(self) -> str:
+        """The daemon's whole output so far."""
+        try:
+            with open(self.log_path, "rb") as f:
+                return f.read().decode("utf-8", "replace")
+        except OSError:
+            return ""
+
+    def threads(self) -> List[str]:
+        """The names of the daemon's threads (Linux `/proc`, at most 15 bytes each: a job
+        thread is `tessd-<op>` cut there, a connection's reader `tessd-conn`)."""
+        return thread_names(self.pid)
+
+    def rss(self) -> int:
+        """The daemon's resident memory, bytes."""
+        return rss_bytes(self.pid)
+
     def stop(self, timeout: float = 15.0) -> Optional[int]:
         """Sends `shutdown`, waits for exit (kills after `timeout`); returns the exit status."""
         if self.proc is None:
@@ -108,6 +146,55 @@ class DaemonProcess:
             except subprocess.TimeoutExpired:
                 self.kill()
         return self.proc.returncode
+
+
+# ---------------------------------------------------------------------------------------------
+# Observing a process and a folder from outside (Linux /proc)
+
+
+def thread_names(pid: int) -> List[str]:
+    """The names (`comm`) of process `pid`'s threads; [] once it is gone."""
+    names = []
+    try:
+        tids = os.listdir("/proc/%d/task" % pid)
+    except OSError:
+        return []
+    for tid in tids:
+        try:
+            with open("/proc/%d/task/%s/comm" % (pid, tid)) as f:
+                names.append(f.read().strip())
+        except OSError:
+            pass  # the thread ended meanwhile
+    return sorted(names)
+
+
+def rss_bytes(pid: int) -> int:
+    """The resident set size of process `pid` (VmRSS), bytes."""
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    raise AssertionError("no VmRSS for pid %d" % pid)
+
+
+def wait_until(predicate: Callable[[], Any], timeout: float, interval: float = 0.01) -> Any:
+    """Polls `predicate` until it returns something true (returned) or `timeout` seconds pass
+    (then its last value, false, is returned)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value or time.monotonic() > deadline:
+            return value
+        time.sleep(interval)
+
+
+#: A tessd output's temporary file: `.<name>.tmp-<pid>-<n>` beside the destination.
+TEMP_NAME = re.compile(r"^\..*\.tmp-(\d+)-(\d+)$")
+
+
+def tessd_temps(folder: Any) -> List[str]:
+    """Names of the tessd temporary files in `folder`, sorted."""
+    return sorted(n for n in os.listdir(folder) if TEMP_NAME.match(n))
 
 
 # ---------------------------------------------------------------------------------------------

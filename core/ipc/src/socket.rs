@@ -62,6 +62,9 @@ fn current_uid() -> String {
     std::env::var("USERNAME").unwrap_or_else(|_| "user".into())
 }
 
+/// Creates the per-user socket folder with mode 0700, or checks the one that exists: it must be
+/// a real folder (a symbolic link there is refused, never followed: it could lead to a folder
+/// someone else controls) owned by this user; one open to others is closed to mode 0700.
 #[cfg(unix)]
 fn private_dir(dir: &Path) -> io::Result<()> {
     use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
@@ -71,6 +74,17 @@ fn private_dir(dir: &Path) -> io::Result<()> {
         Err(e) => return Err(e),
     }
     let meta = std::fs::symlink_metadata(dir)?;
+    if meta.file_type().is_symlink() {
+        return Err(io::Error::new(
+            io::ErrorKind::PermissionDenied,
+            format!(
+                "the socket folder {} is a symbolic link{}; refusing to follow it (remove it, \
+                 tessd creates the folder itself)",
+                dir.display(),
+                link_target(dir)
+            ),
+        ));
+    }
     if !meta.is_dir() || meta.uid() != current_uid() {
         return Err(io::Error::new(
             io::ErrorKind::PermissionDenied,
@@ -84,6 +98,14 @@ fn private_dir(dir: &Path) -> io::Result<()> {
         std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o700))?;
     }
     Ok(())
+}
+
+/// ` (to TARGET)` for a symbolic link whose target can be read, else nothing.
+#[cfg(unix)]
+fn link_target(path: &Path) -> String {
+    std::fs::read_link(path)
+        .map(|t| format!(" (to {})", t.display()))
+        .unwrap_or_default()
 }
 
 #[cfg(not(unix))]
@@ -107,6 +129,15 @@ pub enum BindError {
     /// A daemon already answers on the socket; it is left alone.
     #[error("a tessd daemon is already serving on {0}")]
     InUse(PathBuf),
+    /// The socket path or its folder is not safe to use: a symbolic link, something other than
+    /// a socket, or a folder another user owns. Nothing there is followed, removed or changed.
+    #[error("refusing to listen on {path}: {reason}")]
+    Unsafe {
+        /// The socket path.
+        path: PathBuf,
+        /// What is wrong, naming the offending file or folder.
+        reason: String,
+    },
     /// Any other failure.
     #[error("cannot listen on {path}: {source}")]
     Io {
@@ -121,22 +152,49 @@ pub enum BindError {
 /// Binds a listener at `path` with owner-only permissions (mode 0600). A socket file that no
 /// process answers on is stale and is replaced; a live one is never taken over.
 ///
+/// Nothing planted at the path is followed or destroyed: a symbolic link at `path` or at its
+/// folder, a file there that is not a socket, or a folder owned by another user (who could
+/// swap the socket) is refused with [`BindError::Unsafe`]. A missing folder is created with
+/// mode 0700.
+///
 /// # Errors
-/// [`BindError::InUse`] when a daemon answers there; [`BindError::Io`] otherwise.
+/// [`BindError::InUse`] when a daemon answers there; [`BindError::Unsafe`] as above;
+/// [`BindError::Io`] otherwise.
 pub fn bind(path: &Path) -> Result<Listener, BindError> {
     let io_err = |source| BindError::Io {
         path: path.to_path_buf(),
         source,
     };
+    let unsafe_path = |reason: String| BindError::Unsafe {
+        path: path.to_path_buf(),
+        reason,
+    };
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(io_err)?;
+        create_folder(parent).map_err(io_err)?;
+        check_folder(parent).map_err(unsafe_path)?;
+    }
+    // Refused before the start lock is taken, so that a refusal leaves nothing beside the path
+    // (and checked again under the lock, where the decision is made).
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        check_socket_file(path, &meta).map_err(unsafe_path)?;
     }
     // Daemons started at the same moment (the workers of one node) take turns: between a
     // socket file's creation and its `listen` a connect is refused, and without the lock a
     // second daemon would take that fresh file for stale, delete it and leave the first one
     // listening where nobody can reach it.
-    let _turn = StartLock::take(path).map_err(io_err)?;
-    if std::fs::symlink_metadata(path).is_ok() {
+    let _turn = StartLock::take(path).map_err(|e| {
+        #[cfg(unix)]
+        if e.raw_os_error() == Some(libc::ELOOP) {
+            return unsafe_path(format!(
+                "its lock file {}.lock is a symbolic link; it is not followed (remove it if it \
+                 is yours)",
+                path.display()
+            ));
+        }
+        io_err(e)
+    })?;
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        check_socket_file(path, &meta).map_err(unsafe_path)?;
         if connect(path).is_ok() {
             return Err(BindError::InUse(path.to_path_buf()));
         }
@@ -157,6 +215,78 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
             io_err(e)
         }
     })
+}
+
+/// Creates `dir` and its missing parents with mode 0700 (nothing is changed when it exists).
+fn create_folder(dir: &Path) -> io::Result<()> {
+    let mut builder = std::fs::DirBuilder::new();
+    builder.recursive(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::DirBuilderExt;
+        builder.mode(0o700);
+    }
+    builder.create(dir)
+}
+
+/// Why the socket's folder `dir` is unsafe: a symbolic link, or a folder owned by a user other
+/// than this one and root (who could replace the socket with their own).
+#[cfg(unix)]
+fn check_folder(dir: &Path) -> Result<(), String> {
+    use std::os::unix::fs::MetadataExt;
+    let meta = std::fs::symlink_metadata(dir)
+        .map_err(|e| format!("cannot inspect its folder {}: {e}", dir.display()))?;
+    if meta.file_type().is_symlink() {
+        return Err(format!(
+            "its folder {} is a symbolic link{}; give the real folder instead",
+            dir.display(),
+            link_target(dir)
+        ));
+    }
+    if !meta.is_dir() {
+        return Err(format!("{} is not a folder", dir.display()));
+    }
+    let uid = current_uid();
+    if meta.uid() != uid && meta.uid() != 0 {
+        return Err(format!(
+            "its folder {} belongs to another user (uid {}), who could replace the socket",
+            dir.display(),
+            meta.uid()
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn check_folder(_dir: &Path) -> Result<(), String> {
+    Ok(())
+}
+
+/// Why the existing file at the socket path must not be replaced: a symbolic link (it is not
+/// followed, whatever it points to) or anything but a socket (a user's file is never deleted).
+#[cfg(unix)]
+fn check_socket_file(path: &Path, meta: &std::fs::Metadata) -> Result<(), String> {
+    use std::os::unix::fs::FileTypeExt;
+    let kind = meta.file_type();
+    if kind.is_symlink() {
+        return Err(format!(
+            "{} is a symbolic link{}, not a socket; it is not followed (remove it if it is yours)",
+            path.display(),
+            link_target(path)
+        ));
+    }
+    if !kind.is_socket() {
+        return Err(format!(
+            "{} exists and is not a socket; it is left alone (choose another --socket)",
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn check_socket_file(_path: &Path, _meta: &std::fs::Metadata) -> Result<(), String> {
+    Ok(())
 }
 
 /// An exclusive `flock` on `<socket>.lock`, held while [`bind`] decides whether the socket file
@@ -193,5 +323,63 @@ impl StartLock {
             let _ = socket;
             Ok(StartLock(None))
         }
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    fn unsafe_reason(path: &Path) -> String {
+        match bind(path) {
+            Err(BindError::Unsafe { reason, .. }) => reason,
+            Err(e) => panic!("expected a refusal, got {e}"),
+            Ok(_) => panic!("bound at {}", path.display()),
+        }
+    }
+
+    #[test]
+    fn a_symlink_or_a_file_at_the_path_is_refused_and_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("target.txt");
+        std::fs::write(&target, b"keep").unwrap();
+        let path = dir.path().join("t.sock");
+        std::os::unix::fs::symlink(&target, &path).unwrap();
+        let reason = unsafe_reason(&path);
+        assert!(reason.contains("is a symbolic link"), "{reason}");
+        assert!(reason.contains("target.txt"), "{reason}");
+        assert!(std::fs::symlink_metadata(&path).unwrap().is_symlink());
+        std::fs::remove_file(&path).unwrap();
+
+        std::fs::write(&path, b"mine").unwrap();
+        let reason = unsafe_reason(&path);
+        assert!(reason.contains("is not a socket"), "{reason}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"mine");
+        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+        assert!(!dir.path().join("t.sock.lock").exists());
+    }
+
+    #[test]
+    fn a_symlinked_folder_is_refused_a_missing_one_made_private() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real");
+        std::fs::create_dir(&real).unwrap();
+        let link = dir.path().join("link");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let reason = unsafe_reason(&link.join("t.sock"));
+        assert!(
+            reason.contains("its folder") && reason.contains("symbolic link"),
+            "{reason}"
+        );
+        assert_eq!(std::fs::read_dir(&real).unwrap().count(), 0);
+
+        let fresh = dir.path().join("a").join("b");
+        let path = fresh.join("t.sock");
+        let listener = bind(&path).unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&fresh), 0o700);
+        assert_eq!(mode(&path), 0o600);
+        drop(listener);
     }
 }

@@ -24,14 +24,18 @@ pub fn rgba_to_face_ids(rgba: &[u8]) -> Vec<u32> {
 /// Encodes `rgba` (`width × height` RGBA8 pixels, row 0 at the top) as a PNG into `out`.
 ///
 /// # Errors
-/// [`RenderError::Png`] when the encoder fails (or `rgba` has the wrong length).
+/// [`RenderError::Io`] when `out` fails (a full disk), [`RenderError::Png`] when the encoder
+/// fails (or `rgba` has the wrong length).
 pub fn encode_png(
     out: &mut dyn Write,
     width: u32,
     height: u32,
     rgba: &[u8],
 ) -> Result<(), RenderError> {
-    let png_err = |e: png::EncodingError| RenderError::Png(e.to_string());
+    let png_err = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(e) => RenderError::Io(e.to_string()),
+        e => RenderError::Png(e.to_string()),
+    };
     let mut encoder = png::Encoder::new(out, width, height);
     encoder.set_color(png::ColorType::Rgba);
     encoder.set_depth(png::BitDepth::Eight);
@@ -46,9 +50,15 @@ pub fn encode_png(
 /// leaves no partial file).
 ///
 /// # Errors
-/// [`RenderError::Io`] when the file cannot be written, [`RenderError::Png`] when encoding fails.
+/// [`RenderError::Io`] naming `path` when the file cannot be written, [`RenderError::Png`] when
+/// encoding fails.
 pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), RenderError> {
-    tessd_mesh::io::write_atomic(path, |w| encode_png(w, width, height, rgba))
+    tessd_mesh::io::write_atomic(path, |w| {
+        encode_png(w, width, height, rgba).map_err(|e| match e {
+            RenderError::Io(e) => RenderError::Io(format!("{}: {e}", path.display())),
+            e => e,
+        })
+    })
 }
 
 /// Decodes an 8-bit RGB or RGBA PNG into `(width, height, RGBA8 pixels)` (for tests and hosts

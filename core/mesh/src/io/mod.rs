@@ -29,7 +29,7 @@ mod source;
 mod stl;
 pub mod stream;
 
-pub use atomic::write_atomic;
+pub use atomic::{TempOutput, write_atomic};
 
 use crate::{Mesh, MeshError};
 use source::Source;

@@ -30,6 +30,15 @@ fn codec_error(e: CodecError) -> OpError {
     OpError::new(code, e.to_string())
 }
 
+/// [`codec_error`], with a failure to write the output (the codec's `context`) naming the
+/// output file (`writing out.tsc: No space left on device`).
+fn output_error(e: CodecError, context: &str, output: &std::path::Path) -> OpError {
+    match e {
+        CodecError::Io { context: c, source } if c == context => write_error(output, source),
+        e => codec_error(e),
+    }
+}
+
 /// A `u32` parameter with a default.
 fn u32_param(request: &Request, key: &str, default: u32) -> Result<u32, OpError> {
     match u64_param(request, key)? {
@@ -66,8 +75,8 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
         .as_deref()
         .is_some_and(tessd_codec::source::streamable);
     let progress = |f: f64| ctx.progress(0.02 + 0.96 * f, "code", "").is_ok();
-    let temp = TempFile::next_to(&output)?;
-    let mut file = std::io::BufWriter::with_capacity(1 << 20, temp.create()?);
+    let (file, temp) = temp_output(&output)?;
+    let mut file = std::io::BufWriter::with_capacity(1 << 20, file);
     let (report, read_ms) = if streamed {
         let path = input.expect("streamed inputs are paths");
         let mut src = tessd_codec::source::open(&path).map_err(codec_error)?;
@@ -80,7 +89,7 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
         let report = tessd_codec::compress(&mesh.positions, &tris, params, &mut file, &progress);
         (report, read_ms)
     };
-    let report = report.map_err(codec_error)?;
+    let report = report.map_err(|e| output_error(e, "writing the compressed file", &output))?;
     ctx.progress(0.99, "write", "")?;
     let file = file.into_inner().map_err(|e| {
         OpError::new(
@@ -88,7 +97,7 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
             format!("writing {}: {}", output.display(), e.error()),
         )
     })?;
-    temp.persist(file, &output)?;
+    persist(temp, file, &output)?;
     ctx.progress(1.0, "done", "")?;
     let families: serde_json::Map<String, serde_json::Value> = tessd_codec::symbols::ALL
         .iter()
@@ -152,17 +161,19 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
     let large = tsc.header.triangles + tsc.header.vertices > STREAMED_DECODE_ELEMENTS;
     if is_ply && large && max_bits.is_none_or(|b| b >= p) {
         let path = output.expect("checked above");
-        let temp = TempFile::next_to(&path)?;
-        let mut file = std::io::BufWriter::with_capacity(1 << 20, temp.create()?);
+        let (file, temp) = temp_output(&path)?;
+        let mut file = std::io::BufWriter::with_capacity(1 << 20, file);
         let progress = |f: f64| ctx.progress(0.02 + 0.96 * f, "decode", "").is_ok();
-        let report = tsc.write_ply(&mut file, &progress).map_err(codec_error)?;
+        let report = tsc
+            .write_ply(&mut file, &progress)
+            .map_err(|e| output_error(e, "writing the decoded mesh", &path))?;
         let file = file.into_inner().map_err(|e| {
             OpError::new(
                 ErrorCode::Io,
                 format!("writing {}: {}", path.display(), e.error()),
             )
         })?;
-        temp.persist(file, &path)?;
+        persist(temp, file, &path)?;
         ctx.progress(1.0, "done", "")?;
         return Ok(Response {
             result: json!({
@@ -327,54 +338,31 @@ pub fn view(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     Ok(response)
 }
 
-/// A file written beside its destination and renamed over it once complete, so that a failure
-/// or a kill never leaves half a `.tsc` where the user's file was; removed when dropped unused.
-struct TempFile {
-    path: PathBuf,
-    armed: bool,
+/// A temporary file beside `dest` ([`tessd_mesh::io::TempOutput`]: never through a symbolic
+/// link, renamed over `dest` once complete, removed when dropped unused), so that a failure or
+/// a kill never leaves half a file where the user's file was.
+fn temp_output(
+    dest: &std::path::Path,
+) -> Result<(std::fs::File, tessd_mesh::io::TempOutput), OpError> {
+    if dest.file_name().is_none() {
+        return Err(OpError::request(format!(
+            "`output` {} is not a file path",
+            dest.display()
+        )));
+    }
+    tessd_mesh::io::TempOutput::create(dest).map_err(|e| write_error(dest, e))
 }
 
-impl TempFile {
-    /// A fresh name in `dest`'s folder.
-    fn next_to(dest: &std::path::Path) -> Result<Self, OpError> {
-        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-        let name = dest.file_name().ok_or_else(|| {
-            OpError::request(format!("`output` {} is not a file path", dest.display()))
-        })?;
-        let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let path = dest.with_file_name(format!(
-            ".{}.tessd-{}-{k}.tmp",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
-        Ok(TempFile { path, armed: true })
-    }
-
-    fn io(&self, what: &str, e: std::io::Error) -> OpError {
-        OpError::new(
-            ErrorCode::Io,
-            format!("{what} {}: {e}", self.path.display()),
-        )
-    }
-
-    fn create(&self) -> Result<std::fs::File, OpError> {
-        std::fs::File::create(&self.path).map_err(|e| self.io("creating", e))
-    }
-
-    /// Flushes `file` to disk and renames it to `dest`.
-    fn persist(mut self, file: std::fs::File, dest: &std::path::Path) -> Result<(), OpError> {
-        file.sync_all().map_err(|e| self.io("flushing", e))?;
-        drop(file);
-        std::fs::rename(&self.path, dest).map_err(|e| self.io("renaming", e))?;
-        self.armed = false;
-        Ok(())
-    }
+/// Flushes `file` to disk and renames it over `dest`.
+fn persist(
+    temp: tessd_mesh::io::TempOutput,
+    file: std::fs::File,
+    dest: &std::path::Path,
+) -> Result<(), OpError> {
+    temp.commit(file, true).map_err(|e| write_error(dest, e))
 }
 
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        if self.armed {
-            let _ = std::fs::remove_file(&self.path);
-        }
-    }
+/// An `io` error naming the destination (its temporary file is an implementation detail).
+fn write_error(dest: &std::path::Path, e: std::io::Error) -> OpError {
+    OpError::new(ErrorCode::Io, format!("writing {}: {e}", dest.display()))
 }
