@@ -2,7 +2,8 @@
 # Sets up a fresh machine for tessd: system packages, the Rust build, and the Python venvs with
 # pinned versions. Safe to run again; it only does what is missing. `--demo`: only what
 # `tessd demo` needs, the release build (its inputs are compiled into the binary and it runs
-# nothing else: no apt package, no venv, nothing downloaded but the crates).
+# nothing else: no apt package, no venv, nothing downloaded but the crates). `--fuzz`: only what
+# scripts/fuzz.sh needs, the nightly toolchain and cargo-fuzz.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -43,10 +44,29 @@ make_venv() {
     cp "$reqs" "$dir/.requirements-installed"
   fi
 }
+# The fuzzers' tools (scripts/fuzz.sh): the nightly toolchain (libFuzzer's sanitizer flags are
+# nightly-only) and cargo-fuzz, pinned, built from crates.io.
+CARGO_FUZZ_VERSION=0.13.2
+fuzz_tools() {
+  if ! rustup toolchain list | grep -q '^nightly-'; then
+    echo "setup: installing the nightly toolchain"
+    rustup toolchain install nightly --profile minimal
+  fi
+  if ! cargo fuzz --version >/dev/null 2>&1; then
+    echo "setup: installing cargo-fuzz $CARGO_FUZZ_VERSION"
+    cargo install cargo-fuzz --version "$CARGO_FUZZ_VERSION" --locked --quiet
+  fi
+}
+if [ "${1:-}" = "--fuzz" ]; then
+  fuzz_tools
+  exit 0
+fi
+
 # `setup.sh --demo` skips all of this: the demo needs only the binary.
 if [ "${1:-}" != "--demo" ]; then
-  # System packages the tests need (none are needed by the build itself yet).
-  APT_PACKAGES=(mesa-vulkan-drivers libvulkan1)
+  # System packages the tests need (none are needed by the build itself yet): the renderer's
+  # Vulkan (lavapipe); useradd and mount/umount for tests/reliability (a second user, a tmpfs).
+  APT_PACKAGES=(mesa-vulkan-drivers libvulkan1 passwd mount)
   apt_install "${APT_PACKAGES[@]}"
   make_venv .venv python/requirements-test.txt
   make_venv .venv-bench bench/requirements-bench.txt
@@ -58,6 +78,7 @@ if [ "${1:-}" != "--demo" ]; then
   # PySide2) for the workbench's tests (tests/freecad_plugin/run.sh).
   FREECAD_APT_PACKAGES=(libfreecad-python3-0.20 freecad-python3 python3-pytest python3-numpy)
   apt_install "${FREECAD_APT_PACKAGES[@]}"
+  fuzz_tools
 fi
 
 echo "setup: building tessd (release)"

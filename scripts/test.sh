@@ -9,6 +9,8 @@ export TESSD_BIN="${CARGO_TARGET_DIR:-$PWD/target}/release/tessd"
 export TESSD_SHARED_DATA="${TESSD_SHARED_DATA:-$PWD/../shared/data}"
 echo "== cargo test"
 cargo test --workspace --release
+echo "== fuzz (every target 60 s on its kept corpus)"
+bash scripts/fuzz.sh 60
 echo "== pytest (daemon, USD, demo, simplification)"
 .venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
   --ignore=tests/brep_build123d --ignore=tests/brep_freecad --ignore=tests/render_reference \

@@ -226,7 +226,10 @@ impl Camera {
 
     /// This camera with near and far planes around `bounds`: the box's extent along the view
     /// direction, widened by 1 % (and the near plane kept at least 1/10 000 of the far one, so
-    /// an eye inside the box still gets a usable depth range).
+    /// an eye inside the box still gets a usable depth range). The near plane is always below
+    /// the far one: from an eye so far away that the box's depth is below f64's resolution there
+    /// (found by fuzzing: an eye 1.8·10²⁰ from a unit box gave near = far, a projection
+    /// with no depth range), near is far · (1 − 10⁻⁶).
     pub fn clipped_to(mut self, bounds: &Bounds) -> Camera {
         let (f, _, _) = self.basis();
         let ds = bounds.corners().map(|c| (c - self.eye).dot(f));
@@ -234,7 +237,7 @@ impl Camera {
         let dmax = ds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let span = (dmax - dmin).max(bounds.radius()).max(1e-30);
         let far = (dmax + 0.01 * span).max(1e-30);
-        let near = (dmin - 0.01 * span).max(far * 1e-4);
+        let near = (dmin - 0.01 * span).max(far * 1e-4).min(far * (1.0 - 1e-6));
         self.near = near;
         self.far = far;
         self

@@ -93,12 +93,12 @@ pub fn triangulate(
                 refined += 1;
             }
         }
-        // Every point went into an inside triangle (a centroid, or the midpoint of an edge
-        // that is not a constraint, whose two sides are both inside), and the triangles it
-        // re-made are those reachable from there without crossing a constraint: all inside.
-        // Faces are only ever added by insertion, so the new ones are appended — inside.
-        inside.resize(cdt.all_faces().len(), true);
-        debug_assert_eq!(inside, classify(&cdt));
+        // The inserted points were meant to land in inside triangles only, so that the new
+        // triangles would all be inside; fuzzing found documents (a mutated cylinder, loops
+        // that still cross) where some land outside, and appending them as inside kept
+        // triangles outside the trim. Classifying again is one walk over the triangles, as
+        // the refinement pass itself is.
+        inside = classify(&cdt);
     }
     let mut out = FaceTriangles {
         refined,

@@ -27,9 +27,22 @@ pub enum EdgeSamples {
 /// The samples of every edge, by edge id.
 pub type EdgeTable = HashMap<u64, EdgeSamples>;
 
+/// The most samples one curve gets: [`sample_chordal`] halves each starting segment at most
+/// as often as keeps the whole curve within this. A real edge is far below it (a 1 m circle
+/// at 1 µm takes ~2 300); what reaches it is a curve the tolerance cannot be met on at any
+/// sampling — a trim running 10¹⁶ radians round a cylinder, a part so far from the origin
+/// that its points are f64 noise at the tolerance — which, found by fuzzing, took 4 096 ×
+/// 2²⁴ evaluations (hours, and the memory to hold them) before this bound. Such a curve now
+/// stops at about this count, short of the tolerance.
+pub const MAX_CURVE_SAMPLES: usize = 1 << 14;
+
+/// The deepest halving of a segment (2²⁴ pieces), whatever the budget.
+const MAX_DEPTH: u32 = 24;
+
 /// Samples `f` on `[t0, t1]` (either order) so that, between consecutive samples, the chord
 /// stays within `tol` of the curve's midpoint and turns by less than `angle`; at least
-/// `min_segments` segments. Returns the parameters, from `t0` to `t1`.
+/// `min_segments` segments, at most about [`MAX_CURVE_SAMPLES`]. Returns the parameters, from
+/// `t0` to `t1`.
 pub fn sample_chordal(
     f: &dyn Fn(f64) -> DVec3,
     t0: f64,
@@ -39,6 +52,8 @@ pub fn sample_chordal(
     angle: f64,
 ) -> Vec<f64> {
     let n = min_segments.max(1);
+    // Each starting segment may be halved `max_depth` times: n · 2^max_depth ≤ the budget.
+    let max_depth = (MAX_CURVE_SAMPLES / n).max(1).ilog2().min(MAX_DEPTH);
     let mut out = vec![t0];
     let mut a_p = f(t0);
     for k in 0..n {
@@ -49,7 +64,7 @@ pub fn sample_chordal(
             t0 + (t1 - t0) * (k + 1) as f64 / n as f64
         };
         let b_p = f(b);
-        refine(f, (a, a_p), (b, b_p), tol, angle, 0, &mut out);
+        refine(f, (a, a_p), (b, b_p), tol, angle, max_depth, &mut out);
         a_p = b_p;
     }
     out
@@ -105,7 +120,8 @@ fn chord_deviation(
 }
 
 /// Pushes the samples of `(a, b]`, splitting in two while the curve's chordal deviation (at
-/// the midpoint and quarter points) or the turn between the half-chords is too large.
+/// the midpoint and quarter points) or the turn between the half-chords is too large, at most
+/// `depth` times more.
 fn refine(
     f: &dyn Fn(f64) -> DVec3,
     (a, pa): (f64, DVec3),
@@ -128,9 +144,9 @@ fn refine(
     };
     let turns = cos_turn < angle.min(std::f64::consts::PI).cos();
     let split = dev.is_finite() && (dev > tol || (turns && l1 + l2 > 1e-3 * tol));
-    if depth < 24 && split {
-        refine(f, (a, pa), (m, pm), tol, angle, depth + 1, out);
-        refine(f, (m, pm), (b, pb), tol, angle, depth + 1, out);
+    if depth > 0 && split {
+        refine(f, (a, pa), (m, pm), tol, angle, depth - 1, out);
+        refine(f, (m, pm), (b, pb), tol, angle, depth - 1, out);
     } else {
         out.push(b);
     }

@@ -283,6 +283,9 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             |e| match e {
                 TessellateError::Invalid(e) => brep_error(e),
                 TessellateError::Options(m) => OpError::request(m),
+                e @ TessellateError::Face(..) => {
+                    OpError::new(ErrorCode::InvalidBrep, e.to_string())
+                }
                 TessellateError::Cancelled => match ctx.checkpoint() {
                     Err(e) => e,
                     Ok(()) => OpError::new(ErrorCode::Cancelled, "cancelled"),
