@@ -12,12 +12,11 @@ REPO = Path(__file__).resolve().parent.parent
 for p in (REPO / "python", REPO / "tests", REPO / "tests" / "daemon", REPO / "tests" / "usd"):
     sys.path.insert(0, str(p))
 
-import os  # noqa: E402
 
 import pytest  # noqa: E402
 
 import locate  # noqa: E402
-from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
+from daemon_util import serving  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -31,11 +30,5 @@ def shared_data():
 @pytest.fixture(scope="module")
 def daemon():
     """One `tessd serve --socket <tmp>/t.sock` for the whole module, checked alive at the end."""
-    with short_tmpdir() as d:
-        proc = DaemonProcess(str(locate.tessd_bin()), os.path.join(d, "t.sock"))
-        proc.start()
-        try:
-            yield proc
-            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
-        finally:
-            proc.stop()
+    with serving(str(locate.tessd_bin())) as proc:
+        yield proc

@@ -6,7 +6,6 @@ folder fails the tests (it is never a reason to skip).
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -17,7 +16,7 @@ sys.path.insert(0, str(REPO / "python"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import locate  # noqa: E402
-from daemon_util import DaemonProcess, short_tmpdir  # noqa: E402
+from daemon_util import serving, short_tmpdir  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -48,11 +47,5 @@ def daemon(tessd_bin):
     Stopped at the end with the `shutdown` op (then killed if it does not exit); the test
     module fails at teardown if the daemon died during it.
     """
-    with short_tmpdir() as d:
-        proc = DaemonProcess(tessd_bin, os.path.join(d, "t.sock"))
-        proc.start()
-        try:
-            yield proc
-            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
-        finally:
-            proc.stop()
+    with serving(tessd_bin) as proc:
+        yield proc

@@ -148,6 +148,20 @@ class DaemonProcess:
         return self.proc.returncode
 
 
+@contextlib.contextmanager
+def serving(binary: str, args: Tuple[str, ...] = (), name: str = "t.sock"):
+    """A started `tessd serve --socket <tmp>/NAME ARGS` for a `with` block (a module fixture's
+    body): fails at the end if the daemon died meanwhile, and stops it either way."""
+    with short_tmpdir() as d:
+        proc = DaemonProcess(binary, os.path.join(d, name), args)
+        proc.start()
+        try:
+            yield proc
+            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
+        finally:
+            proc.stop()
+
+
 # ---------------------------------------------------------------------------------------------
 # Observing a process and a folder from outside (Linux /proc)
 

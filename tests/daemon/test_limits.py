@@ -5,13 +5,12 @@ and its flag, lets through what is under it, and the daemon serves on afterwards
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
 
 import tessd
-from daemon_util import DaemonProcess, RawConn, raw_frame, short_tmpdir
+from daemon_util import RawConn, raw_frame, serving
 from tessd import TessdError
 
 
@@ -19,16 +18,9 @@ from tessd import TessdError
 def limited(tessd_bin):
     """A daemon with small limits: 2 jobs at once, 3 000 mesh elements, 1 MB per job, 64 KiB
     payloads."""
-    with short_tmpdir() as d:
-        proc = DaemonProcess(tessd_bin, os.path.join(d, "l.sock"), (
-            "--max-jobs", "2", "--max-mesh-elements", "3000", "--max-job-memory", "1000000",
-            "--max-payload", "65536"))
-        proc.start()
-        try:
-            yield proc
-            assert proc.alive(), "the daemon died during the tests:\n" + proc.log_tail()
-        finally:
-            proc.stop()
+    with serving(tessd_bin, ("--max-jobs", "2", "--max-mesh-elements", "3000",
+                             "--max-job-memory", "1000000", "--max-payload", "65536")) as proc:
+        yield proc
 
 
 def grid(n):
