@@ -15,7 +15,9 @@
 # Environment: FUZZ_TARGETS="frame codec" runs only those; FUZZ_WORK_DIR=DIR keeps each run's new
 # inputs in DIR/<target>/ (instead of a temporary folder) for a later `cmin`; artefacts go to
 # ${FUZZ_WORK_DIR:-fuzz}/artifacts/<target>/. CARGO_TARGET_DIR is honoured (the binaries are
-# then under $CARGO_TARGET_DIR/x86_64-unknown-linux-gnu/release). Needs the nightly toolchain and
+# then under $CARGO_TARGET_DIR/x86_64-unknown-linux-gnu/release). FUZZ_DROP_BUILD=1 deletes the
+# instrumented build (~1.5 GB) after the runs, as CI does to keep its disk for the later steps.
+# Needs the nightly toolchain and
 # cargo-fuzz: `bash scripts/setup.sh --fuzz` installs them when missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -53,6 +55,8 @@ build() {
   dir=$(cargo metadata --manifest-path fuzz/Cargo.toml --format-version 1 --no-deps \
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
   BIN_DIR="$dir/$TRIPLE/release"
+  FUZZ_BUILD_DIR="$dir/$TRIPLE"
+  echo "fuzz: build $(du -sh "$FUZZ_BUILD_DIR" | cut -f1), $(df -h --output=avail . | tail -1 | tr -d ' ') free on disk"
 }
 
 if [ "${1:-}" = "cmin" ]; then
@@ -117,6 +121,9 @@ for t in "${TARGETS[@]}"; do
     cp "$log" "$ART_ROOT/$t.last-run.log"
   fi
 done
+if [ "${FUZZ_DROP_BUILD:-0}" = 1 ]; then
+  rm -rf "$FUZZ_BUILD_DIR"
+fi
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz: FAILED: ${failed[*]} (artefacts under $ART_ROOT/; reproduce with"
   echo "      cargo +nightly fuzz run ${BUILD_FLAGS[*]} TARGET ARTEFACT)"
