@@ -26,20 +26,23 @@ TRIPLE=x86_64-unknown-linux-gnu
 # Release with debug assertions and overflow checks, AddressSanitizer (cargo-fuzz's default),
 # which also lets libFuzzer refuse any single allocation over the memory limit.
 BUILD_FLAGS=(-O -a --fuzz-dir fuzz)
-ALL_TARGETS=(frame mesh_obj mesh_ply mesh_stl mesh_off brep job_file codec render_params)
+ALL_TARGETS=(frame envelope mesh_obj mesh_ply mesh_stl mesh_off mesh_stream brep job_file codec
+  render_params)
 read -r -a TARGETS <<<"${FUZZ_TARGETS:-${ALL_TARGETS[*]}}"
 # The dictionary of each target (fuzz/dict/).
-declare -A DICT=([frame]=json [mesh_obj]=obj [mesh_ply]=ply [mesh_stl]=stl [mesh_off]=off
-  [brep]=brep [job_file]=json [codec]=codec [render_params]=json)
+declare -A DICT=([frame]=json [envelope]=json [mesh_obj]=obj [mesh_ply]=ply [mesh_stl]=stl
+  [mesh_off]=off [mesh_stream]=stream [brep]=brep [job_file]=json [codec]=codec [render_params]=json)
 # libFuzzer's flags: 1 s per input, 2 GB of memory. The frame decoder allocates each array of
 # a checked table before its bytes arrive (zeroed, so committed only as they are received:
 # docs/protocol.md), up to the daemon's 4 GiB payload limit; its single-allocation limit is
-# that, its resident-memory limit stays 2 GB.
+# that (the envelope target's too, as it decodes frames first), its resident-memory limit
+# stays 2 GB.
 # The B-Rep target's tessellation runs 30-80x slower instrumented than in a release build (the
 # sanitizer, coverage counters, and spade's own debug checks of its triangulation): a document
 # that tessellates in 60 ms takes 2-5 s here, so its limit is 10 s, which is ~0.2 s of release.
 COMMON=(-rss_limit_mb=2048 -print_final_stats=1)
-declare -A EXTRA=([frame]=-malloc_limit_mb=4100 [brep]=-timeout=10)
+declare -A EXTRA=([frame]=-malloc_limit_mb=4100 [envelope]=-malloc_limit_mb=4100
+  [brep]=-timeout=10)
 # Tessellation runs its faces on rayon: one worker keeps runs reproducible and the cores free.
 export RAYON_NUM_THREADS=1
 
@@ -56,8 +59,15 @@ build() {
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
   BIN_DIR="$dir/$TRIPLE/release"
   FUZZ_BUILD_DIR="$dir/$TRIPLE"
-  echo "fuzz: build $(du -sh "$FUZZ_BUILD_DIR" | cut -f1), $(df -h --output=avail . | tail -1 | tr -d ' ') free on disk"
+  local free
+  free=$(df -h --output=avail . | tail -1 | tr -d ' ')
+  echo "fuzz: build $(du -sh "$FUZZ_BUILD_DIR" | cut -f1), $free free on disk"
 }
+
+# Each run's scratch: logs, new inputs without FUZZ_WORK_DIR, and the mesh_stream target's input
+# file (it writes to TMPDIR).
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
 
 if [ "${1:-}" = "cmin" ]; then
   for t in "${TARGETS[@]}"; do
@@ -67,9 +77,9 @@ if [ "${1:-}" = "cmin" ]; then
       cp -n "$FUZZ_WORK_DIR/$t"/* "$kept"/ 2>/dev/null || true
     fi
     before=$(find "$kept" -type f | wc -l)
-    cargo +nightly fuzz cmin "${BUILD_FLAGS[@]}" "$t" "$kept" -- -timeout=1 "${COMMON[@]}" \
-      ${EXTRA[$t]:-} >"${TMPDIR:-/tmp}/fuzz-cmin-$t.log" 2>&1 || {
-      tail -20 "${TMPDIR:-/tmp}/fuzz-cmin-$t.log"
+    TMPDIR="$TMP" cargo +nightly fuzz cmin "${BUILD_FLAGS[@]}" "$t" "$kept" -- -timeout=1 \
+      "${COMMON[@]}" ${EXTRA[$t]:-} >"$TMP/cmin-$t.log" 2>&1 || {
+      tail -20 "$TMP/cmin-$t.log"
       echo "fuzz: cmin of $t failed" >&2
       exit 1
     }
@@ -87,8 +97,6 @@ case $SECONDS_EACH in '' | *[!0-9]*)
 esac
 
 build
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
 ART_ROOT="${FUZZ_WORK_DIR:-fuzz}/artifacts"
 failed=()
 printf '%-14s %8s %10s %8s %8s %10s %s\n' target seconds "execs/s" "cov" "corpus" "peak MB" crashes
@@ -100,8 +108,8 @@ for t in "${TARGETS[@]}"; do
   before=$(find "$art" -type f | wc -l)
   start=$(date +%s)
   rc=0
-  "$BIN_DIR/$t" -max_total_time="$SECONDS_EACH" -timeout=1 "${COMMON[@]}" ${EXTRA[$t]:-} \
-    -dict="fuzz/dict/${DICT[$t]}.dict" -artifact_prefix="$art/" "$new" "fuzz/corpus/$t" \
+  TMPDIR="$TMP" "$BIN_DIR/$t" -max_total_time="$SECONDS_EACH" -timeout=1 "${COMMON[@]}" \
+    ${EXTRA[$t]:-} -dict="fuzz/dict/${DICT[$t]}.dict" -artifact_prefix="$art/" "$new" "fuzz/corpus/$t" \
     >"$log" 2>&1 || rc=$?
   took=$(($(date +%s) - start))
   execs=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)

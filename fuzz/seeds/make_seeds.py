@@ -137,6 +137,29 @@ def frame(obj, arrays=()):
     return head + j + bytes(payload)
 
 
+def envelope_seeds(frames):
+    """Requests for the envelope target: the frame seeds that are requests, the built-in ops'
+    parameters, and envelopes each wrong in one member."""
+    for name in ["hello", "stats_path", "stats_arrays", "all_dtypes", "cancel"]:
+        put("envelope", name, frames[name])
+    requests = {
+        "hold": {"id": 5, "op": "session.hold", "params": {"pid": 4242, "host": "blender"}},
+        "release_bad_pid": {"id": 6, "op": "session.release", "params": {"pid": -1}},
+        "shutdown_if_unheld": {"id": 7, "op": "shutdown", "params": {"if_unheld": True}},
+        "shutdown_bad_flag": {"id": 8, "op": "shutdown", "params": {"if_unheld": "yes"}},
+        "unknown_op": {"id": 9, "op": "mesh.explode", "params": None},
+        "id_negative": {"id": -3, "op": "ping"},
+        "id_float": {"id": 1.5, "op": "ping", "params": {"echo": "x"}},
+        "op_number": {"id": 10, "op": 17},
+        "params_array": {"id": 11, "op": "simplify", "params": [1, 2]},
+        "no_id": {"op": "hello"},
+    }
+    for name, obj in requests.items():
+        put("envelope", name, frame(obj))
+    put("envelope", "hold_then_release", frame(requests["hold"])
+        + frame({"id": 12, "op": "session.release", "params": {"pid": 4242}}))
+
+
 def small_meshes():
     """(name, positions, faces) of small shared meshes."""
     out = []
@@ -258,6 +281,7 @@ def main():
     for name, data in frames.items():
         put("frame", name, data)
     put("frame", "two_frames", frames["hello"] + frames["cancel"])
+    envelope_seeds(frames)
 
     # Codec: small meshes compressed as the brief of the CI step says, and one with --ahead 1.
     codec = [(os.path.join(SHARED, "mesh", "spot_control_mesh.obj"), []),

@@ -2,7 +2,7 @@
 //!
 //! The wire protocol of docs/protocol.md: [`frame`]s (header + JSON + aligned binary
 //! [`arrays`]), the local-socket [`server`] and a blocking [`client`], the [`job`] model
-//! (progress and cancellation) shared with [`job_file`]s, the [`holders`] that share one daemon
+//! (progress and cancellation) shared with [`job_file`]s, the request [`envelope`], the [`holders`] that share one daemon
 //! between host programs, and the operation [`registry`] the binary fills. Nothing here knows about meshes: operations are registered from above.
 //!
 //! ```no_run
@@ -19,6 +19,7 @@
 
 pub mod arrays;
 pub mod client;
+pub mod envelope;
 pub mod error;
 pub mod frame;
 pub mod holders;

@@ -8,6 +8,7 @@
 //! `session.hold` and `session.release` are built in because they concern the server itself.
 
 use crate::arrays::{Arrays, OwnedArray};
+use crate::envelope::{Envelope, bool_param, holder_pid, parse_envelope};
 use crate::error::{ErrorCode, OpError};
 use crate::frame::{
     Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame,
@@ -274,7 +275,7 @@ impl Connection {
         let Frame { mut json, arrays } = frame;
         let raw_id = json.get("id").cloned().unwrap_or(Value::Null);
         let parsed = parse_envelope(&mut json);
-        let (id, op, params) = match parsed {
+        let Envelope { id, op, params } = match parsed {
             Ok(p) => p,
             Err(e) => return self.reply(&raw_id, Err(e)),
         };
@@ -529,78 +530,5 @@ fn code_of(e: &FrameError) -> ErrorCode {
     match e.code() {
         "too_large" => ErrorCode::TooLarge,
         _ => ErrorCode::InvalidFrame,
-    }
-}
-
-/// Checks a request's `id`, `op` and `params`.
-fn parse_envelope(
-    json: &mut Map<String, Value>,
-) -> Result<(u64, String, Map<String, Value>), OpError> {
-    let id = match json.get("id") {
-        Some(v) => v.as_u64().ok_or_else(|| {
-            OpError::request(format!(
-                "`id` must be a non-negative integer, got {}",
-                describe(v)
-            ))
-        })?,
-        None => return Err(OpError::request("the request has no `id`")),
-    };
-    let op = match json.remove("op") {
-        Some(Value::String(s)) => s,
-        Some(v) => {
-            return Err(OpError::request(format!(
-                "`op` must be a string, got {}",
-                json_kind(&v)
-            )));
-        }
-        None => return Err(OpError::request("the request has no `op`")),
-    };
-    let params = match json.remove("params") {
-        None | Some(Value::Null) => Map::new(),
-        Some(Value::Object(m)) => m,
-        Some(v) => {
-            return Err(OpError::request(format!(
-                "`params` must be an object, got {}",
-                json_kind(&v)
-            )));
-        }
-    };
-    Ok((id, op, params))
-}
-
-/// The `pid` parameter of `session.hold` / `session.release`: a positive process id.
-fn holder_pid(params: &Map<String, Value>, op: &str) -> Result<u32, OpError> {
-    let Some(v) = params.get("pid") else {
-        return Err(OpError::request(format!(
-            "{op} needs `params.pid`, the holding program's process id"
-        )));
-    };
-    v.as_u64()
-        .and_then(|n| u32::try_from(n).ok())
-        .filter(|&n| n > 0 && i32::try_from(n).is_ok())
-        .ok_or_else(|| {
-            OpError::request(format!(
-                "parameter `pid` must be a positive integer (a process id), got {}",
-                describe(v)
-            ))
-        })
-}
-
-/// An optional boolean parameter (absent or null: false).
-fn bool_param(params: &Map<String, Value>, key: &str) -> Result<bool, OpError> {
-    match params.get(key) {
-        None | Some(Value::Null) => Ok(false),
-        Some(Value::Bool(b)) => Ok(*b),
-        Some(v) => Err(OpError::request(format!(
-            "parameter `{key}` must be true or false, got {}",
-            json_kind(v)
-        ))),
-    }
-}
-
-fn describe(v: &Value) -> String {
-    match v {
-        Value::Number(n) => format!("{n}"),
-        other => json_kind(other).to_string(),
     }
 }
