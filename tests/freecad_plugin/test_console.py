@@ -547,8 +547,8 @@ class Cancel(DocCase):
         # The task gives the daemon CANCEL_WAIT_S to confirm, then closes the connection
         # (which cancels what is left of the request in the daemon) and returns.
         self.assertLess(took, task_module.CANCEL_WAIT_S + 1.0, "cancelled after %.1f s" % took)
-        # The daemon stops a tessellation between faces: it confirms the cancel well within
-        # CANCEL_WAIT_S (one loft face at 0.2 µm takes a fraction of a second).
+        # The daemon stops a face while it refines (it asks every ~1000 points): it confirms
+        # the cancel well within CANCEL_WAIT_S, however long a face would take.
         with self.assertRaises(api.TessdError) as e:
             task.job.result(0)
         self.assertEqual(e.exception.code, "cancelled")

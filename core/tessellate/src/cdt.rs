@@ -48,15 +48,20 @@ pub struct FaceTriangles {
 /// The most refinement passes, and the most vertices a face may reach by refinement.
 const PASSES: usize = 16;
 const MAX_VERTICES: usize = 400_000;
+/// Refinement points inserted between two asks whether to go on: a face can take seconds at
+/// a fine tolerance, and a cancelled job should not wait for it (~1 ms of insertions).
+const INSERTS_PER_CHECK: usize = 1024;
 
-/// Triangulates one face.
+/// Triangulates one face; `None` once `keep_going` says stop (asked before each refinement
+/// pass and every [`INSERTS_PER_CHECK`] insertions).
 pub fn triangulate(
     face: &Face,
     loops: &[Polyline],
     interior: &[DVec2],
     plan: &Plan,
     options: &Options,
-) -> FaceTriangles {
+    keep_going: &dyn Fn() -> bool,
+) -> Option<FaceTriangles> {
     let scale = plan.delaunay;
     let b = plan.bounds;
     let shake = JITTER * ((b[1] - b[0]) * scale[0]).max((b[3] - b[2]) * scale[1]);
@@ -79,13 +84,19 @@ pub fn triangulate(
         if cdt.num_vertices() >= MAX_VERTICES {
             break;
         }
+        if !keep_going() {
+            return None;
+        }
         let wanted = refinement_points(face, &cdt, &inside, &limits, &mut checked);
         if wanted.is_empty() {
             break;
         }
-        for (uv, hint) in wanted {
+        for (k, (uv, hint)) in wanted.into_iter().enumerate() {
             if cdt.num_vertices() >= MAX_VERTICES {
                 break;
+            }
+            if k % INSERTS_PER_CHECK == INSERTS_PER_CHECK - 1 && !keep_going() {
+                return None;
             }
             let v = mk(uv, face.surface.point(uv[0], uv[1]));
             // The point lies in (or beside) the triangle it came from: start the search there.
@@ -122,7 +133,7 @@ pub fn triangulate(
         }
         out.triangles.push(tri);
     }
-    out
+    Some(out)
 }
 
 /// The size of the displacement of every point in the Delaunay plane, relative to the face's

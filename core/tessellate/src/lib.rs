@@ -169,8 +169,10 @@ pub fn tessellate(doc: &Document, options: &Options) -> Result<Tessellation, Tes
     tessellate_with_progress(doc, options, &|_, _| true)
 }
 
-/// [`tessellate`], calling `progress(done, total)` as faces complete (from any thread); once
-/// it returns `false` (a cancelled job) the faces not yet started are skipped and the call
+/// [`tessellate`], calling `progress(done, total)` as faces complete (from any thread), and
+/// again with the same `done` while a face refines (every pass, and every thousand or so
+/// points), so that a cancel does not wait for a slow face; once it returns `false` (a
+/// cancelled job) the faces in progress stop, those not yet started are skipped, and the call
 /// ends with [`TessellateError::Cancelled`].
 ///
 /// # Errors
@@ -210,6 +212,17 @@ pub fn tessellate_with_progress(
     let total = doc.faces.len();
     let indices: Vec<usize> = (0..total).collect();
     let stop = std::sync::atomic::AtomicBool::new(false);
+    // Asked by a face while it refines: the cancel is seen within one pass's slice of points.
+    let keep_going = || {
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            return false;
+        }
+        if !progress(done.load(std::sync::atomic::Ordering::Relaxed), total) {
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            return false;
+        }
+        true
+    };
     let faces: Vec<Result<cdt::FaceTriangles, String>> = map(&indices, |&f| {
         if stop.load(std::sync::atomic::Ordering::Relaxed) {
             return Ok(cdt::FaceTriangles::default());
@@ -221,7 +234,7 @@ pub fn tessellate_with_progress(
         // whose loops still cross); the face is refused with its id instead of taking the
         // caller down
         let t = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            cdt::triangulate(face, loops, &points, &plan, options)
+            cdt::triangulate(face, loops, &points, &plan, options, &keep_going)
         }))
         .map_err(|payload| {
             payload
@@ -230,11 +243,15 @@ pub fn tessellate_with_progress(
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "a panic without a message".into())
         });
+        let Ok(Some(t)) = t else {
+            // A stopped face has no triangles; the call ends `Cancelled` below.
+            return t.map(Option::unwrap_or_default);
+        };
         let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         if !progress(n, total) {
             stop.store(true, std::sync::atomic::Ordering::Relaxed);
         }
-        t
+        Ok(t)
     });
     if stop.into_inner() {
         return Err(TessellateError::Cancelled);
