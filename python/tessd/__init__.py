@@ -7,10 +7,15 @@ else :class:`~tessd.arrays.RawArray` objects). See docs/protocol.md for the wire
     path = tessd.ensure_daemon()
     with tessd.Client(path) as c:
         stats, _ = c.call("mesh.stats", {"input": "/data/bunny.ply"})
+
+Every exception the client raises on purpose is a :class:`tessd.Error`: :class:`TessdError`
+(an error reply), :class:`DaemonUnavailable`, :class:`DaemonStartError`, :class:`ProtocolError`
+and :class:`CallTimeout` (see :mod:`tessd.errors`).
 """
 
 from .arrays import RawArray
 from .client import Client, Job, Progress, TessdError
+from .errors import CallTimeout, Error
 from .daemon import DaemonStartError, ensure_daemon, stop_daemon
 from .frame import ProtocolError
 from .mesh_arrays import MeshArrays, arrays_to_mesh, mesh_to_arrays
@@ -20,9 +25,11 @@ from .transport import DaemonUnavailable
 __version__ = "0.1.0"
 
 __all__ = [
+    "CallTimeout",
     "Client",
     "DaemonStartError",
     "DaemonUnavailable",
+    "Error",
     "Job",
     "MeshArrays",
     "Progress",

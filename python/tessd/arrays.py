@@ -246,6 +246,74 @@ def to_wire(value: Any, name: str = "array") -> WireArray:
     )
 
 
+#: Smallest and largest value of each integer protocol dtype.
+INT_RANGE = {"u8": (0, 2 ** 8 - 1), "u16": (0, 2 ** 16 - 1), "u32": (0, 2 ** 32 - 1),
+             "u64": (0, 2 ** 64 - 1), "i32": (-2 ** 31, 2 ** 31 - 1),
+             "i64": (-2 ** 63, 2 ** 63 - 1)}
+
+
+def dtype_of(value: Any) -> Optional[str]:
+    """The protocol dtype ``value`` would be sent as (see :func:`to_wire`), or None when it
+    has none (then :func:`to_wire` refuses it)."""
+    if isinstance(value, (WireArray, RawArray)):
+        return value.dtype
+    if _np is not None and isinstance(value, _np.ndarray):
+        return _numpy_dtype_name(value.dtype)
+    if isinstance(value, array.array):
+        return _TYPECODE_TO_DTYPE.get(value.typecode)
+    if isinstance(value, tuple) and len(value) == 3 and value[0] in ITEMSIZE:
+        return value[0]
+    return None
+
+
+def _out_of_range(name: str, source: str, dtype: str, value: int, index: int) -> ValueError:
+    low, high = INT_RANGE[dtype]
+    why = ("is negative" if value < 0 and low == 0 else
+           "is below %d, the smallest %s" % (low, dtype) if value < low else
+           "is above %d, the largest %s" % (high, dtype))
+    return ValueError("array %r (%s) holds %d at flat index %d, which %s; the daemon reads %r "
+                      "as %s" % (name, source, value, index, why, name, dtype))
+
+
+def fit_integers(value: Any, name: str, dtype: str) -> Any:
+    """``value``, an integer array of another dtype, converted to the integer ``dtype`` when
+    every element fits (numpy's default int64 face indices become u32, for instance).
+
+    Raises ``ValueError`` naming the array, the first element that does not fit, its flat
+    index and why (negative, or above the largest ``dtype``). Anything else (already
+    ``dtype``, a float array, something :func:`to_wire` refuses) is returned unchanged.
+    """
+    if dtype not in INT_RANGE:
+        return value
+    low, high = INT_RANGE[dtype]
+    if _np is not None and isinstance(value, _np.ndarray):
+        # Any numpy integer type, also those the protocol lacks (int8, int16).
+        source = "%s%d" % (value.dtype.kind, value.dtype.itemsize * 8)
+        if value.dtype.kind not in "iu" or source == dtype:
+            return value
+        if value.size:
+            flat = value.reshape(-1)
+            i_min, i_max = int(flat.argmin()), int(flat.argmax())
+            if int(flat[i_min]) < low:
+                raise _out_of_range(name, source, dtype, int(flat[i_min]), i_min)
+            if int(flat[i_max]) > high:
+                raise _out_of_range(name, source, dtype, int(flat[i_max]), i_max)
+        return _np.ascontiguousarray(value.astype("<%s%d" % (dtype[0], ITEMSIZE[dtype])))
+    source = dtype_of(value)
+    if source is None or source == dtype or source[0] not in "ui":
+        return value
+    wire = to_wire(value, name)
+    values = wire.data.cast(TYPECODE[source]).tolist() if _LITTLE else \
+        RawArray(source, wire.shape, wire.data).to_array().tolist()
+    for i, v in enumerate(values):
+        if v < low or v > high:
+            raise _out_of_range(name, source, dtype, v, i)
+    out = array.array(TYPECODE[dtype], values)
+    if not _LITTLE:  # pragma: no cover - big-endian hosts only
+        out.byteswap()
+    return (dtype, wire.shape, out.tobytes())
+
+
 def from_wire(dtype: str, shape: Sequence[int], buffer: Any, offset: int, use_numpy: bool) -> Any:
     """An array viewing ``buffer[offset:]`` (no copy): numpy when ``use_numpy``, else RawArray.
 

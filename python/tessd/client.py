@@ -6,11 +6,32 @@ frames until the caller polls or waits. So one client can carry several requests
 be used from several threads, and a GUI can poll jobs from a timer without ever blocking.
 
     with Client() as c:
-        result, arrays = c.call("mesh.stats", {"input": "bunny.ply"})
+        result, arrays = c.call("mesh.stats", {"input": "bunny.ply"})  # relative to os.getcwd()
         job = c.submit("mesh.convert", {"input": "a.obj", "output": "a.ply"})
         while not job.poll():          # e.g. from a Blender timer
             print(job.progress)
         result, _ = job.result()
+
+What the client does to a request before sending it:
+
+- File paths in ``params`` (:data:`PATH_PARAMS`: ``input``, ``output``, ``a``, ``b``, ...) are
+  made absolute against the caller's working folder (the daemon runs in its own folder, so a
+  relative path would name another file there). ``os.PathLike`` values are accepted.
+- Integer mesh arrays (``face_indices``, ``face_sizes``, ``*_indices``, ``crease_edges``,
+  ``face_groups``, ``sharp_edges``) of another integer type are sent as the u32 the daemon
+  reads (:func:`tessd.mesh_arrays.prepare_arrays`), so numpy's default int64 works; an array
+  whose values do not fit is refused before anything is sent, with a :class:`TessdError`
+  (code ``invalid_mesh``, also a ``ValueError``) naming the array, the value and why. Float
+  arrays and other names go as given (``debug.echo``'s arrays too).
+
+Timeouts: ``Client(timeout=T)`` bounds connecting to the socket (:class:`DaemonUnavailable`
+after T seconds) and is the default timeout of every :meth:`Client.call` (and of ``ping`` and
+``hello``), which bounds the wait for the reply, counted from when the request has been sent:
+when it passes, the call sends a ``cancel`` for the request and raises :class:`CallTimeout`.
+``call(..., timeout=S)`` sets one call's own bound, ``timeout=None`` waits as long as the
+request runs. Writing the request is not bounded (the daemon reads requests as they come).
+:meth:`Client.submit` never waits; :meth:`Job.result` and :meth:`Job.wait` take their own
+timeout (default: none).
 """
 
 from __future__ import annotations
@@ -23,7 +44,9 @@ import time
 import weakref
 from typing import Any, Callable, Deque, Dict, List, Mapping, NamedTuple, Optional, Tuple
 
+from .errors import CallTimeout, Error
 from .frame import ArraysArg, ProtocolError, encode_frame, read_frame
+from .mesh_arrays import prepare_arrays
 from .socket_path import resolve_socket
 from .transport import DaemonUnavailable, connect
 
@@ -32,12 +55,64 @@ DEFAULT_CLIENT_MAX_PAYLOAD = 64 * 1024 ** 3
 
 ProgressCallback = Callable[[float, str, str], Optional[bool]]
 
+#: The parameters of each operation that name files (docs/protocol.md): the client makes them
+#: absolute against its working folder before sending. A list (``render``'s ``input``) has each
+#: string item made absolute; values that are not strings or paths (``per_level: true``) are
+#: left alone.
+PATH_PARAMS: Dict[str, Tuple[str, ...]] = {
+    "mesh.stats": ("input",),
+    "mesh.convert": ("input", "output"),
+    "simplify": ("input", "output", "partition_output"),
+    "lod": ("input", "output", "per_level"),
+    "subdivide": ("input", "output"),
+    "compare": ("a", "b"),
+    "brep.load": ("input",),
+    "tessellate": ("input", "output"),
+    "trim.classify": ("input",),
+    "render": ("input", "output", "face_ids"),
+    "codec.compress": ("input", "output"),
+    "codec.decompress": ("input", "output"),
+    "codec.view": ("input", "output"),
+}
 
-class TessdError(Exception):
+#: Operations whose arrays are sent exactly as given (no dtype conversion).
+RAW_ARRAY_OPS = frozenset({"debug.echo"})
+
+#: The default of :meth:`Client.call`'s ``timeout``: the client's own.
+_CLIENT_TIMEOUT: Any = object()
+
+
+def _absolute(value: Any) -> Any:
+    """``value`` made absolute when it is a non-empty path (str or os.PathLike), a list of
+    them item by item; anything else unchanged."""
+    if isinstance(value, list):
+        return [_absolute(v) for v in value]
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+        if isinstance(value, bytes):
+            value = os.fsdecode(value)
+    if isinstance(value, str) and value and not os.path.isabs(value):
+        # join, not abspath: `..` is left to the filesystem (a symbolic link's parent).
+        return os.path.join(os.getcwd(), value)
+    return value
+
+
+def absolute_paths(op: str, params: Mapping[str, Any]) -> Dict[str, Any]:
+    """A copy of ``params`` with the file paths of ``op`` (:data:`PATH_PARAMS`) absolute,
+    resolved against the current working folder; other values are untouched."""
+    out = dict(params)
+    for key in PATH_PARAMS.get(op, ()):
+        if key in out:
+            out[key] = _absolute(out[key])
+    return out
+
+
+class TessdError(Error):
     """An error reply from the daemon (or the client's equivalent, e.g. ``cancelled``).
 
     ``code`` is one of the protocol's stable codes (``invalid_request``, ``invalid_mesh``,
-    ``io``, ``cancelled``, ...); ``message`` is the daemon's human-readable text.
+    ``io``, ``cancelled``, ...); ``message`` is the daemon's human-readable text. A
+    :class:`tessd.Error`.
     """
 
     def __init__(self, code: str, message: str, id: Optional[int] = None,
@@ -47,6 +122,20 @@ class TessdError(Exception):
         self.message = message
         self.id = id
         self.details = dict(details or {})
+
+
+class _ArrayRefused(TessdError, ValueError):
+    """An array the client refuses before sending (code ``invalid_mesh``): a TessdError, as
+    the daemon's answer would be, and a ValueError, as a bad argument."""
+
+
+class _InvalidReply(ProtocolError, TessdError):
+    """Bytes from the daemon's side that are no valid frame (e.g. another program listens on
+    the socket): a :class:`ProtocolError`, and a :class:`TessdError` (code ``invalid_frame``
+    or ``too_large``) as earlier versions raised."""
+
+    def __init__(self, message: str, code: str = "invalid_frame"):
+        TessdError.__init__(self, code, message)
 
 
 class Progress(NamedTuple):
@@ -69,6 +158,8 @@ def _error_from_frame(message: Mapping[str, Any]) -> TessdError:
 def _fresh(error: BaseException) -> BaseException:
     """A new exception like ``error`` (one shared instance raised in many threads would pile
     up tracebacks)."""
+    if isinstance(error, _InvalidReply):
+        return _InvalidReply(error.message, error.code)
     if isinstance(error, TessdError):
         return TessdError(error.code, error.message, error.id, error.details)
     if isinstance(error, DaemonUnavailable):
@@ -211,11 +302,11 @@ class Job:
         """Waits for the final reply and returns ``(result, arrays)``.
 
         Raises :class:`TessdError` for an error reply (code ``cancelled`` after a cancel),
-        :class:`DaemonUnavailable` if the connection was lost, ``TimeoutError`` if ``timeout``
-        seconds pass first (the job keeps running).
+        :class:`DaemonUnavailable` if the connection was lost, :class:`CallTimeout` (a
+        ``TimeoutError``) if ``timeout`` seconds pass first (the job keeps running).
         """
         if not self.wait(timeout):
-            raise TimeoutError("%s (request %d) did not finish within %gs" % (self.op, self.id, timeout))
+            raise CallTimeout("%s (request %d) did not finish within %gs" % (self.op, self.id, timeout))
         if self._error is not None:
             raise self._error
         return dict(self._result or {}), dict(self._arrays)
@@ -247,8 +338,10 @@ class Client:
     """A connection to a tessd daemon.
 
     ``socket`` is a path or bare name as for ``tessd serve --socket`` (default: the user's
-    default socket). ``timeout`` bounds connecting and is the default for :meth:`call`
-    (None: wait as long as it takes). ``use_numpy`` chooses how received arrays are returned
+    default socket). ``timeout`` (seconds; None: no bound) bounds connecting, and is the
+    default timeout of each :meth:`call` (and ``ping``, ``hello``, ``hold``, ``release``),
+    which bounds the wait for its reply once the request is sent; a call can give its own.
+    :meth:`submit` never waits. See the module's documentation. ``use_numpy`` chooses how received arrays are returned
     (default: numpy arrays when numpy is importable, else :class:`~tessd.arrays.RawArray`).
 
     Raises :class:`DaemonUnavailable` when nothing listens on the socket.
@@ -295,8 +388,13 @@ class Client:
             self._jobs[job_id] = job
         message: Dict[str, Any] = {"id": job_id, "op": op}
         if params is not None:
-            message["params"] = dict(params)
+            message["params"] = absolute_paths(op, params)
         try:
+            if op not in RAW_ARRAY_OPS:
+                try:
+                    arrays = prepare_arrays(arrays)
+                except ValueError as e:
+                    raise _ArrayRefused("invalid_mesh", "%s (not sent)" % e, job_id) from None
             pieces = encode_frame(message, arrays)
         except BaseException:
             with self._lock:
@@ -328,26 +426,30 @@ class Client:
         ``arrays`` maps names to numpy arrays, ``array.array`` objects, RawArrays or
         ``(dtype, shape, bytes)`` tuples; they are written without being copied. ``progress``
         is called as ``progress(fraction, stage, message)`` from whichever thread polls or
-        waits on the job.
+        waits on the job. Paths in ``params`` are made absolute and mesh arrays converted as
+        the module's documentation says.
         """
         return self._send_request(op, params, arrays, progress)
 
     def call(self, op: str, params: Optional[Mapping[str, Any]] = None, arrays: ArraysArg = None,
              progress: Optional[ProgressCallback] = None,
-             timeout: Optional[float] = None) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+             timeout: Optional[float] = _CLIENT_TIMEOUT) -> Tuple[Dict[str, Any], Dict[str, Any]]:
         """Sends a request and waits for its reply; returns ``(result, arrays)``.
 
         ``progress(fraction, stage, message)`` is called for each progress frame; returning
         ``False`` cancels the request (a ``cancel`` op is sent) and the call then raises
         :class:`TessdError` with code ``cancelled``. Error replies raise :class:`TessdError`.
-        ``timeout`` (default: the client's) makes the call cancel the request and raise
-        ``TimeoutError`` when it passes.
+        ``timeout`` bounds the wait for the reply, in seconds from when the request was sent
+        (default: the client's ``timeout``; ``None``: wait as long as the request runs); when
+        it passes, the call cancels the request and raises :class:`CallTimeout` (a
+        ``TimeoutError``).
         """
-        timeout = self.timeout if timeout is None else timeout
+        if timeout is _CLIENT_TIMEOUT:
+            timeout = self.timeout
         job = self._send_request(op, params, arrays, progress)
         if not job.wait(timeout):
             job.cancel()
-            raise TimeoutError("%s (request %d) did not finish within %gs; cancelled"
+            raise CallTimeout("%s (request %d) did not finish within %gs; cancelled"
                                % (op, job.id, timeout))
         return job.result(0)
 
@@ -462,7 +564,8 @@ def _reader_main(ref: "weakref.ref[Client]", conn: Any, use_numpy: bool,
             client._route(*frame)
             del client
     except ProtocolError as e:
-        failure = TessdError(e.code, "invalid frame from the daemon: %s" % e.message)
+        failure = _InvalidReply("invalid frame from %s (is it a tessd daemon?): %s"
+                                % (socket_path, e.message), e.code)
     except OSError as e:
         failure = DaemonUnavailable("lost the connection to %s: %s" % (socket_path, e))
     except BaseException as e:  # pragma: no cover - a bug; still fail the jobs
@@ -472,4 +575,5 @@ def _reader_main(ref: "weakref.ref[Client]", conn: Any, use_numpy: bool,
         client._fail_all(failure)
 
 
-__all__ = ["Client", "DaemonUnavailable", "Job", "Progress", "TessdError"]
+__all__ = ["CallTimeout", "Client", "DaemonUnavailable", "Error", "Job", "PATH_PARAMS", "Progress",
+           "TessdError", "absolute_paths"]

@@ -18,6 +18,7 @@ from typing import Any, Callable, Dict, Iterable, List, Mapping, NamedTuple, Opt
 
 from . import arrays as _arrays
 from .arrays import ITEMSIZE, WireArray, from_wire, has_numpy, product, to_wire
+from .errors import Error
 
 MAGIC = b"TSSD"
 VERSION = 1
@@ -35,8 +36,8 @@ _ZEROS = bytes(ALIGNMENT)
 ArraysArg = Union[None, Mapping[str, Any], Iterable[Tuple[str, Any]]]
 
 
-class ProtocolError(Exception):
-    """Bytes that are not a valid frame.
+class ProtocolError(Error):
+    """Bytes that are not a valid frame (a :class:`tessd.Error`).
 
     ``code`` is the protocol error code the daemon would use: ``invalid_frame`` or
     ``too_large``.

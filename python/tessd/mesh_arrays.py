@@ -16,9 +16,9 @@
 from __future__ import annotations
 
 import array
-from typing import Any, Dict, Iterator, List, NamedTuple, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterator, List, Mapping, NamedTuple, Optional, Sequence, Tuple
 
-from .arrays import ITEMSIZE, RawArray, TYPECODE, has_numpy, product
+from .arrays import INT_RANGE, ITEMSIZE, RawArray, TYPECODE, fit_integers, has_numpy, product
 
 if has_numpy():
     import numpy as _np
@@ -53,8 +53,8 @@ def _typed(value: Any, dtypes: Tuple[str, ...], width: Optional[int], what: str)
         arr = _np.asarray(value)
         name = "%s%d" % (arr.dtype.kind, arr.dtype.itemsize * 8) if arr.dtype.kind in "uif" else ""
         if name not in dtypes:
-            if dtypes[0].startswith("u") and arr.size and arr.dtype.kind in "iu" and arr.min() < 0:
-                raise ValueError("%s: negative index %d" % (what, int(arr.min())))
+            if dtypes[0].startswith("u") and arr.dtype.kind in "iu":
+                arr = fit_integers(arr, what, dtypes[0])  # refuses what does not fit
             arr = arr.astype("<" + dtypes[0][0] + str(ITEMSIZE[dtypes[0]]))
         if width is None:
             arr = arr.reshape(-1)
@@ -71,8 +71,13 @@ def _typed(value: Any, dtypes: Tuple[str, ...], width: Optional[int], what: str)
     else:
         flat = _flatten(value, width, what)
     dtype = dtypes[0]
-    if dtype.startswith("u") and any(v < 0 for v in flat):
-        raise ValueError("%s: negative index" % what)
+    if dtype.startswith("u"):
+        low, high = INT_RANGE[dtype]
+        for i, v in enumerate(flat):
+            if v < low or v > high:
+                raise ValueError("%s[%d] is %d: %s" % (
+                    what, i, v, "a negative index" if v < 0 else
+                    "above %d, the largest %s" % (high, dtype)))
     data = array.array(TYPECODE[dtype], flat)
     count = len(flat) if width is None else len(flat) // width
     shape = (count,) if width is None else (count, width)
@@ -106,8 +111,7 @@ def _faces_arrays(faces: Any) -> Dict[str, Any]:
             raise ValueError("a faces array must be [F, n]; pass (face_indices, face_sizes)")
         arr = faces
         if arr.dtype != _np.dtype("<u4"):
-            if arr.size and arr.min() < 0:
-                raise ValueError("faces: negative index %d" % int(arr.min()))
+            arr = fit_integers(arr, "faces", "u32")  # refuses what does not fit
             arr = arr.astype("<u4")
         return {"face_indices": _np.ascontiguousarray(arr)}
     # A sequence of polygons (lists of vertex indices, possibly of different sizes).
@@ -147,6 +151,28 @@ def mesh_to_arrays(positions: Any, faces: Any, normals: Any = None, uvs: Any = N
     if face_groups is not None:
         out["face_groups"] = _typed(face_groups, ("u32",), None, "face_groups")
     return out
+
+
+#: Mesh arrays the daemon reads as u32 (docs/protocol.md, "Mesh arrays").
+U32_ARRAYS = frozenset({"face_indices", "face_sizes", "normal_indices", "uv_indices",
+                        "crease_edges", "face_groups", "sharp_edges"})
+
+
+def prepare_arrays(arrays: Any) -> Optional[List[Tuple[str, Any]]]:
+    """The arrays of a request as ``(name, array)`` pairs, the integer mesh arrays
+    (:data:`U32_ARRAYS`) of another integer type (numpy's default int64, int32, uint64,
+    int16...) converted to the u32 the daemon reads when every value fits; ``ValueError``
+    naming the array, the value, its flat index and why (negative, too large) when one does
+    not.
+
+    Everything else goes as given (float arrays too: the daemon's dtype errors name them).
+    ``None`` stays ``None``; the caller's mapping is not changed.
+    """
+    if arrays is None:
+        return None
+    items = list(arrays.items()) if isinstance(arrays, Mapping) else list(arrays)
+    return [(name, fit_integers(value, name, "u32") if name in U32_ARRAYS else value)
+            for name, value in items]
 
 
 class MeshArrays(NamedTuple):
@@ -227,4 +253,5 @@ def arrays_to_mesh(arrays: Dict[str, Any]) -> MeshArrays:
     return MeshArrays(arrays["positions"], indices, sizes, *(arrays.get(k) for k in names))
 
 
-__all__ = ["MeshArrays", "arrays_to_mesh", "iter_faces", "mesh_to_arrays"]
+__all__ = ["MeshArrays", "U32_ARRAYS", "arrays_to_mesh", "iter_faces", "mesh_to_arrays",
+           "prepare_arrays"]

@@ -11,11 +11,14 @@ import socket
 import time
 from typing import Any, Optional
 
+from .errors import Error
 from .socket_path import is_windows
 
 
-class DaemonUnavailable(ConnectionError):
-    """No tessd daemon is listening on the socket (or the connection to it was lost)."""
+class DaemonUnavailable(ConnectionError, Error):
+    """No tessd daemon is listening on the socket (or the connection to it was lost).
+
+    A ``ConnectionError`` (so an ``OSError``) as before, and a :class:`tessd.Error`."""
 
 
 class UnixTransport:

@@ -22,16 +22,36 @@ python/requirements-cad.txt (the CAD venv, which STEP/IGES inputs need for OCP a
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 from .manifest import Asset, ManifestError, Op
 
+#: Where dask comes from (pyproject's `batch` extra, the CAD venv scripts/setup.sh makes).
+DASK_HINT = ("run it with the CAD venv's Python (.venv-cad/bin/python, which scripts/setup.sh "
+             "makes with dask[distributed] pinned), or install dask into this one: "
+             "pip install './python[batch]' from the tessd repository (dask[distributed] "
+             "2026.8.0)")
+
+
+def require_dask() -> None:
+    """Raises an ImportError saying where dask comes from when ``dask`` or ``distributed``
+    cannot be imported."""
+    try:
+        import dask  # noqa: F401
+        import distributed  # noqa: F401
+    except ImportError as e:
+        raise ImportError(f"Dask distributed, which tessd.batch runs on, is not importable "
+                          f"in {sys.executable} ({e}): {DASK_HINT}", name=e.name) from e
+
 
 def run(*args: Any, **kwargs: Any) -> Any:
-    """:func:`tessd.batch.runner.run` (imported on first use: it needs dask)."""
+    """:func:`tessd.batch.runner.run` (imported on first use: it needs dask; an ImportError
+    saying where dask comes from when it is missing)."""
+    require_dask()
     from .runner import run as _run
 
     return _run(*args, **kwargs)
 
 
-__all__ = ["Asset", "ManifestError", "Op", "run"]
+__all__ = ["Asset", "DASK_HINT", "ManifestError", "Op", "require_dask", "run"]

@@ -39,7 +39,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     if args.workers < 1:
         ap.error("--workers must be at least 1")
 
+    from . import require_dask
     from .manifest import ManifestError
+
+    try:
+        require_dask()
+    except ImportError as e:
+        print("tessd.batch: %s" % e, file=sys.stderr)
+        return 2
     from .runner import BatchError, run
 
     try:

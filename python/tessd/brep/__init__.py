@@ -21,6 +21,29 @@ from typing import Any, Dict, Optional
 from .document import FORMAT, VERSION
 
 
+#: What to do when OCP is missing (pyproject's `cad` extra, the venvs scripts/setup.sh makes).
+OCP_HINT = ("run it with the CAD venv's Python (.venv-cad/bin/python, cadquery 2.8 / OCP 7.9, or "
+            ".venv-b123d/bin/python, build123d 0.13 / OCP 8.0; scripts/setup.sh makes both), or "
+            "install OCP into this one: pip install './python[cad]' from the tessd repository "
+            "(cadquery-ocp 7.9), or pip install cadquery / build123d")
+
+
+def missing_ocp_message(error: ImportError) -> str:
+    """The message for an OCP that cannot be imported: what failed, in which Python, and
+    where OCP comes from (:data:`OCP_HINT`)."""
+    return (f"OCP (OpenCASCADE's Python bindings), which reading STEP / IGES / BREP files and "
+            f"OCP shapes needs, is not importable in {sys.executable} ({error}): {OCP_HINT}")
+
+
+def import_ocp() -> Any:
+    """The `tessd.brep.ocp` module, or an ImportError saying where OCP comes from."""
+    try:
+        from . import ocp
+    except ImportError as e:
+        raise ImportError(missing_ocp_message(e), name=e.name) from e
+    return ocp
+
+
 def _is_freecad(shape: Any) -> bool:
     """A FreeCAD `Part` object (Part.Shape, Part.Solid, ...) or a document object with a
     `Part.Shape` (its type's module says so: nothing of FreeCAD is imported to ask)."""
@@ -52,8 +75,8 @@ def export_shape(shape: Any, units: str = "mm", source: Optional[str] = None,
     try:
         from . import ocp
     except ImportError as e:
-        raise TypeError(f"not a FreeCAD Part.Shape ({type(shape).__name__}), and OCP, needed for "
-                        f"OCP / cadquery / build123d shapes, is not importable: {e}") from e
+        raise TypeError(f"not a FreeCAD Part.Shape ({type(shape).__name__}), and "
+                        f"{missing_ocp_message(e)}") from e
 
     return ocp.export_topods(ocp.to_topods(shape), units=units, source=source, sew=sew,
                              sew_tolerance=sew_tolerance)
@@ -65,11 +88,11 @@ def export_file(path: str, units: str = "mm", source: Optional[str] = None,
     IGES surface model or open STEP shell is sewn unless `sew=False`, as in `export_shape`)."""
     import os
 
-    from . import ocp
-
+    ocp = import_ocp()
     shape = ocp.read_file(path, units=units)
     return ocp.export_topods(shape, units=units, source=os.path.basename(path) if source is None else source,
                              sew=sew, sew_tolerance=sew_tolerance)
 
 
-__all__ = ["FORMAT", "VERSION", "export_shape", "export_file"]
+__all__ = ["FORMAT", "OCP_HINT", "VERSION", "export_shape", "export_file", "import_ocp",
+           "missing_ocp_message"]

@@ -40,7 +40,13 @@ def main(argv: Optional[List[str]] = None) -> int:
                          "tolerance, within 1e-6 and 1e-3 of its bounding-box diagonal)")
     args = ap.parse_args(argv)
 
-    from . import ocp
+    from . import import_ocp
+
+    try:
+        ocp = import_ocp()
+    except ImportError as e:
+        print(f"tessd.brep: {e}", file=sys.stderr)
+        return 1
 
     t0 = time.perf_counter()
     try:
