@@ -1,5 +1,6 @@
 """Builds the installable extension zip for one platform: `python3 blender_addon/build.py` ->
-blender_addon/dist/tessd-<version>-<platform>.zip (e.g. tessd-0.1.0-linux-x64.zip).
+dist/tessd-<version>-<platform>.zip at the repository's root (e.g. tessd-0.1.0-linux-x64.zip;
+`--out DIR` writes it elsewhere). Nothing is written into the source folder blender_addon/.
 
 The zip holds the add-on's files, as the subpackage `vendor/tessd` a copy of the `tessd`
 Python client made from python/tessd at build time (the add-on folder in git keeps no copy of
@@ -17,7 +18,10 @@ it; the zip still records mode 0755 for tools that honour it.
 
 When Blender's own extension tool is at hand (the `bpy` module's
 `bl_pkg/cli/blender_ext.py`, what `blender --command extension validate` runs), the zip is
-validated with it; `--no-validate` skips that, `--blender-ext PATH` names the tool.
+validated with it; `--no-validate` skips that, `--blender-ext PATH` names the tool. It is looked
+for (find_blender_ext) in the `bpy` module of the Python running build.py, in the `bpy` of the
+repository's .venv, and beside a `blender` on PATH (its bundled scripts folder); when none has
+it, the output says where it looked.
 """
 
 import argparse
@@ -33,6 +37,10 @@ import zipfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 CLIENT = os.path.join(REPO, "python", "tessd")
+#: Where the zip goes without --out: dist/ at the repository's root, outside the sources.
+DEFAULT_OUT = os.path.join(REPO, "dist")
+#: The tool's path below a `bpy` package folder (or a Blender install's `<version>/` folder).
+BLENDER_EXT = os.path.join("scripts", "addons_core", "bl_pkg", "cli", "blender_ext.py")
 #: Files of the add-on folder that are not part of the extension.
 EXCLUDE = {"build.py"}
 
@@ -145,11 +153,43 @@ def build(out_dir, binary=None, platform=None):
     return path
 
 
-def find_blender_ext():
-    pattern = os.path.join(REPO, ".venv", "lib", "python3*", "site-packages", "bpy", "*",
-                           "scripts", "addons_core", "bl_pkg", "cli", "blender_ext.py")
-    hits = sorted(glob.glob(pattern))
-    return hits[-1] if hits else None
+def blender_ext_places():
+    """The glob patterns where Blender's blender_ext.py may be, in the order they are tried:
+    the `bpy` module of the running Python (importable, not imported: importing bpy takes
+    seconds), the `bpy` of the repository's .venv, then a `blender` on PATH (a Blender install
+    keeps its scripts in `<version>/scripts` beside the executable, or below share/blender on
+    Linux distributions)."""
+    places = []
+    try:
+        import importlib.machinery
+
+        # The installed package on sys.path (an imported bpy would answer with its scripts'
+        # module folder instead).
+        spec = importlib.machinery.PathFinder.find_spec("bpy")
+    except (ImportError, ValueError):
+        spec = None
+    if spec is not None and spec.submodule_search_locations:
+        for folder in spec.submodule_search_locations:
+            places.append(os.path.join(folder, "*", BLENDER_EXT))
+    places.append(os.path.join(REPO, ".venv", "lib", "python3*", "site-packages", "bpy", "*",
+                               BLENDER_EXT))
+    import shutil
+
+    blender = shutil.which("blender")
+    if blender:
+        real = os.path.dirname(os.path.realpath(blender))
+        places.append(os.path.join(real, "*", BLENDER_EXT))
+        places.append(os.path.join(os.path.dirname(real), "share", "blender", "*", BLENDER_EXT))
+    return places
+
+
+def find_blender_ext(places=None):
+    """The newest blender_ext.py found in :func:`blender_ext_places`, or None."""
+    for pattern in blender_ext_places() if places is None else places:
+        hits = sorted(glob.glob(pattern))
+        if hits:
+            return hits[-1]
+    return None
 
 
 def validate(zip_path, tool):
@@ -160,9 +200,11 @@ def validate(zip_path, tool):
     return proc.returncode
 
 
-def main(argv=None):
+def make_parser():
+    """The command line's parser."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=os.path.join(HERE, "dist"), help="output folder")
+    ap.add_argument("--out", default=DEFAULT_OUT,
+                    help="output folder (default: dist/ at the repository's root, %s)" % DEFAULT_OUT)
     ap.add_argument("--no-validate", action="store_true")
     ap.add_argument("--blender-ext", help="path of Blender's bl_pkg/cli/blender_ext.py")
     ap.add_argument("--binary", help="the tessd executable to bundle as bin/tessd (default: "
@@ -170,17 +212,24 @@ def main(argv=None):
     ap.add_argument("--platform", default=this_platform(),
                     help="Blender platform of the binary (default: this machine's, %s)"
                          % this_platform())
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None):
+    args = make_parser().parse_args(argv)
     if args.platform not in PLATFORMS:
         print("build.py: warning: %s is not one of Blender's platforms (%s)"
               % (args.platform, ", ".join(PLATFORMS)), file=sys.stderr)
     path = build(args.out, args.binary, args.platform)
     print(path)
     if not args.no_validate:
-        tool = args.blender_ext or find_blender_ext()
+        places = blender_ext_places()
+        tool = args.blender_ext or find_blender_ext(places)
         if tool is None:
-            print("not validated: Blender's blender_ext.py not found (install bpy in .venv, or "
-                  "run `blender --command extension validate %s`)" % path)
+            print("not validated: Blender's blender_ext.py not found; looked in:\n  %s\n"
+                  "(pip install bpy into the Python running build.py, put `blender` on PATH, pass "
+                  "--blender-ext PATH, or run `blender --command extension validate %s`)"
+                  % ("\n  ".join(places), path))
         elif validate(path, tool) != 0:
             return 1
     return 0

@@ -201,6 +201,26 @@ def unit_results(created, unit, mesh, suffix, replace):
     return out
 
 
+def mesh_counts(mesh):
+    """(vertices, faces, triangles) of a Blender mesh, as the viewport's Statistics overlay
+    counts them: faces are polygons (a quad is one face), triangles what they split into."""
+    sizes = np.empty(len(mesh.polygons), dtype=np.int64)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    return len(mesh.vertices), len(mesh.polygons), int((sizes - 2).sum())
+
+
+def faces_text(faces, triangles):
+    """`500 faces (968 triangles)`; `278 faces` when every face is a triangle."""
+    text = "%d faces" % faces
+    return text if triangles == faces else "%s (%d triangles)" % (text, triangles)
+
+
+def mesh_counts_text(mesh):
+    """`507 vertices, 500 faces (968 triangles)`: a mesh's figures as Blender shows them."""
+    vertices, faces, triangles = mesh_counts(mesh)
+    return "%d vertices, %s" % (vertices, faces_text(faces, triangles))
+
+
 def abs_path(path):
     return os.path.abspath(bpy.path.abspath(path))
 

@@ -5,8 +5,10 @@ once). Every level carries what LOD0 has: UV maps, colour and generic attributes
 groups, shape keys, sharp faces and edges (attributes.py); what cannot travel is reported. The result is a collection `<name>_LODs`
 holding `<name>_LOD0` (a copy of the input) .. `<name>_LOD<n>`, all with the source's
 transform (or side by side along X with `side_by_side`). With `usd_path`, the daemon also
-writes one stage with the `LOD` variant set (docs/protocol.md, lod); with several selected
-objects each gets `<stem>_<name>.usda` and `usd_path` becomes a stage referencing them.
+writes, per object, a stage with the `LOD` variant set (docs/protocol.md, lod), the points in
+object space, as `<stem>_<name>.usda`; `usd_path` is a stage referencing them, one Xform per
+object carrying its world matrix (as Export USD via tessd writes them), however many objects
+are selected: one object is placed in the stage as it is in Blender, not at the origin.
 """
 
 import os
@@ -72,9 +74,10 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
         if usd and not usd.lower().endswith(".usda"):
             raise UserError("tessd: the USD file must end in .usda, got %s" % usd)
         tasks = [skipped_task(name, why) for name, why in skipped]
-        self._unit_count = len(units)
         for unit in units:
-            path = common.per_object_path(usd, unit.names[0], len(units)) if usd else ""
+            # Always one file per unit and `usd` referencing them with the objects' world
+            # matrices: the daemon writes points in object space, without a transform.
+            path = common.per_object_path(usd, unit.names[0], 2) if usd else ""
             tasks.append(Task(unit.label, self._steps(context, unit, levels, path), unit=unit,
                               usd_file=path))
         return tasks
@@ -125,24 +128,23 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
                     obj.matrix_world = m
                 results.append(obj)
         task.dropped = attributes.describe_dropped(req.sent, _dropped(req.result))
+        # The report counts what Blender's statistics show: the levels' meshes as built.
+        task.counts = [common.mesh_counts_text(m) for m in meshes]
         return results
 
     def finish(self, context, tasks, results):
-        files = [(t.unit.objects[0], t.usd_file) for t in tasks if t.usd_file]
-        if files and self._unit_count > 1:
+        # Every object of a unit references the unit's file, with its own world matrix.
+        files = [(obj, t.usd_file) for t in tasks if t.usd_file for obj in t.unit.objects]
+        if files:
             common.write_assembly(common.abs_path(self.usd_path), context, files)
 
     def summary(self, context, tasks):
         dropped = ["%s: %s" % (t.label, ", ".join(t.dropped)) for t in tasks if t.dropped]
         if dropped:
             self.report({'WARNING'}, "tessd LODs: not carried to the levels: " + "; ".join(dropped))
-        parts = []
-        for t in tasks:
-            levels = t.requests[0].result.get("levels", [])
-            parts.append("%s: LOD0 %d vertices, %s" % (
-                t.label, t.requests[0].result.get("input_vertices", 0),
-                ", ".join("LOD%d %d" % (lv.get("level", i + 1), lv.get("output_vertices", 0))
-                          for i, lv in enumerate(levels))))
+        parts = ["%s: %s" % (t.label, ", ".join("LOD%d %s" % (i, text)
+                                                for i, text in enumerate(t.counts)))
+                 for t in tasks]
         return "tessd LODs: " + "; ".join(parts)
 
 

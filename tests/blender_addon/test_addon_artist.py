@@ -561,11 +561,32 @@ def test_lods_with_usd_are_one_request(bpy, jobs, tmp_path):
     assert {"output", "return_arrays"} <= set(ops[0][1])
     assert names("Suzanne_LOD") == ["Suzanne_LOD0", "Suzanne_LOD1", "Suzanne_LOD2"]
     stage = Usd.Stage.Open(str(usd))
-    vset = stage.GetDefaultPrim().GetVariantSets().GetVariantSet("LOD")
+    # usd references the object's own file (one_Suzanne.usda) under an Xform with its matrix
+    [prim] = [p for p in stage.Traverse() if p.GetVariantSets().HasVariantSet("LOD")]
+    vset = prim.GetVariantSets().GetVariantSet("LOD")
     assert vset.GetVariantNames() == ["LOD0", "LOD1", "LOD2"]
     vset.SetVariantSelection("LOD2")
     mesh = [p for p in stage.Traverse() if p.GetTypeName() == "Mesh"][0]
     assert len(mesh.GetAttribute("points").Get()) == len(bpy.data.objects["Suzanne_LOD2"].data.vertices)
+
+
+def test_lods_report_counts_faces_as_blender_shows_them(bpy, capfd):
+    """Issue 32: the report counted triangles where Blender's statistics show faces. Suzanne
+    has 500 faces (968 triangles); each level is reported as its mesh in Blender counts."""
+    src = scenes.suzanne()
+    select(src)
+    capfd.readouterr()
+    assert bpy.ops.tessd.generate_lods(levels="50%,20%") == {'FINISHED'}
+    [line] = [ln for ln in reports(capfd, "Info") if "tessd LODs:" in ln]
+    print("\n" + line)
+    assert "LOD0 507 vertices, 500 faces (968 triangles)" in line
+    for i in (1, 2):
+        lod = bpy.data.objects["Suzanne_LOD%d" % i]
+        tris = sum(len(p.vertices) - 2 for p in lod.data.polygons)
+        text = "LOD%d %d vertices, %d faces" % (i, len(lod.data.vertices), len(lod.data.polygons))
+        if tris != len(lod.data.polygons):
+            text += " (%d triangles)" % tris
+        assert text in line, (text, line)
 
 
 def test_progress_is_in_the_status_bar(bpy, jobs):

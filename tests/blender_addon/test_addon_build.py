@@ -11,6 +11,7 @@ import subprocess
 import sys
 import tomllib
 import zipfile
+from pathlib import Path
 
 import locate
 from addon_env import ADDON, REPO
@@ -100,6 +101,50 @@ def test_validate_rejects_a_broken_manifest(tmp_path):
         z.writestr("blender_manifest.toml", 'schema_version = "1.0.0"\nname = "x"\n')
         z.writestr("__init__.py", "")
     assert build.validate(str(bad), build.find_blender_ext()) != 0
+
+
+def test_default_output_is_outside_the_sources():
+    """Without --out the zip goes to dist/ at the repository's root, not into blender_addon/."""
+    build = _build_module()
+    out = build.make_parser().parse_args([]).out
+    assert out == str(REPO / "dist") == build.DEFAULT_OUT
+    assert not out.startswith(str(REPO / "blender_addon"))
+
+
+def test_validator_is_found_in_the_running_python_and_on_path(tmp_path, monkeypatch):
+    """build.py looks for Blender's blender_ext.py in the running Python's bpy (here .venv's),
+    then beside a `blender` on PATH, and says where it looked when none has it."""
+    import sysconfig
+
+    build = _build_module()
+    places = build.blender_ext_places()
+    # The running Python (.venv's) has bpy installed: the first place is its package.
+    assert places[0] == str(Path(sysconfig.get_paths()["purelib"]) / "bpy" / "*" / build.BLENDER_EXT)
+    assert build.find_blender_ext([places[0]]) is not None
+    # A Blender install on PATH: <prefix>/blender and <prefix>/5.0/scripts/addons_core/...
+    install = tmp_path / "blender-5.0-linux-x64"
+    tool = install / "5.0" / "scripts" / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
+    tool.parent.mkdir(parents=True)
+    tool.write_text("# stand-in\n")
+    exe = install / "blender"
+    exe.write_text("#!/bin/sh\n")
+    exe.chmod(0o755)
+    monkeypatch.setenv("PATH", "%s:/usr/bin:/bin" % install)
+    places = build.blender_ext_places()
+    assert str(install / "*" / build.BLENDER_EXT) in places
+    assert build.find_blender_ext([p for p in places if p.startswith(str(install))]) == str(tool)
+    # Nowhere: the output names every place it looked.
+    monkeypatch.setattr(build, "blender_ext_places", lambda: [str(tmp_path / "nowhere" / "*.py")])
+    monkeypatch.setattr(build, "build", lambda out, binary, plat: str(tmp_path / "x.zip"))
+    import contextlib
+    import io
+
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert build.main(["--out", str(tmp_path)]) == 0
+    print("\n" + text.getvalue())
+    assert "blender_ext.py not found; looked in:" in text.getvalue()
+    assert str(tmp_path / "nowhere" / "*.py") in text.getvalue()
 
 
 def test_installed_and_registered(addon):

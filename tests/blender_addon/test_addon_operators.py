@@ -151,14 +151,74 @@ def test_generate_lods(bpy, tmp_path):
             level["output_vertices"], level["output_faces"])
     for o in coll.objects:
         assert same_matrix(o.matrix_world, src.matrix_world)
+    assert (tmp_path / "lods_Suzanne.usda").is_file()  # the object's chain, usd references it
     stage = Usd.Stage.Open(str(usd))
-    root = stage.GetDefaultPrim()
+    root = lod_prim(stage)
     vset = root.GetVariantSets().GetVariantSet("LOD")
     assert vset.GetVariantNames() == ["LOD0", "LOD1", "LOD2", "LOD3"]
     assert vset.GetVariantSelection() == "LOD0"
     vset.SetVariantSelection("LOD2")
     mesh = [p for p in stage.Traverse() if p.GetTypeName() == "Mesh"][0]
     assert len(mesh.GetAttribute("points").Get()) == ref["levels"][1]["output_vertices"]
+
+
+def lod_prim(stage):
+    """The prim holding the `LOD` variant set (the object's, below the assembly's Xform)."""
+    [prim] = [p for p in stage.Traverse() if p.GetVariantSets().HasVariantSet("LOD")]
+    return prim
+
+
+def world_bounds(obj):
+    """(min, max) of the object's vertices in world space, as Blender places them."""
+    m = np.array(obj.matrix_world, dtype=np.float64)
+    co = np.empty(len(obj.data.vertices) * 3, dtype=np.float64)
+    obj.data.vertices.foreach_get("co", co)
+    co = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+    return co.min(axis=0), co.max(axis=0)
+
+
+@pytest.mark.parametrize("count", [1, 2])
+def test_generate_lods_usd_has_the_world_transform(bpy, tmp_path, count):
+    """Issue 32: with one object selected the stage held object-space points and no transform
+    (an OBJ import, rotated 90° about X, lay on its back); with two it was right. Now one
+    object is written as two are: its file, referenced under an Xform with its world matrix."""
+    from pxr import Usd, UsdGeom
+
+    objs = []
+    for i in range(count):
+        obj = scenes.suzanne("Monkey%d" % i)
+        obj.rotation_euler = (np.pi / 2, 0.0, 0.3 * i)  # as Blender's OBJ importer leaves it
+        obj.location = (1.5 + 4 * i, -2.0, 0.75)
+        obj.scale = (2.0, 2.0, 2.0)
+        objs.append(obj)
+    bpy.context.view_layer.update()
+    select(*objs)
+    usd = tmp_path / "lods.usda"
+    assert bpy.ops.tessd.generate_lods(levels="50%", usd_path=str(usd)) == {'FINISHED'}
+    stage = Usd.Stage.Open(str(usd))
+    assert UsdGeom.GetStageUpAxis(stage) == "Z"
+    meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    assert len(meshes) == count
+    cache = UsdGeom.BBoxCache(Usd.TimeCode.Default(), [UsdGeom.Tokens.default_])
+    for obj in objs:
+        [mesh] = [p for p in meshes if str(p.GetPath()).split("/")[2] == obj.name]
+        xf = UsdGeom.Xformable(mesh).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+        want = np.array(obj.matrix_world, dtype=np.float64).T  # USD: row vectors
+        print("\n%s %s world transform:\n%s" % (obj.name, mesh.GetPath(), np.array(xf)))
+        assert np.allclose(np.array(xf), want, atol=1e-6), (np.array(xf), want)
+        # The stage's points (LOD0, the default variant) placed by the stage's transform.
+        points = np.array(UsdGeom.Mesh(mesh).GetPointsAttr().Get(), dtype=np.float64)
+        world = np.c_[points, np.ones(len(points))] @ np.array(xf)
+        lo, hi = world_bounds(obj)
+        print("bounds: usd %s %s, blender %s %s" % (world[:, :3].min(0), world[:, :3].max(0),
+                                                   lo, hi))
+        # lying on its back would swap the Y and Z extents
+        assert np.allclose(world[:, :3].min(axis=0), lo, atol=1e-4)
+        assert np.allclose(world[:, :3].max(axis=0), hi, atol=1e-4)
+        # usd-core's own bound agrees (an axis-aligned box holding the points)
+        box = cache.ComputeWorldBound(mesh).ComputeAlignedRange()
+        assert np.all(np.array(box.GetMin()) <= lo + 1e-4)
+        assert np.all(np.array(box.GetMax()) >= hi - 1e-4)
 
 
 def test_generate_lods_side_by_side_without_usd(bpy, tmp_path):
