@@ -306,7 +306,8 @@ class Job:
         ``TimeoutError``) if ``timeout`` seconds pass first (the job keeps running).
         """
         if not self.wait(timeout):
-            raise CallTimeout("%s (request %d) did not finish within %gs" % (self.op, self.id, timeout))
+            raise CallTimeout("%s (request %d) did not finish within %gs"
+                              % (self.op, self.id, timeout))
         if self._error is not None:
             raise self._error
         return dict(self._result or {}), dict(self._arrays)
