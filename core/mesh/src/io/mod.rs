@@ -10,7 +10,7 @@
 //! | format | read | written |
 //! |---|---|---|
 //! | OBJ | positions, n-gons, `vt`/`vn` (face-varying), groups (`usemtl`, else `g`) | all of these |
-//! | PLY | positions, n-gons, per-vertex `nx ny nz` and `s t`/`u v` | binary LE; normals/UVs when per-vertex |
+//! | PLY | positions, n-gons, per-vertex `nx ny nz` and `s t`/`u v` | binary LE; normals and UVs as `nx ny nz` / `s t` (a vertex whose corners differ is split, one vertex per value) |
 //! | STL | triangles (ASCII or binary), equal positions welded | binary, fan-triangulated |
 //! | OFF | positions, n-gons (`OFF`, `COFF`, `NOFF`, `STOFF` headers) | ASCII `OFF` |
 //!
@@ -294,25 +294,162 @@ fn write_named(
 
 /// What writing `mesh` as `format` leaves out, by protocol name (see
 /// [`Mesh::carried_names`]): no format here holds creases, sharp edges or generic attributes;
-/// OBJ keeps normals, UVs and face groups; PLY keeps normals and UVs only when they are per
-/// vertex; STL and OFF keep positions and faces alone.
+/// OBJ keeps normals, UVs and face groups; PLY keeps normals and UVs (per vertex: a vertex
+/// with several is split, see [`written_counts`]); STL and OFF keep positions and faces alone.
 pub fn dropped_by_format(mesh: &Mesh, format: Format) -> Vec<String> {
-    let kept = |name: &str| match (format, name) {
-        (Format::Obj, "normals" | "uvs" | "face_groups") => true,
-        (Format::Ply, "normals") => mesh
-            .normals
-            .as_ref()
-            .is_some_and(|n| per_vertex(mesh, n).is_some()),
-        (Format::Ply, "uvs") => mesh
-            .uvs
-            .as_ref()
-            .is_some_and(|t| per_vertex(mesh, t).is_some()),
-        _ => false,
-    };
+    let kept = |name: &str| format_carries(format, name);
     mesh.carried_names()
         .into_iter()
         .filter(|n| !kept(n))
         .collect()
+}
+
+/// Whether a file of `format` holds what the protocol calls `name` (`normals`, `uvs`,
+/// `crease_edges`, `face_groups`, `sharp_edges`, a generic attribute's label): OBJ holds
+/// normals, UVs and face groups, PLY normals and UVs, STL and OFF none of them.
+pub fn format_carries(format: Format, name: &str) -> bool {
+    matches!(
+        (format, name),
+        (Format::Obj, "normals" | "uvs" | "face_groups") | (Format::Ply, "normals" | "uvs")
+    )
+}
+
+/// What a file of `format` written from a mesh holds, as a reader counts it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct WrittenCounts {
+    /// Vertices in the file (PLY: after the seam split; STL: the mesh's, which a reader
+    /// welds back from the triangles' corners).
+    pub vertices: usize,
+    /// Faces in the file: the mesh's polygons, or for STL the triangles of their fan
+    /// triangulation.
+    pub faces: usize,
+    /// Whether the faces are the fan triangulation's triangles (STL).
+    pub triangulated: bool,
+    /// Vertices PLY added by splitting a vertex whose corners carry several UVs or normals
+    /// (one vertex per distinct pair, as exporters do); 0 for the other formats.
+    pub split_vertices: usize,
+}
+
+/// The counts a file of `format` holds when [`write_path`] writes `mesh` there.
+pub fn written_counts(mesh: &Mesh, format: Format) -> WrittenCounts {
+    let split_vertices = match format {
+        Format::Ply => split_at_seams(mesh).map_or(0, |s| s.source.len()),
+        _ => 0,
+    };
+    let triangulated = format == Format::Stl;
+    WrittenCounts {
+        vertices: mesh.vertex_count() + split_vertices,
+        faces: if triangulated {
+            mesh.triangle_count()
+        } else {
+            mesh.face_count()
+        },
+        triangulated,
+        split_vertices,
+    }
+}
+
+/// A mesh's vertices split so that its normals and UVs are per vertex, as PLY stores them.
+pub(crate) struct SeamSplit {
+    /// For each added vertex (numbered after the mesh's own), the vertex it copies.
+    pub source: Vec<u32>,
+    /// The faces' corners on the split vertices.
+    pub face_indices: Vec<u32>,
+    /// One normal per split vertex (mesh vertices first), when the mesh has normals.
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// One UV per split vertex, when the mesh has UVs.
+    pub uvs: Option<Vec<[f32; 2]>>,
+}
+
+/// Splits every vertex whose corners carry different UVs or normals into one vertex per
+/// distinct (UV, normal) pair: the first pair a vertex meets keeps its index, the others get
+/// new vertices after the mesh's. `None` when nothing needs splitting (no face-varying values,
+/// or one value per vertex already).
+pub(crate) fn split_at_seams(mesh: &Mesh) -> Option<SeamSplit> {
+    if mesh.normals.is_none() && mesh.uvs.is_none() {
+        return None;
+    }
+    let uv_ok = mesh
+        .uvs
+        .as_ref()
+        .is_none_or(|t| per_vertex(mesh, t).is_some());
+    let n_ok = mesh
+        .normals
+        .as_ref()
+        .is_none_or(|n| per_vertex(mesh, n).is_some());
+    if uv_ok && n_ok {
+        return None;
+    }
+    // The key of a corner: its UV and normal bits (-0.0 read as 0.0, as `==` does).
+    let bits = |x: f32| (x + 0.0).to_bits();
+    let key = |c: usize| -> [u32; 5] {
+        let mut k = [0u32; 5];
+        if let Some(t) = &mesh.uvs {
+            let v = t.values[t.indices[c] as usize];
+            k[0] = bits(v[0]);
+            k[1] = bits(v[1]);
+        }
+        if let Some(n) = &mesh.normals {
+            let v = n.values[n.indices[c] as usize];
+            k[2] = bits(v[0]);
+            k[3] = bits(v[1]);
+            k[4] = bits(v[2]);
+        }
+        k
+    };
+    let n = mesh.positions.len();
+    let mut first: Vec<Option<[u32; 5]>> = vec![None; n];
+    let mut extra: std::collections::HashMap<(u32, [u32; 5]), u32> = Default::default();
+    let mut source: Vec<u32> = Vec::new();
+    let mut corner_of: Vec<usize> = vec![usize::MAX; n];
+    let mut extra_corner: Vec<usize> = Vec::new();
+    let mut face_indices = Vec::with_capacity(mesh.face_indices.len());
+    for (c, &v) in mesh.face_indices.iter().enumerate() {
+        let k = key(c);
+        let slot = &mut first[v as usize];
+        let out = match slot {
+            None => {
+                *slot = Some(k);
+                corner_of[v as usize] = c;
+                v
+            }
+            Some(f) if *f == k => v,
+            Some(_) => *extra.entry((v, k)).or_insert_with(|| {
+                source.push(v);
+                extra_corner.push(c);
+                (n + source.len() - 1) as u32
+            }),
+        };
+        face_indices.push(out);
+    }
+    // Each split vertex's values from one of its corners (unused vertices get zeros).
+    let corners: Vec<usize> = corner_of.into_iter().chain(extra_corner).collect();
+    let gather = |f: &dyn Fn(usize) -> [f32; 3]| -> Vec<[f32; 3]> {
+        corners
+            .iter()
+            .map(|&c| if c == usize::MAX { [0.0; 3] } else { f(c) })
+            .collect()
+    };
+    let normals = mesh
+        .normals
+        .as_ref()
+        .map(|a| gather(&|c| a.values[a.indices[c] as usize]));
+    let uvs = mesh.uvs.as_ref().map(|a| {
+        gather(&|c| {
+            let t = a.values[a.indices[c] as usize];
+            [t[0], t[1], 0.0]
+        })
+        .into_iter()
+        .map(|t| [t[0], t[1]])
+        .collect()
+    });
+    Some(SeamSplit {
+        source,
+        face_indices,
+        normals,
+        uvs,
+    })
 }
 
 /// Per-vertex values for a face-varying attribute, when every corner of a vertex uses the same

@@ -10,12 +10,14 @@
 //! allocate. Data is decoded straight out of the 64 KiB read buffer; triangle files with a
 //! `uchar` count and `int`/`uint` indices in little-endian take a dedicated fast path.
 //!
-//! Write: binary little-endian, `float x y z`, plus `nx ny nz` / `s t` when the mesh's normals /
-//! UVs are per-vertex (one value per vertex, as PLY stores them; otherwise they are left out),
-//! and faces as `list uchar int` (`uint` count when a face has more than 255 corners).
+//! Write: binary little-endian, `float x y z`, plus `nx ny nz` / `s t` when the mesh has normals /
+//! UVs (one value per vertex, as PLY stores them: a vertex whose corners carry several, at a UV
+//! seam or a sharp normal, is split into one vertex per distinct value, as exporters do; the
+//! added vertices follow the mesh's own), and faces as `list uchar int` (`uint` count when a
+//! face has more than 255 corners). Blender reads `s t`, MeshLab reads them too.
 
 use super::source::{BUF_SIZE, Source, element_limit, parse_f64, parse_i64, show, tokens};
-use super::{ReadOptions, per_vertex};
+use super::{ReadOptions, per_vertex, split_at_seams};
 use crate::{FaceVarying, Mesh, MeshError};
 use std::io::{Read, Write};
 
@@ -792,14 +794,55 @@ pub(crate) fn read<R: Read>(
     Ok(mesh)
 }
 
-/// Writes `mesh` as binary PLY; with `f64_positions`, those as `double` x, y, z.
+/// Writes `mesh` as binary PLY; with `f64_positions`, those as `double` x, y, z. Normals and
+/// UVs are per vertex in PLY: a vertex whose corners carry several is split first
+/// ([`split_at_seams`]).
 pub(crate) fn write(
     mesh: &Mesh,
     w: &mut impl Write,
     f64_positions: Option<&[[f64; 3]]>,
 ) -> std::io::Result<()> {
-    let normals = mesh.normals.as_ref().and_then(|n| per_vertex(mesh, n));
-    let uvs = mesh.uvs.as_ref().and_then(|t| per_vertex(mesh, t));
+    let Some(split) = split_at_seams(mesh) else {
+        let normals = mesh.normals.as_ref().and_then(|n| per_vertex(mesh, n));
+        let uvs = mesh.uvs.as_ref().and_then(|t| per_vertex(mesh, t));
+        return write_vertices(mesh, w, f64_positions, normals, uvs);
+    };
+    let copies = |v: &u32| *v as usize;
+    let positions: Vec<[f32; 3]> = mesh
+        .positions
+        .iter()
+        .copied()
+        .chain(split.source.iter().map(|v| mesh.positions[copies(v)]))
+        .collect();
+    let f64_split: Option<Vec<[f64; 3]>> = f64_positions.map(|f| {
+        f.iter()
+            .copied()
+            .chain(split.source.iter().map(|v| f[copies(v)]))
+            .collect()
+    });
+    let split_mesh = Mesh {
+        positions,
+        face_offsets: mesh.face_offsets.clone(),
+        face_indices: split.face_indices,
+        ..Mesh::default()
+    };
+    write_vertices(
+        &split_mesh,
+        w,
+        f64_split.as_deref(),
+        split.normals,
+        split.uvs,
+    )
+}
+
+/// Writes `mesh`'s positions and faces as binary PLY with the given per-vertex normals and UVs.
+fn write_vertices(
+    mesh: &Mesh,
+    w: &mut impl Write,
+    f64_positions: Option<&[[f64; 3]]>,
+    normals: Option<Vec<[f32; 3]>>,
+    uvs: Option<Vec<[f32; 2]>>,
+) -> std::io::Result<()> {
     let big_faces = mesh.face_offsets.windows(2).any(|w| w[1] - w[0] > 255);
     let index_type = if mesh.positions.len() > i32::MAX as usize {
         "uint"
@@ -917,6 +960,56 @@ mod tests {
         let back = parse(&out).unwrap();
         assert_eq!(back.positions, m.positions);
         assert_eq!(back.normals.unwrap().values, [[0.0, 0.0, 1.0]; 3]);
+    }
+
+    /// A quad split into two triangles whose UVs meet at a seam along the diagonal, with a
+    /// normal per face: PLY gets a vertex per distinct (UV, normal) and reads them back.
+    #[test]
+    fn seams_split_vertices_and_read_back() {
+        let mut m = Mesh {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            ..Mesh::default()
+        };
+        m.push_face(&[0, 1, 2]);
+        m.push_face(&[0, 2, 3]);
+        // The second face's UVs are shifted by 0.5 on vertices 0 and 2 (a seam); vertex 3 has
+        // one UV only.
+        m.uvs = Some(crate::FaceVarying {
+            values: vec![
+                [0.0, 0.0],
+                [1.0, 0.0],
+                [1.0, 1.0],
+                [0.5, 0.0],
+                [1.5, 1.0],
+                [0.0, 1.0],
+            ],
+            indices: vec![0, 1, 2, 3, 4, 5],
+        });
+        let counts = crate::io::written_counts(&m, Format::Ply);
+        assert_eq!((counts.vertices, counts.split_vertices), (6, 2));
+        assert!(crate::io::dropped_by_format(&m, Format::Ply).is_empty());
+        let mut out = Vec::new();
+        crate::io::write(&m, &mut out, Format::Ply).unwrap();
+        assert!(String::from_utf8_lossy(&out).contains("property float s\nproperty float t\n"));
+        let back = parse(&out).unwrap();
+        assert_eq!(back.vertex_count(), 6);
+        assert_eq!(back.face(0), &[0, 1, 2]);
+        assert_eq!(back.face(1), &[4, 5, 3]);
+        assert_eq!(back.positions[4], m.positions[0]);
+        assert_eq!(back.positions[5], m.positions[2]);
+        // Every corner keeps its UV.
+        let uv = |mesh: &Mesh, c: usize| {
+            let t = mesh.uvs.as_ref().unwrap();
+            t.values[t.indices[c] as usize]
+        };
+        for c in 0..6 {
+            assert_eq!(uv(&back, c), uv(&m, c), "corner {c}");
+        }
+        // Written again, the read-back mesh needs no split: one UV per vertex.
+        assert_eq!(
+            crate::io::written_counts(&back, Format::Ply).split_vertices,
+            0
+        );
     }
 
     #[test]
