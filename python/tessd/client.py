@@ -342,8 +342,9 @@ class Client:
     default socket). ``timeout`` (seconds; None: no bound) bounds connecting, and is the
     default timeout of each :meth:`call` (and ``ping``, ``hello``, ``hold``, ``release``),
     which bounds the wait for its reply once the request is sent; a call can give its own.
-    :meth:`submit` never waits. See the module's documentation. ``use_numpy`` chooses how received arrays are returned
-    (default: numpy arrays when numpy is importable, else :class:`~tessd.arrays.RawArray`).
+    :meth:`submit` never waits. See the module's documentation. ``use_numpy`` chooses how
+    received arrays are returned (default: numpy arrays when numpy is importable, else
+    :class:`~tessd.arrays.RawArray`).
 
     Raises :class:`DaemonUnavailable` when nothing listens on the socket.
     """
