@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine for tessd: system packages, the Rust build, and the Python venvs with
 # pinned versions. Safe to run again; it only does what is missing. `--demo`: only what
-# `tessd demo` needs, the release build (its inputs are compiled into the binary and it runs
-# nothing else: no apt package, no venv, nothing downloaded but the crates). `--fuzz`: only what
-# scripts/fuzz.sh needs, the nightly toolchain and cargo-fuzz.
+# `tessd demo` needs: the release build (its inputs are compiled into the binary) and, for its
+# pictures, the Vulkan loader and Mesa's software Vulkan driver (lavapipe) when missing; no venv,
+# nothing downloaded but the crates and those two packages. `--fuzz`: only what scripts/fuzz.sh
+# needs, the nightly toolchain and cargo-fuzz.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -62,11 +63,23 @@ if [ "${1:-}" = "--fuzz" ]; then
   exit 0
 fi
 
-# `setup.sh --demo` skips all of this: the demo needs only the binary.
-if [ "${1:-}" != "--demo" ]; then
+# What `tessd demo` needs besides the binary: its pictures render on Vulkan, without a GPU on
+# lavapipe, so the loader and the driver (tests/demo checks that this list is all `--demo`
+# installs).
+DEMO_APT_PACKAGES=(libvulkan1 mesa-vulkan-drivers)
+if [ "${1:-}" = "--demo" ]; then
+  if command -v dpkg >/dev/null && command -v apt-get >/dev/null; then
+    apt_install "${DEMO_APT_PACKAGES[@]}"
+  else
+    # Not Debian or Ubuntu: the demo still writes everything but its pictures without them.
+    echo "setup: no apt-get here; for the demo's pictures install the Vulkan loader and Mesa's" \
+      "Vulkan drivers (lavapipe) with this system's package manager"
+  fi
+else
   # System packages the tests need (none are needed by the build itself yet): the renderer's
-  # Vulkan (lavapipe); useradd and mount/umount for tests/reliability (a second user, a tmpfs).
-  APT_PACKAGES=(mesa-vulkan-drivers libvulkan1 passwd mount)
+  # Vulkan (lavapipe), as for the demo; useradd and mount/umount for tests/reliability (a
+  # second user, a tmpfs).
+  APT_PACKAGES=("${DEMO_APT_PACKAGES[@]}" passwd mount)
   apt_install "${APT_PACKAGES[@]}"
   make_venv .venv python/requirements-test.txt
   make_venv .venv-bench bench/requirements-bench.txt

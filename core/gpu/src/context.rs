@@ -36,9 +36,7 @@ impl GpuContext {
     /// # Errors
     /// As [`open`](Self::open).
     pub async fn open_async(label: &str) -> Result<Self, GpuError> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Instance::enabled_backend_features();
-        let instance = wgpu::Instance::new(desc.with_env());
+        let instance = headless_instance()?;
         let adapter = instance
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
@@ -87,6 +85,73 @@ impl GpuContext {
     /// `llvmpipe ... (Vulkan, Cpu; driver llvmpipe ...)`), for logs and test output.
     pub fn describe(&self) -> String {
         describe(&self.adapter_info)
+    }
+}
+
+/// The window-system surface extensions a headless instance leaves out (see
+/// [`headless_instance`]).
+const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
+    c"VK_KHR_wayland_surface",
+    c"VK_KHR_xcb_surface",
+    c"VK_KHR_xlib_surface",
+];
+
+/// A wgpu instance for offscreen work: the backends of this build (and `WGPU_BACKEND`,
+/// `WGPU_VALIDATION`... from the environment), its Vulkan instance created without the
+/// window-system surface extensions.
+///
+/// wgpu enables every surface extension the loader offers, and Mesa's device-selection layer
+/// (an implicit layer of `mesa-vulkan-drivers`) takes `VK_KHR_wayland_surface` as a sign that
+/// the program draws on Wayland: it connects to the compositor to find the default GPU, and on a
+/// machine without a session (ssh, cron, CI, render nodes: no `XDG_RUNTIME_DIR`) libwayland
+/// prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` on stderr at every
+/// adapter enumeration (issue 32). tessd never presents, so it never needs them: wgpu-hal checks
+/// that an extension was enabled before creating a surface with it.
+///
+/// # Errors
+/// [`GpuError::NoAdapter`] when Vulkan is the only backend and cannot be initialised (no
+/// loader: `libvulkan1` missing).
+fn headless_instance() -> Result<wgpu::Instance, GpuError> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Instance::enabled_backend_features();
+    let desc = desc.with_env();
+    if !desc.backends.contains(wgpu::Backends::VULKAN) {
+        return Ok(wgpu::Instance::new(desc));
+    }
+    let hal_desc = wgpu::hal::InstanceDescriptor {
+        name: "tessd",
+        flags: desc.flags,
+        memory_budget_thresholds: desc.memory_budget_thresholds,
+        backend_options: desc.backend_options.clone(),
+        telemetry: None,
+        display: None,
+    };
+    let leave_out_window_systems: Box<wgpu::hal::vulkan::CreateInstanceCallback> =
+        Box::new(|args| {
+            args.extensions
+                .retain(|e| !WINDOW_SYSTEM_EXTENSIONS.contains(e));
+        });
+    // SAFETY: the descriptor is wgpu's own, from the environment. The callback removes only
+    // surface extensions, which wgpu-hal looks up before creating a surface (it then refuses
+    // the surface) and which tessd never creates; nothing else about the instance changes.
+    let hal = unsafe {
+        wgpu::hal::vulkan::Instance::init_with_callback(&hal_desc, Some(leave_out_window_systems))
+    };
+    match hal {
+        // SAFETY: `hal` is a freshly created, valid Vulkan instance that wgpu now owns.
+        Ok(hal) => Ok(unsafe { wgpu::Instance::from_hal::<wgpu::hal::api::Vulkan>(hal) }),
+        Err(e) if desc.backends == wgpu::Backends::VULKAN => {
+            let mut reason = format!("Vulkan: {e}");
+            if let Some(source) = std::error::Error::source(&e) {
+                reason.push_str(&format!(": {source}"));
+            }
+            Err(GpuError::NoAdapter(reason))
+        }
+        Err(_) => {
+            let mut others = desc;
+            others.backends.remove(wgpu::Backends::VULKAN);
+            Ok(wgpu::Instance::new(others))
+        }
     }
 }
 

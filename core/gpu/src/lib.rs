@@ -37,13 +37,23 @@ const WORKGROUP: u32 = 64;
 /// Bytes of the per-level uniform (`Params` in the shader).
 const PARAMS_SIZE: u64 = 16;
 
+/// How [`GpuError::NoAdapter`]'s message begins, for callers that only see it as text (a
+/// protocol error frame).
+pub const NO_ADAPTER: &str = "no GPU adapter found";
+
+/// The command that installs the Vulkan loader and Mesa's software Vulkan driver (lavapipe) on
+/// Debian and Ubuntu, as [`GpuError::NoAdapter`] names it.
+pub const SOFTWARE_DRIVER_INSTALL: &str = "apt-get install mesa-vulkan-drivers libvulkan1";
+
 /// Why a GPU operation failed.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     /// No Vulkan adapter, not even a software one.
     #[error(
-        "no GPU adapter found ({0}); for the software Vulkan driver (lavapipe) install \
-         mesa-vulkan-drivers and libvulkan1 (apt-get install mesa-vulkan-drivers libvulkan1)"
+        "{prefix} ({0}); for the software Vulkan driver (lavapipe) install mesa-vulkan-drivers \
+         and libvulkan1 ({install})",
+        prefix = NO_ADAPTER,
+        install = SOFTWARE_DRIVER_INSTALL
     )]
     NoAdapter(String),
     /// The adapter refused to create a device with the limits asked for.

@@ -13,8 +13,8 @@ use std::path::Path;
 /// Why a call failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
-    /// The daemon answered with an error frame.
-    #[error("{0}")]
+    /// The daemon answered with an error frame (shown as the frame's `code: message`, once).
+    #[error(transparent)]
     Op(#[from] OpError),
     /// The connection or its bytes failed.
     #[error("protocol: {0}")]

@@ -9,6 +9,10 @@
 //! tessellated to 0.1 mm into a USD file with one GeomSubset per face. Last, pictures through
 //! the `render` op: the bottle with paper 001's object-space crack filling (and its face ids),
 //! and each level of Spot's LOD chain from one camera.
+//!
+//! Without any GPU adapter (no Vulkan driver at all, not even lavapipe) everything but the
+//! pictures is still written; the demo then ends with one line naming the pictures it could not
+//! render and the command that installs the software driver, and fails.
 
 use anyhow::{Context, Result, bail};
 use serde_json::json;
@@ -16,8 +20,17 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use tessd_ipc::arrays::{Arrays, OwnedArray};
-use tessd_ipc::client::Client;
+use tessd_ipc::client::{Client, ClientError};
 use tessd_mesh::io::{Format, ReadOptions};
+
+/// `println!` that ignores a closed stdout (`tessd demo | head -3`): the demo's lines report
+/// on the files, which it still writes to the end.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
 
 /// Spot (Keenan Crane, public domain), triangulated, with UVs.
 pub const SPOT_OBJ: &[u8] = include_bytes!("../data/spot_triangulated.obj");
@@ -45,6 +58,12 @@ impl Daemon {
             .arg(socket)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
+            // The daemon's routine lines (listening, a failed render) would interleave with the
+            // demo's report, which says all of it; warnings and errors still show.
+            .env(
+                "TESSD_LOG",
+                std::env::var("TESSD_LOG").unwrap_or_else(|_| "warn".into()),
+            )
             .stderr(Stdio::inherit())
             .spawn()
             .context("starting tessd serve")?;
@@ -95,14 +114,16 @@ pub fn run(out: &Path) -> Result<()> {
     let out = out.canonicalize()?;
     let socket_dir = tempdir_for_socket()?;
     let socket = socket_dir.join("demo.sock");
-    println!("tessd demo: starting a daemon on {}", socket.display());
+    say!("tessd demo: starting a daemon on {}", socket.display());
     let daemon = Daemon::start(&socket)?;
     let mut client = Client::connect(&daemon.socket)?;
 
     let (hello, _) = client.call("hello", json!({}), &[], |_| {})?;
-    println!(
+    say!(
         "  daemon {} (protocol {}), ops: {}",
-        hello["version"], hello["protocol"], hello["ops"]
+        hello["version"],
+        hello["protocol"],
+        hello["ops"]
     );
 
     let mesh = tessd_mesh::io::read(
@@ -115,7 +136,7 @@ pub fn run(out: &Path) -> Result<()> {
     let (stats, _) = client.call("mesh.stats", json!({}), &arrays, |_| {})?;
     let stats_path = out.join("spot_stats.json");
     std::fs::write(&stats_path, serde_json::to_string_pretty(&stats)? + "\n")?;
-    println!(
+    say!(
         "  mesh.stats: {} vertices, {} faces, {} boundary edges -> {}",
         stats["vertices"],
         stats["faces"],
@@ -126,7 +147,7 @@ pub fn run(out: &Path) -> Result<()> {
     let usd_path = out.join("spot.usda");
     let (converted, _) =
         client.call("mesh.convert", json!({"output": usd_path}), &arrays, |_| {})?;
-    println!(
+    say!(
         "  mesh.convert: {} vertices, {} faces -> {}",
         converted["vertices"],
         converted["faces"],
@@ -151,7 +172,7 @@ pub fn run(out: &Path) -> Result<()> {
         .flatten()
         .map(|l| l["output_vertices"].to_string())
         .collect();
-    println!(
+    say!(
         "  lod: LOD0 {} vertices, LOD1..{} {} vertices -> {}",
         lods["input_vertices"],
         counts.len(),
@@ -160,16 +181,63 @@ pub fn run(out: &Path) -> Result<()> {
     );
     subdivision(&mut client, &out)?;
     tessellation(&mut client, &out)?;
-    render_bottle(&mut client, &out)?;
     let mut levels = vec![arrays];
     for i in 1..=counts.len() {
         levels.push(level_arrays(&lod_arrays, i)?);
     }
-    render_lods(&mut client, &out, &levels, &lods_path)?;
+    let rendered = render_bottle(&mut client, &out)
+        .and_then(|()| render_lods(&mut client, &out, &levels, &lods_path));
     drop(daemon);
     let _ = std::fs::remove_dir_all(&socket_dir);
-    println!("tessd demo: done, results in {}", out.display());
+    if let Err(e) = rendered {
+        let Some(reason) = no_adapter(&e) else {
+            return Err(e);
+        };
+        let missing: Vec<&str> = PICTURES
+            .iter()
+            .copied()
+            .filter(|p| !out.join(p).exists())
+            .collect();
+        say!("  render: no GPU adapter ({reason})");
+        bail!(
+            "no GPU adapter, so {} of the demo's pictures were not rendered ({}); everything else \
+             is in {}. Install the software Vulkan driver (lavapipe), as root: `{}`, and run the \
+             demo again",
+            missing.len(),
+            missing.join(", "),
+            out.display(),
+            tessd_gpu::SOFTWARE_DRIVER_INSTALL
+        );
+    }
+    say!("tessd demo: done, results in {}", out.display());
     Ok(())
+}
+
+/// The pictures the demo renders, in order: all it needs a GPU adapter for.
+pub const PICTURES: [&str; 7] = [
+    "bottle.png",
+    "bottle_face_ids.png",
+    "spot_lod0.png",
+    "spot_lod1.png",
+    "spot_lod2.png",
+    "spot_lod3.png",
+    "spot_lods.png",
+];
+
+/// wgpu's reason when `e` is the daemon's answer that it has no GPU adapter at all
+/// ([`tessd_gpu::GpuError::NoAdapter`]), else `None`.
+fn no_adapter(e: &anyhow::Error) -> Option<String> {
+    let ClientError::Op(op) = e.downcast_ref::<ClientError>()? else {
+        return None;
+    };
+    let rest = op.message.strip_prefix(tessd_gpu::NO_ADAPTER)?;
+    let reason = rest.strip_prefix(" (").unwrap_or(rest);
+    Some(
+        reason
+            .rsplit_once("); ")
+            .map_or(reason, |(r, _)| r)
+            .to_string(),
+    )
 }
 
 /// Spot's cage subdivided three ways: the refined mesh, the cage for USD renderers to refine,
@@ -198,7 +266,7 @@ fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
         &arrays,
         |_| {},
     )?;
-    println!(
+    say!(
         "  subdivide: cage {} faces -> {} faces at level 3 (topology {:.1} ms, apply {:.1} ms) -> {}",
         r["cage_faces"],
         r["faces"],
@@ -213,7 +281,7 @@ fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
         &arrays,
         |_| {},
     )?;
-    println!(
+    say!(
         "  subdivide: the cage with subdivisionScheme = \"catmullClark\" -> {}",
         cage_path.display()
     );
@@ -226,7 +294,7 @@ fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
         &with_frames,
         |_| {},
     )?;
-    println!(
+    say!(
         "  subdivide: {} frames at level 2, one topology phase ({:.1} ms), apply {:.2} ms per frame -> {}",
         r["frames"],
         r["topology_ms"].as_f64().unwrap_or(0.0),
@@ -240,7 +308,7 @@ fn subdivision(client: &mut Client, out: &Path) -> Result<()> {
 fn tessellation(client: &mut Client, out: &Path) -> Result<()> {
     let doc: serde_json::Value = serde_json::from_slice(BOTTLE_JSON)?;
     let (loaded, _) = client.call("brep.load", json!({"brep": doc}), &[], |_| {})?;
-    println!(
+    say!(
         "  brep.load: bottle, {} faces, {}",
         loaded["faces"].as_array().map_or(0, Vec::len),
         loaded["stats"]["faces_by_surface"]
@@ -252,7 +320,7 @@ fn tessellation(client: &mut Client, out: &Path) -> Result<()> {
         &[],
         |_| {},
     )?;
-    println!(
+    say!(
         "  tessellate: {} faces -> {} triangles at 0.1 mm in {:.0} ms -> {}",
         r["faces"],
         r["triangles"],
@@ -277,7 +345,7 @@ fn render_bottle(client: &mut Client, out: &Path) -> Result<()> {
         &[],
         |_| {},
     )?;
-    println!(
+    say!(
         "  render: bottle {}x{} iso, {} cracks detected / {} filled (object), {} of {} pixels covered, {:.0} ms -> {}",
         r["width"],
         r["height"],
@@ -288,7 +356,7 @@ fn render_bottle(client: &mut Client, out: &Path) -> Result<()> {
         r["timings_ms"]["total"].as_f64().unwrap_or(0.0),
         png.display()
     );
-    println!("  render: bottle face ids -> {}", ids.display());
+    say!("  render: bottle face ids -> {}", ids.display());
     Ok(())
 }
 
@@ -316,7 +384,7 @@ fn render_lods(
             arrays,
             |_| {},
         )?;
-        println!(
+        say!(
             "  render: Spot LOD{i}, {} triangles, {} of {} pixels covered -> {}",
             r["triangles"],
             r["covered"],
@@ -340,7 +408,7 @@ fn render_lods(
         .flatten()
         .map(|p| format!("{} {}", p["label"].as_str().unwrap_or(""), p["triangles"]))
         .collect();
-    println!(
+    say!(
         "  render: Spot's LOD chain side by side from {} ({}), {}x{} -> {}",
         stage.display(),
         panels.join(" / "),

@@ -425,10 +425,13 @@ fn main() {
     // Mesh-sized buffers go back to the system when a job frees them (see the module).
     tessd_mesh::allocation::return_large_buffers_to_system();
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Serve { .. } | Command::Demo { .. }) {
+        die_quietly_on_broken_pipe();
+    }
     let code = match set_threads(cli.threads).and_then(|()| run(cli)) {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("tessd: {e:#}");
+            eprintln!("tessd: {}", error_text(&e));
             if e.downcast_ref::<tessd_ipc::socket::BindError>()
                 .is_some_and(|b| matches!(b, tessd_ipc::socket::BindError::InUse(_)))
             {
@@ -439,6 +442,37 @@ fn main() {
         }
     };
     std::process::exit(code);
+}
+
+/// Restores SIGPIPE's default action, which Rust's runtime sets to "ignore": a CLI verb whose
+/// reader goes away (`tessd stats big.ply | head -1`) then ends quietly, killed by SIGPIPE (the
+/// shell shows status 141) like `cat` or `grep`, instead of panicking in `println!`. `serve`
+/// keeps ignoring it, so a client that hangs up gives its socket an EPIPE error, not the daemon
+/// its death; `demo` too (it talks to its daemon over a socket, and its own lines ignore a
+/// closed stdout).
+fn die_quietly_on_broken_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in `main`, before any thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// `e` and its causes on one line, `outer: cause: its cause`, each text once: many errors (the
+/// `"{path}: {source}"` kind) already print their source, which `{e:#}` would repeat.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let s = cause.to_string();
+        if text.is_empty() {
+            text = s;
+        } else if !text.contains(&s) {
+            text.push_str(": ");
+            text.push_str(&s);
+        }
+    }
+    text
 }
 
 /// Builds the global rayon pool with `threads` workers (`--threads`); without it rayon's default
@@ -994,7 +1028,7 @@ fn job_run(file: &Path) -> Result<()> {
                 );
             }
             Err(e) => {
-                eprintln!("tessd: {e:#}");
+                eprintln!("tessd: {}", error_text(&e));
                 failed += 1;
             }
         }
