@@ -19,6 +19,7 @@
 
 use crate::geom::{V3, closest_on_triangle, v64};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Most triangles in a leaf (the SAH may stop earlier).
 const MAX_LEAF: usize = 8;
@@ -207,8 +208,21 @@ pub(crate) struct Bvh {
 
 impl Bvh {
     /// Builds the hierarchy over `tris` (indices into `positions`); `tris` must be non-empty.
+    #[cfg(test)]
     pub(crate) fn build(positions: &[[f32; 3]], tris: &[[u32; 3]]) -> Bvh {
+        Self::build_cancellable(positions, tris, None).expect("no cancel flag")
+    }
+
+    /// As [`Bvh::build`], checking `cancel` before every node split of the parallel levels
+    /// (each split bins at most its node's triangles, the root's included) and before every
+    /// sequential subtree (under 16 K triangles): `None` when it was set.
+    pub(crate) fn build_cancellable(
+        positions: &[[f32; 3]],
+        tris: &[[u32; 3]],
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Bvh> {
         assert!(!tris.is_empty());
+        let stop = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
         let mut prims: Vec<Prim> = tris
             .par_iter()
             .enumerate()
@@ -233,8 +247,14 @@ impl Bvh {
                 }
             })
             .collect();
+        if stop() {
+            return None;
+        }
         let bounds = par_bounds(&prims);
-        let (root, segments) = build_par(&mut prims, 0, bounds, 0);
+        let (root, segments) = build_par(&mut prims, 0, bounds, 0, cancel);
+        if stop() {
+            return None;
+        }
         let nodes = if root.leaf.is_some() {
             vec![Node::new(&root, 0, &Node::EMPTY_CHILD, 0)]
         } else {
@@ -256,7 +276,7 @@ impl Bvh {
                 ]
             })
             .collect();
-        Bvh { nodes, tris }
+        Some(Bvh { nodes, tris })
     }
 
     /// Number of triangles.
@@ -559,7 +579,17 @@ fn partition(v: &mut [Prim], pred: impl Fn(&Prim) -> bool) -> usize {
 /// Builds the subtree over `prims` (the first of which becomes triangle `first` in leaf
 /// order) and returns it with its nodes, depth-first, as segments to concatenate (none for a
 /// leaf).
-fn build_par(prims: &mut [Prim], first: usize, nb: Bounds, depth: usize) -> (Sub, Vec<Vec<Node>>) {
+/// When `cancel` is set, what is left is built as leaves at once (the caller discards the tree).
+fn build_par(
+    prims: &mut [Prim],
+    first: usize,
+    nb: Bounds,
+    depth: usize,
+    cancel: Option<&AtomicBool>,
+) -> (Sub, Vec<Vec<Node>>) {
+    if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+        return (leaf(&nb, first, prims.len()), Vec::new());
+    }
     if prims.len() < PAR_THRESHOLD {
         let mut out = Vec::new();
         let s = build_seq(prims, first, nb, depth, &mut out);
@@ -570,8 +600,8 @@ fn build_par(prims: &mut [Prim], first: usize, nb: Bounds, depth: usize) -> (Sub
     };
     let (l, r) = prims.split_at_mut(mid);
     let ((ls, lsegs), (rs, rsegs)) = rayon::join(
-        || build_par(l, first, lb, depth + 1),
-        || build_par(r, first + mid, rb, depth + 1),
+        || build_par(l, first, lb, depth + 1, cancel),
+        || build_par(r, first + mid, rb, depth + 1, cancel),
     );
     let left_nodes: usize = lsegs.iter().map(Vec::len).sum();
     let mut segs = Vec::with_capacity(1 + lsegs.len() + rsegs.len());

@@ -65,6 +65,8 @@ use bvh::{Bvh, Hit};
 use geom::{V3, v64};
 use rayon::prelude::*;
 use sample::{Rng, point_in_triangle, stratified};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use tessd_mesh::{Mesh, MeshError};
 use thiserror::Error;
 
@@ -113,7 +115,33 @@ pub enum CompareError {
     /// samples), or a sample density that is negative or not finite.
     #[error("invalid options: {0}")]
     InvalidOptions(String),
+    /// [`CompareOptions::cancel`] was set before the comparison finished.
+    #[error("cancelled")]
+    Cancelled,
 }
+
+/// A flag another thread sets to stop a comparison (the daemon's cancel token): checked
+/// before and between the preparation steps, before every node split of the index's parallel
+/// levels, and every [`CANCEL_EVERY`] samples, so a comparison stops within a few
+/// milliseconds of work. Two flags are equal when they are the same flag.
+#[derive(Clone, Debug, Default)]
+pub struct CancelFlag(pub Arc<AtomicBool>);
+
+impl PartialEq for CancelFlag {
+    fn eq(&self, other: &CancelFlag) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl CancelFlag {
+    /// Whether the flag is set.
+    pub fn is_set(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// Samples measured between two looks at the cancel flag (about 1 ms of work).
+pub const CANCEL_EVERY: u64 = 1024;
 
 /// How many points to sample on the faces of the `from` surface (vertex and edge samples
 /// come on top of these).
@@ -145,6 +173,8 @@ pub struct CompareOptions {
     /// Also sample the distinct polygon edges at `√density` samples per unit length (default
     /// `false`; Metro's edge sampling).
     pub include_edges: bool,
+    /// Stops the comparison with [`CompareError::Cancelled`] when set (default: none).
+    pub cancel: Option<CancelFlag>,
 }
 
 impl Default for CompareOptions {
@@ -154,6 +184,7 @@ impl Default for CompareOptions {
             seed: 0,
             include_vertices: true,
             include_edges: false,
+            cancel: None,
         }
     }
 }
@@ -191,6 +222,21 @@ impl CompareOptions {
     pub fn with_edges(mut self, include: bool) -> Self {
         self.include_edges = include;
         self
+    }
+
+    /// Sets [`CompareOptions::cancel`].
+    pub fn with_cancel(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.cancel = Some(CancelFlag(flag));
+        self
+    }
+
+    /// `Err(Cancelled)` when the cancel flag is set.
+    fn check_cancel(&self) -> Result<(), CompareError> {
+        if self.cancel.as_ref().is_some_and(CancelFlag::is_set) {
+            Err(CompareError::Cancelled)
+        } else {
+            Ok(())
+        }
     }
 }
 
@@ -305,12 +351,22 @@ impl SurfaceIndex {
     }
 
     fn build(mesh: &Mesh, which: &'static str) -> Result<SurfaceIndex, CompareError> {
+        Self::build_with(mesh, which, &CompareOptions::default())
+    }
+
+    /// As [`SurfaceIndex::build`], stopping when `options`' cancel flag is set.
+    fn build_with(
+        mesh: &Mesh,
+        which: &'static str,
+        options: &CompareOptions,
+    ) -> Result<SurfaceIndex, CompareError> {
         let t = usable(mesh, which)?;
+        options.check_cancel()?;
         let area = t.areas.iter().sum();
-        Ok(SurfaceIndex {
-            bvh: Bvh::build(&mesh.positions, &t.tris),
-            area,
-        })
+        let cancel = options.cancel.as_ref().map(|c| &*c.0);
+        let bvh = Bvh::build_cancellable(&mesh.positions, &t.tris, cancel)
+            .ok_or(CompareError::Cancelled)?;
+        Ok(SurfaceIndex { bvh, area })
     }
 
     /// Number of (non-degenerate, fan) triangles indexed.
@@ -371,9 +427,11 @@ impl SurfaceIndex {
         which: &'static str,
         options: &CompareOptions,
     ) -> Result<Distance, CompareError> {
+        options.check_cancel()?;
         let t = usable(from, which)?;
         let plan = Plan::new(from, t, self.triangle_count(), options)?;
-        Ok(plan.run(from, &self.bvh, options.seed))
+        options.check_cancel()?;
+        plan.run(from, &self.bvh, options)
     }
 }
 
@@ -394,7 +452,7 @@ pub fn one_sided(
     check(from, "from")?;
     check(to, "to")?;
     usable_quick(from, "from")?;
-    let index = SurfaceIndex::build(to, "to")?;
+    let index = SurfaceIndex::build_with(to, "to", options)?;
     index.measure(from, "from", options)
 }
 
@@ -410,8 +468,8 @@ pub fn compare(a: &Mesh, b: &Mesh, options: &CompareOptions) -> Result<Compariso
     check(b, "b")?;
     usable_quick(a, "a")?;
     usable_quick(b, "b")?;
-    let a_to_b = SurfaceIndex::build(b, "b")?.measure(a, "a", options)?;
-    let b_to_a = SurfaceIndex::build(a, "a")?.measure(b, "b", options)?;
+    let a_to_b = SurfaceIndex::build_with(b, "b", options)?.measure(a, "a", options)?;
+    let b_to_a = SurfaceIndex::build_with(a, "a", options)?.measure(b, "b", options)?;
     Ok(Comparison::from_directions(
         a_to_b,
         b_to_a,
@@ -518,6 +576,7 @@ impl Plan {
             let [a, b, c] = t.tris[i].map(|v| v64(pos[v as usize]));
             (a + b + c) * (1.0 / 3.0)
         });
+        options.check_cancel()?;
         let tris: Vec<[u32; 3]> = order.par_iter().map(|&i| t.tris[i as usize]).collect();
         let areas: Vec<f64> = order.par_iter().map(|&i| t.areas[i as usize]).collect();
         drop((order, t));
@@ -537,6 +596,7 @@ impl Plan {
                 (d * area).round() as u64
             }
         };
+        options.check_cancel()?;
         let vertices = if options.include_vertices {
             let v = sample::referenced_vertices(from);
             sample::morton_order(v.len(), |i| v64(pos[v[i] as usize]))
@@ -560,6 +620,7 @@ impl Plan {
         } else {
             (Vec::new(), Vec::new(), 0)
         };
+        options.check_cancel()?;
         if face_samples + edge_samples + vertices.len() as u64 == 0 {
             return Err(CompareError::InvalidOptions(
                 "no samples: zero face samples and no vertex or edge samples".into(),
@@ -595,18 +656,33 @@ impl Plan {
         jobs
     }
 
-    fn run(&self, from: &Mesh, bvh: &Bvh, seed: u64) -> Distance {
+    /// Measures every job's samples; each job looks at the cancel flag before it starts and
+    /// every [`CANCEL_EVERY`] samples, and skips the rest of its samples once it is set.
+    fn run(
+        &self,
+        from: &Mesh,
+        bvh: &Bvh,
+        options: &CompareOptions,
+    ) -> Result<Distance, CompareError> {
+        let cancel = options.cancel.as_ref();
         let stats: Vec<Stats> = self
             .jobs()
             .par_iter()
-            .map(|job| self.run_job(job, from, bvh, seed))
+            .map(|job| {
+                if cancel.is_some_and(CancelFlag::is_set) {
+                    Stats::new()
+                } else {
+                    self.run_job(job, from, bvh, options.seed, cancel)
+                }
+            })
             .collect();
+        options.check_cancel()?;
         let mut total = Stats::new();
         for s in &stats {
             total.merge(s);
         }
         let n = total.n.max(1) as f64;
-        Distance {
+        Ok(Distance {
             max: total.max.max(0.0),
             mean: total.sum / n,
             rms: (total.sum2 / n).sqrt(),
@@ -614,16 +690,32 @@ impl Plan {
             argmax_point: total.argmax.to_array(),
             argmax_closest: total.argmax_closest.to_array(),
             area: self.area,
-        }
+        })
     }
 
-    fn run_job(&self, job: &Job, from: &Mesh, bvh: &Bvh, seed: u64) -> Stats {
+    fn run_job(
+        &self,
+        job: &Job,
+        from: &Mesh,
+        bvh: &Bvh,
+        seed: u64,
+        cancel: Option<&CancelFlag>,
+    ) -> Stats {
         let pos = &from.positions;
         let mut rng = Rng::new(seed, ((job.kind as u64) << 48) | job.chunk);
         let mut st = Stats::new();
         let mut hint = None;
         let mut stack = Vec::with_capacity(bvh::STACK);
+        let (mut count, mut stopped) = (0u64, false);
         let mut measure = |p: V3| {
+            if stopped {
+                return;
+            }
+            count += 1;
+            if count.is_multiple_of(CANCEL_EVERY) && cancel.is_some_and(CancelFlag::is_set) {
+                stopped = true;
+                return;
+            }
             let h = bvh.nearest(p, hint, &mut stack);
             hint = Some(h.tri);
             st.add(p, &h);

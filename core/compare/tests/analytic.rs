@@ -427,3 +427,35 @@ fn errors_name_the_mesh() {
     .unwrap_err();
     assert!(e.to_string().contains("sample density NaN"), "{e}");
 }
+
+#[test]
+fn a_cancel_stops_the_comparison_mid_way() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::time::{Duration, Instant};
+    let (a, b) = (icosphere(5), icosphere(3));
+    // Set before: nothing is measured.
+    let flag = Arc::new(AtomicBool::new(true));
+    let o = opts(1000).with_cancel(flag.clone());
+    assert!(matches!(compare(&a, &b, &o), Err(CompareError::Cancelled)));
+    assert!(matches!(one_sided(&a, &b, &o), Err(CompareError::Cancelled)));
+    // Set while 50 M samples are being measured (seconds of work): the answer comes within
+    // a few milliseconds of work.
+    flag.store(false, Ordering::Relaxed);
+    let o = opts(50_000_000).with_cancel(flag.clone());
+    let setter = {
+        let flag = flag.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(300));
+            flag.store(true, Ordering::Relaxed);
+            Instant::now()
+        })
+    };
+    let r = one_sided(&a, &b, &o);
+    let answered = Instant::now();
+    let set = setter.join().unwrap();
+    assert!(matches!(r, Err(CompareError::Cancelled)), "{r:?}");
+    let late = answered.saturating_duration_since(set);
+    println!("cancelled: answered {late:?} after the flag was set");
+    assert!(late < Duration::from_millis(300), "{late:?}");
+}

@@ -524,12 +524,7 @@ fn run(cli: Cli) -> Result<()> {
                 "mesh.convert",
                 serde_json::json!({"input": input, "output": output}),
             )?;
-            println!(
-                "wrote {} ({} vertices, {} faces)",
-                output.display(),
-                response.result["vertices"],
-                response.result["faces"]
-            );
+            println!("{}", report::convert_line(&output, &response.result));
             Ok(())
         }
         Command::Simplify {
@@ -949,7 +944,12 @@ fn run_local_with(op: &str, params: serde_json::Value, arrays: &[OwnedArray]) ->
         base_dir: Some(cwd),
         arrays: Arrays::from_owned(arrays),
     };
-    with_progress(op, |ctx| tessd::ops::registry().run(op, request, ctx))
+    let response = with_progress(op, |ctx| tessd::ops::registry().run(op, request, ctx))?;
+    // Every verb that writes a file says what the file could not hold.
+    for line in report::dropped_warnings(op, &response) {
+        eprintln!("{line}");
+    }
+    Ok(response)
 }
 
 /// The `frames` array of `subdivide`: the positions of each mesh file, which must all have the

@@ -23,6 +23,9 @@ pub fn print_simplify(output: &Path, r: &serde_json::Value) {
     if let Some(t) = r["tolerance"].as_f64() {
         line += &format!(" (tolerance {t})");
     }
+    if let Some(t) = r["polygon_twist"].as_f64().filter(|&t| t > 0.0) {
+        line += &format!(", input polygons twisted by up to {t}");
+    }
     if let Some(n) = r["refinement_rounds"].as_u64().filter(|&n| n > 0) {
         line += &format!(", {n} coverage rounds");
     }
@@ -123,4 +126,128 @@ pub fn print_stats(file: &Path, s: &serde_json::Value) {
     }
     println!("  {:22} {}", "face sizes", s["face_sizes"]);
     println!("  {:22} {}", "bounds", s["bounds"]);
+}
+
+/// The name a warning gives the format of `file` (from its extension).
+fn format_name(file: &Path) -> String {
+    let ext = file
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "usda" => "a USD stage".to_string(),
+        "tsc" => "the .tsc codec".to_string(),
+        "" => "the output".to_string(),
+        other => other.to_ascii_uppercase(),
+    }
+}
+
+/// Whether a file at `file` can hold what the protocol calls `name` (see
+/// [`tessd_mesh::io::format_carries`]; a USD stage holds all but sharp edges, a `.tsc` file
+/// positions and triangles alone).
+fn file_carries(file: &Path, name: &str) -> bool {
+    let ext = file
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "usda" => name != "sharp_edges",
+        "tsc" => false,
+        _ => tessd_mesh::io::Format::from_path(file)
+            .is_ok_and(|f| tessd_mesh::io::format_carries(f, name)),
+    }
+}
+
+/// The warning lines for what an operation's result says it dropped (`dropped_attributes`,
+/// and each `lod` level's): one line per attribute and file,
+/// `warning: <file>: dropped <attr> (<format> cannot carry it)`, naming the file whose format
+/// cannot hold it, or the operation when the files could (a subdivision scheme without
+/// face-varying refinement, ...).
+pub fn dropped_warnings(op: &str, response: &Response) -> Vec<String> {
+    let r = &response.result;
+    let mut names: Vec<String> = Vec::new();
+    let lists = std::iter::once(&r["dropped_attributes"]).chain(
+        r["levels"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|l| &l["dropped_attributes"]),
+    );
+    for list in lists {
+        for n in list
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|n| n.as_str())
+        {
+            if !names.iter().any(|m| m == n) {
+                names.push(n.to_string());
+            }
+        }
+    }
+    let mut files: Vec<&Path> = response.files.iter().map(|p| p.as_path()).collect();
+    if files.is_empty() {
+        files.extend(r["output"].as_str().map(Path::new));
+    }
+    // Paths as the user gave them: relative to the working folder when inside it.
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let show = |f: &Path| f.strip_prefix(&cwd).unwrap_or(f).display().to_string();
+    let mut lines = Vec::new();
+    for name in &names {
+        let holders: Vec<&Path> = files
+            .iter()
+            .copied()
+            .filter(|f| !file_carries(f, name))
+            .collect();
+        if holders.is_empty() {
+            let shown = files
+                .first()
+                .map_or_else(|| "<arrays>".to_string(), |f| show(f));
+            lines.push(format!(
+                "warning: {shown}: dropped {name} (`{op}` cannot carry it)"
+            ));
+        }
+        for f in holders {
+            lines.push(format!(
+                "warning: {}: dropped {name} ({} cannot carry it)",
+                show(f),
+                format_name(f)
+            ));
+        }
+    }
+    lines
+}
+
+/// The `tessd convert` summary: what the file holds (STL: the triangles written; PLY: the
+/// vertices after the seam split, saying how many were added).
+pub fn convert_line(output: &Path, r: &serde_json::Value) -> String {
+    let w = &r["written"];
+    if w["triangulated"].as_bool() == Some(true) {
+        let (tris, faces) = (&w["faces"], &r["faces"]);
+        return if tris == faces {
+            format!("wrote {} ({tris} triangles)", output.display())
+        } else {
+            format!(
+                "wrote {} ({tris} triangles: the {faces} faces fan-triangulated, as STL needs)",
+                output.display()
+            )
+        };
+    }
+    let vertices = if w.is_null() {
+        &r["vertices"]
+    } else {
+        &w["vertices"]
+    };
+    let mut line = format!(
+        "wrote {} ({vertices} vertices, {} faces)",
+        output.display(),
+        r["faces"]
+    );
+    if let Some(n) = w["split_vertices"].as_u64().filter(|&n| n > 0) {
+        line += &format!(
+            "; {n} vertices added at UV / normal seams ({} holds one UV and normal per vertex)",
+            format_name(output)
+        );
+    }
+    line
 }

@@ -19,6 +19,12 @@ pub trait MeshSource {
     /// Calls `f` with every triangle's vertex indices, in order; checks each index against
     /// [`MeshSource::vertex_count`].
     fn triangles(&mut self, f: &mut dyn FnMut([u32; 3])) -> Result<(), MeshError>;
+    /// What the input holds beyond positions and faces, by protocol name (`normals`, `uvs`,
+    /// `face_groups`, as [`crate::Mesh::carried_names`] names them): what a consumer of
+    /// positions and triangles alone drops. Empty by default.
+    fn carried_names(&self) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 /// A mesh in memory.
@@ -361,6 +367,26 @@ impl MeshSource for PlyFile {
         self.vertices
     }
 
+    fn carried_names(&self) -> Vec<String> {
+        // The vertex properties the in-memory PLY reader turns into normals and UVs.
+        let has = |names: &[&str]| {
+            self.elements.iter().any(|e| {
+                e.name == "vertex"
+                    && e.properties
+                        .iter()
+                        .any(|p| p.list.is_none() && names.contains(&p.name.as_str()))
+            })
+        };
+        let mut out = Vec::new();
+        if has(&["nx"]) {
+            out.push("normals".to_string());
+        }
+        if has(&["s", "u", "texture_u", "texture_s"]) {
+            out.push("uvs".to_string());
+        }
+        out
+    }
+
     fn vertices(&mut self, f: &mut dyn FnMut([f32; 3])) -> Result<(), MeshError> {
         let v = self.elements.iter().find(|e| e.name == "vertex").cloned();
         let Some(v) = v else { return Ok(()) };
@@ -416,6 +442,9 @@ impl MeshSource for PlyFile {
 pub struct ObjFile {
     path: PathBuf,
     vertices: u64,
+    has_normals: bool,
+    has_uvs: bool,
+    has_groups: bool,
 }
 
 impl ObjFile {
@@ -424,15 +453,29 @@ impl ObjFile {
         let mut obj = ObjFile {
             path: path.to_path_buf(),
             vertices: 0,
+            has_normals: false,
+            has_uvs: false,
+            has_groups: false,
         };
-        let mut n = 0;
+        let (mut n, mut normals, mut uvs, mut groups) = (0, false, false, false);
+        let keyword = |line: &str, k: &str| {
+            line.strip_prefix(k)
+                .is_some_and(|rest| rest.starts_with([' ', '\t']))
+        };
         obj.lines(&mut |_, line| {
-            if line.starts_with("v ") || line.starts_with("v\t") {
+            if keyword(line, "v") {
                 n += 1;
+            } else if keyword(line, "vn") {
+                normals = true;
+            } else if keyword(line, "vt") {
+                uvs = true;
+            } else if keyword(line, "usemtl") || keyword(line, "g") {
+                groups = true;
             }
             Ok(())
         })?;
         obj.vertices = n;
+        (obj.has_normals, obj.has_uvs, obj.has_groups) = (normals, uvs, groups);
         Ok(obj)
     }
 
@@ -453,6 +496,20 @@ impl ObjFile {
 impl MeshSource for ObjFile {
     fn vertex_count(&self) -> u64 {
         self.vertices
+    }
+
+    fn carried_names(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.has_normals {
+            out.push("normals".to_string());
+        }
+        if self.has_uvs {
+            out.push("uvs".to_string());
+        }
+        if self.has_groups {
+            out.push("face_groups".to_string());
+        }
+        out
     }
 
     fn vertices(&mut self, f: &mut dyn FnMut([f32; 3])) -> Result<(), MeshError> {

@@ -13,7 +13,7 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
 
-use super::common::{file_dropped, u64_param, write_mesh_file};
+use super::common::{file_dropped, stage_options, u64_param, write_mesh_file};
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use super::render::{parse_size, vec3_param};
 
@@ -77,17 +77,19 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
     let progress = |f: f64| ctx.progress(0.02 + 0.96 * f, "code", "").is_ok();
     let (file, temp) = temp_output(&output)?;
     let mut file = std::io::BufWriter::with_capacity(1 << 20, file);
-    let (report, read_ms) = if streamed {
+    // The codec holds positions and triangles: everything else the input carries is dropped.
+    let (report, read_ms, dropped) = if streamed {
         let path = input.expect("streamed inputs are paths");
         let mut src = tessd_codec::source::open(&path).map_err(codec_error)?;
+        let dropped = src.carried_names();
         let report = tessd_codec::compress_source(&mut *src, params, &mut file, &progress);
-        (report, 0.0)
+        (report, 0.0, dropped)
     } else {
         let mesh = input_mesh(&mut request, ctx)?;
         let read_ms = started.elapsed().as_secs_f64() * 1e3;
         let tris = mesh.fan_triangles();
         let report = tessd_codec::compress(&mesh.positions, &tris, params, &mut file, &progress);
-        (report, read_ms)
+        (report, read_ms, mesh.carried_names())
     };
     let report = report.map_err(|e| output_error(e, "writing the compressed file", &output))?;
     ctx.progress(0.99, "write", "")?;
@@ -126,6 +128,7 @@ pub fn compress(mut request: Request, ctx: &JobContext) -> Result<Response, OpEr
             "read_ms": read_ms,
             "steps_ms": {"partition": report.steps_ms[0], "codes": report.steps_ms[1], "final": report.steps_ms[2]},
             "elapsed_ms": started.elapsed().as_secs_f64() * 1e3,
+            "dropped_attributes": dropped,
         }),
         files: vec![output],
         ..Response::default()
@@ -149,6 +152,8 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
         .ok_or_else(|| OpError::request("parameter `input` (the .tsc file) is required"))?;
     let max_bits = u64_param(&request, "max_bits")?.map(|b| b.min(u32::MAX as u64) as u32);
     let output = output_path(&request)?;
+    // Bad stage options are refused before the work, not when writing.
+    stage_options(&request)?;
     ctx.progress(0.0, "read", "")?;
     let tsc = Tsc::open_file(&input).map_err(codec_error)?;
     let p = tsc.header.params.bits;
@@ -302,6 +307,7 @@ pub fn view(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             .ok_or_else(|| OpError::request(format!("parameter `{key}` ([x, y, z]) is required")))
     };
     let (width, height) = parse_size(request.params.get("size"))?;
+    stage_options(&request)?;
     let camera = Camera {
         eye: need("eye")?,
         target: need("target")?,

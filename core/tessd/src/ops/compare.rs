@@ -17,6 +17,7 @@ fn compare_error(e: CompareError) -> OpError {
         CompareError::EmptyMesh { .. }
         | CompareError::DegenerateMesh { .. }
         | CompareError::InvalidMesh { .. } => ErrorCode::InvalidMesh,
+        CompareError::Cancelled => return OpError::cancelled(),
         _ => ErrorCode::Internal,
     };
     OpError::new(code, e.to_string())
@@ -50,11 +51,12 @@ fn relative(x: f64, diagonal: f64) -> Value {
 ///
 /// # Errors
 /// `invalid_request` for missing paths or bad options, `invalid_mesh` for a mesh without
-/// (non-degenerate) faces, `io`, `cancelled` (checked between the two directions: one
-/// direction is not interrupted).
+/// (non-degenerate) faces, `io`, `cancelled` (within a few milliseconds of work: the
+/// comparison checks the flag in every long loop).
 pub fn run(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
-    let mut options = CompareOptions::default();
+    // The comparison looks at the job's cancel flag every ~1 ms of work.
+    let mut options = CompareOptions::default().with_cancel(ctx.cancel_token().flag());
     if let Some(n) = u64_param(&request, "samples")? {
         options = options.with_samples(n);
     }

@@ -38,6 +38,17 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             let mut result = counts;
             result["output"] = json!(path.display().to_string());
             result["dropped_attributes"] = json!(file_dropped(&mesh, &path));
+            // What the file holds when a reader counts it: STL's triangles, PLY's vertices
+            // split at UV / normal seams.
+            if let Ok(format) = tessd_mesh::io::Format::from_path(&path) {
+                let w = tessd_mesh::io::written_counts(&mesh, format);
+                result["written"] = json!({
+                    "vertices": w.vertices,
+                    "faces": w.faces,
+                    "triangulated": w.triangulated,
+                    "split_vertices": w.split_vertices,
+                });
+            }
             Ok(Response {
                 result,
                 files: vec![path],
