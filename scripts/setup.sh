@@ -19,7 +19,9 @@ apt_install() {
     echo "setup: installing ${missing[*]}"
     local SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
     $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+    # `env` inside sudo: sudo drops the caller's DEBIAN_FRONTEND. No progress bars in logs.
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq -o Dpkg::Use-Pty=0 \
+      --no-install-recommends "${missing[@]}"
   fi
 }
 
