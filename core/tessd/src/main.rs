@@ -33,7 +33,8 @@ enum Command {
         /// Socket name (in the per-user folder) or path; default: the per-user socket.
         #[arg(long)]
         socket: Option<String>,
-        /// Also append the log to this file.
+        /// Append the log to this file instead of stderr (lines stamped in RFC 3339 UTC;
+        /// level from TESSD_LOG, default info).
         #[arg(long)]
         log: Option<PathBuf>,
         /// Largest request payload in bytes.
