@@ -2,7 +2,8 @@
 
 Builds an L-shaped bracket (two boxes, four holes, filleted edges) with cadquery, exports its
 B-Rep faces with `tessd.brep.export_shape`, and asks the daemon for a precise mesh, `part.usda`
-(chordal tolerance 0.05 mm, watertight, one GeomSubset per B-Rep face), and an iso-view picture
+(chordal tolerance 0.05 mm, watertight, one GeomSubset per B-Rep face, metersPerUnit 0.001 from
+the part's millimetres), and an iso-view picture
 of the exact surfaces, `part.png`.
 
 Run (cadquery 2.8, the `.venv-cad` of scripts/setup.sh; the daemon from $TESSD_BIN or PATH):
@@ -43,8 +44,10 @@ try:
     with tessd.Client(sock) as c:
         mesh, _ = c.call("tessellate", {"brep": doc, "tolerance": "0.05mm",
                                         "output": os.path.join(out, "part.usda")})
-        print("tessellate: %d faces -> %d triangles within %g mm -> %s (%.1f ms)" % (
-            mesh["faces"], mesh["triangles"], mesh["tolerance"], mesh["output"], mesh["time_ms"]))
+        # The stage's metersPerUnit follows the document's units: 0.001 for this mm part.
+        print("tessellate: %d faces -> %d triangles within %g mm -> %s (metersPerUnit %g, %.1f ms)"
+              % (mesh["faces"], mesh["triangles"], mesh["tolerance"], mesh["output"],
+                 mesh["meters_per_unit"], mesh["time_ms"]))
         pic, _ = c.call("render", {"brep": doc, "view": "iso", "size": "1280x720",
                                    "output": os.path.join(out, "part.png")})
         print("render: %dx%d, %d of %d pixels covered -> %s (%s)"

@@ -159,9 +159,79 @@ def test_lod_quality_and_grid_levels(tmp_path):
     for level in r["levels"]:
         assert level["max_displacement"] <= level["tolerance"]
     assert validate_stage(tmp_path / "q.usda") == []
+    v = [l["output_vertices"] for l in r["levels"]]
+    assert SPOT_VERTICES > v[0] > v[1] > v[2] > 0 and r["warnings"] == []
     r = tessd_json("lod", SPOT, "--method", "grid", "--levels", "16,8", "--out", tmp_path / "g.usda")
     v = [l["output_vertices"] for l in r["levels"]]
-    assert SPOT_VERTICES > v[0] > v[1] > 0
+    assert SPOT_VERTICES > v[0] > v[1] > 0 and r["warnings"] == []
+
+
+@pytest.mark.parametrize("method, levels, reads, suggestion", [
+    # The issue's chain: for quality the levels are errors, which grow.
+    ("quality", "50%,20%", "which must grow, but LOD2's 20% (0.3436) is not above LOD1's 50% (0.859)",
+     "20%,50%"),
+    ("quality", "0.1,1%", "LOD2's 1% (0.01718) is not above LOD1's 0.1", "1%,0.1"),
+    ("complexity", "20%,50%",
+     "which must shrink, but LOD2's 50% (1465 vertices) is not below LOD1's 20% (586 vertices)",
+     "50%,20%"),
+    ("complexity", "1000,50%", "LOD2's 50% (1465 vertices) is not below LOD1's 1000 vertices",
+     "50%,1000"),
+    ("complexity", "50%,1465,5%", "LOD2's 1465 vertices is not below LOD1's 50% (1465 vertices)",
+     "50%,5%"),
+    ("grid", "16,32,8", "the cells per axis, which must shrink, but LOD2's 32 is not below LOD1's 16",
+     "32,16,8"),
+    ("grid", "8,8", "LOD2's 8 is not below LOD1's 8", "8"),
+])
+def test_lod_refuses_levels_that_do_not_get_coarser(tmp_path, daemon, method, levels, reads,
+                                                    suggestion):
+    out = tmp_path / "x.usda"
+    run = run_tessd("lod", SPOT, "--method", method, "--levels", levels, "--out", out, check=False)
+    assert run.returncode == 1, run.stderr
+    assert "`--levels` must get coarser from each level to the next" in run.stderr, run.stderr
+    assert f"with method {method} a level is" in run.stderr and reads in run.stderr, run.stderr
+    assert run.stderr.rstrip().endswith(f"did you mean {suggestion}?"), run.stderr
+    # The op names its parameter; the same chain as a list.
+    with tessd.Client(daemon.socket, timeout=60) as c:
+        with pytest.raises(TessdError) as info:
+            c.call("lod", {"input": str(SPOT), "method": method, "levels": levels.split(","),
+                           "output": str(out)})
+    e = info.value
+    assert e.code == "invalid_request" and e.message.startswith("`levels` must get coarser"), e
+    assert reads in e.message and e.message.endswith(f"did you mean {suggestion}?"), e
+    assert list(tmp_path.iterdir()) == []
+    # The suggestion is a chain that works, and its levels get coarser.
+    if "," in suggestion:
+        r = tessd_json("lod", SPOT, "--method", method, "--levels", suggestion, "--out", out)
+        v = [l["output_vertices"] for l in r["levels"]]
+        assert all(a > b for a, b in zip([SPOT_VERTICES] + v, v)), v
+        assert r["warnings"] == []
+
+
+def test_lod_warns_of_a_level_no_coarser_than_the_one_before(tmp_path):
+    # Grid cells are not nested: 37 cells per axis keep more of Spot's vertices than 38 do.
+    out = tmp_path / "g.usda"
+    run = run_tessd("lod", SPOT, "--method", "grid", "--levels", "40,39,38,37,20", "--out", out)
+    r = tessd_json("lod", SPOT, "--method", "grid", "--levels", "40,39,38,37,20", "--out", out)
+    v = [l["output_vertices"] for l in r["levels"]]
+    assert v == [2435, 2405, 2315, 2327, 1236]
+    assert r["warnings"] == [
+        "LOD4 (goal 37) has 2327 vertices, not fewer than LOD3's 2315: it is no coarser than the "
+        "level before it"]
+    assert f"warning: {r['warnings'][0]}" in run.stderr
+    # A tolerance that moves nothing keeps LOD0 as it is.
+    r = tessd_json("lod", SPOT, "--method", "quality", "--levels", "0.000001,1%", "--out", out)
+    assert r["levels"][0]["output_vertices"] == SPOT_VERTICES
+    assert len(r["warnings"]) == 1 and r["warnings"][0].startswith("LOD1 (goal "), r
+    assert f"has {SPOT_VERTICES} vertices, not fewer than LOD0's {SPOT_VERTICES}" in r["warnings"][0]
+
+
+def test_lod_help_says_how_levels_read():
+    text = " ".join(run_tessd("lod", "--help").stdout.split())
+    for words in ["each level coarser than the one before",
+                  "for --method complexity the vertices to keep", "which shrink",
+                  "for quality the largest error", "which grow",
+                  "for grid the cells per axis"]:
+        assert words in text, words
 
 
 def test_lod_cli_errors(tmp_path):

@@ -70,6 +70,8 @@ enum Command {
         input: PathBuf,
         /// Output mesh.
         output: PathBuf,
+        #[command(flatten)]
+        stage: StageArgs,
     },
     /// Simplify a mesh by vertex clustering (regular grid, quality goal or complexity goal).
     Simplify {
@@ -99,6 +101,8 @@ enum Command {
         /// Also write the partition's cells: wire boxes for .obj, a box mesh otherwise.
         #[arg(long, value_name = "BOXES.obj")]
         partition: Option<PathBuf>,
+        #[command(flatten)]
+        stage: StageArgs,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -136,6 +140,8 @@ enum Command {
         /// OUT (.usda) gets their refined points as time samples 1, 2, ...
         #[arg(long, num_args = 1..)]
         frames: Vec<PathBuf>,
+        #[command(flatten)]
+        stage: StageArgs,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -145,9 +151,11 @@ enum Command {
     Lod {
         /// Input mesh (OBJ, PLY, STL, OFF, or a USD stage .usda): LOD0.
         input: PathBuf,
-        /// Goals of LOD1, LOD2..., comma-separated: vertex counts or percentages for
-        /// complexity ("50%,20%,5%"), tolerances for quality ("0.5%,2%"), cells per axis for
-        /// grid.
+        /// Goals of LOD1, LOD2..., comma-separated, each level coarser than the one before
+        /// (a chain that does not get coarser is refused): for --method complexity the vertices
+        /// to keep, counts or percentages of the input's, which shrink ("50%,20%,5%"); for
+        /// quality the largest error, distances or percentages of the bounding box's largest
+        /// side, which grow ("0.5%,2%"); for grid the cells per axis, which shrink ("32,16,8").
         #[arg(
             long,
             value_delimiter = ',',
@@ -173,12 +181,8 @@ enum Command {
         per_level_format: String,
         #[command(flatten)]
         cluster: ClusterArgs,
-        /// The stage's up axis.
-        #[arg(long, value_parser = ["Y", "Z"])]
-        up_axis: Option<String>,
-        /// The stage's metres per model unit (FreeCAD's millimetres: 0.001).
-        #[arg(long)]
-        meters_per_unit: Option<f64>,
+        #[command(flatten)]
+        stage: StageArgs,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -220,6 +224,8 @@ enum Command {
         /// Decode only up to this many bits per coordinate (a prefix of the refinement).
         #[arg(long)]
         max_bits: Option<u32>,
+        #[command(flatten)]
+        stage: StageArgs,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -249,6 +255,8 @@ enum Command {
         /// Largest projected error of a vertex, in pixels.
         #[arg(long, default_value_t = 1.0)]
         pixel_error: f64,
+        #[command(flatten)]
+        stage: StageArgs,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -303,6 +311,8 @@ enum Command {
         /// BREP text carries none. A JSON document names its own.
         #[arg(long)]
         units: Option<String>,
+        #[command(flatten)]
+        stage: StageArgs,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,
@@ -413,6 +423,36 @@ impl ClusterArgs {
     }
 }
 
+/// The USD stage settings of every verb that can write a `.usda`.
+#[derive(clap::Args)]
+struct StageArgs {
+    /// A .usda output's up axis (default Z).
+    #[arg(long, value_parser = ["Y", "Z"])]
+    up_axis: Option<String>,
+    /// A .usda output's metres per model unit (default: a B-Rep's own units, mm → 0.001;
+    /// for meshes, which name none, 1; FreeCAD's millimetres: 0.001).
+    #[arg(long, value_name = "M", value_parser = positive_f64)]
+    meters_per_unit: Option<f64>,
+}
+
+impl StageArgs {
+    /// Adds these settings to a request's parameters (`up_axis`, `meters_per_unit`).
+    fn add_to(&self, params: &mut serde_json::Value) {
+        params["up_axis"] = serde_json::json!(self.up_axis);
+        params["meters_per_unit"] = serde_json::json!(self.meters_per_unit);
+    }
+}
+
+/// A finite number above zero (`--meters-per-unit`).
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!(
+            "expected a positive number (millimetres: 0.001), got {s:?}"
+        )),
+    }
+}
+
 #[derive(Subcommand)]
 enum JobAction {
     /// Run JOB.json: `{"op": ..., "params": {...}}` or `{"jobs": [...]}`.
@@ -520,11 +560,14 @@ fn run(cli: Cli) -> Result<()> {
             json,
             |r| print_stats(&file, &r.result),
         ),
-        Command::Convert { input, output } => {
-            let response = run_local(
-                "mesh.convert",
-                serde_json::json!({"input": input, "output": output}),
-            )?;
+        Command::Convert {
+            input,
+            output,
+            stage,
+        } => {
+            let mut params = serde_json::json!({"input": input, "output": output});
+            stage.add_to(&mut params);
+            let response = run_local("mesh.convert", params)?;
             println!("{}", report::convert_line(&output, &response.result));
             Ok(())
         }
@@ -538,6 +581,7 @@ fn run(cli: Cli) -> Result<()> {
             target_vertices,
             cluster,
             partition,
+            stage,
             json,
         } => {
             let mut params = serde_json::json!({
@@ -551,6 +595,7 @@ fn run(cli: Cli) -> Result<()> {
                 "partition_output": partition,
             });
             cluster.add_to(&mut params);
+            stage.add_to(&mut params);
             report_or_json(run_local("simplify", params)?, json, |r| {
                 print_simplify(&output, &r.result)
             })
@@ -566,9 +611,10 @@ fn run(cli: Cli) -> Result<()> {
             no_normals,
             usd_cage,
             frames,
+            stage,
             json,
         } => {
-            let params = serde_json::json!({
+            let mut params = serde_json::json!({
                 "input": input,
                 "output": output,
                 "scheme": scheme,
@@ -579,6 +625,7 @@ fn run(cli: Cli) -> Result<()> {
                 "normals": !no_normals,
                 "usd": if usd_cage { "cage" } else { "refined" },
             });
+            stage.add_to(&mut params);
             let arrays = if frames.is_empty() {
                 Vec::new()
             } else {
@@ -615,8 +662,7 @@ fn run(cli: Cli) -> Result<()> {
             per_level_dir,
             per_level_format,
             cluster,
-            up_axis,
-            meters_per_unit,
+            stage,
             json,
         } => {
             if out.is_none() && per_level_dir.is_none() {
@@ -630,11 +676,15 @@ fn run(cli: Cli) -> Result<()> {
                 "lod_schema": lod_schema,
                 "per_level": per_level_dir,
                 "per_level_format": per_level_format,
-                "up_axis": up_axis,
-                "meters_per_unit": meters_per_unit,
             });
             cluster.add_to(&mut params);
-            report_or_json(run_local("lod", params)?, json, print_lod)
+            stage.add_to(&mut params);
+            report_or_json(run_local("lod", params)?, json, |r| {
+                print_lod(r);
+                for w in r.result["warnings"].as_array().into_iter().flatten() {
+                    eprintln!("warning: {}", w.as_str().unwrap_or_default());
+                }
+            })
         }
         Command::Compress {
             input,
@@ -674,10 +724,12 @@ fn run(cli: Cli) -> Result<()> {
             input,
             output,
             max_bits,
+            stage,
             json,
         } => {
-            let params =
+            let mut params =
                 serde_json::json!({"input": input, "output": output, "max_bits": max_bits});
+            stage.add_to(&mut params);
             report_or_json(run_local("codec.decompress", params)?, json, |r| {
                 print_decoded(
                     format!("decompress: {} bits", r.result["bits"]),
@@ -695,9 +747,10 @@ fn run(cli: Cli) -> Result<()> {
             fov,
             size,
             pixel_error,
+            stage,
             json,
         } => {
-            let params = serde_json::json!({
+            let mut params = serde_json::json!({
                 "input": input,
                 "output": output,
                 "eye": vec3_arg(&eye),
@@ -707,6 +760,7 @@ fn run(cli: Cli) -> Result<()> {
                 "size": size,
                 "pixel_error": pixel_error,
             });
+            stage.add_to(&mut params);
             report_or_json(run_local("codec.view", params)?, json, |r| {
                 print_decoded(
                     format!("view-decode: {} cells", r.result["cells"]),
@@ -743,9 +797,10 @@ fn run(cli: Cli) -> Result<()> {
             angle,
             origin,
             units,
+            stage,
             json,
         } => {
-            let params = serde_json::json!({
+            let mut params = serde_json::json!({
                 "input": input,
                 "output": output,
                 "tolerance": tolerance,
@@ -753,6 +808,7 @@ fn run(cli: Cli) -> Result<()> {
                 "origin": origin.as_deref().map(origin_param),
                 "units": units,
             });
+            stage.add_to(&mut params);
             report_or_json(run_local("tessellate", params)?, json, |r| {
                 let r = &r.result;
                 let units = r["units"].as_str().unwrap_or("");

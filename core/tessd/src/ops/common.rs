@@ -44,11 +44,24 @@ pub fn check_mesh_output(path: &Path) -> Result<(), OpError> {
 }
 
 /// The stage options of a request: `params.up_axis` (`"Y"`/`"Z"`, default Z) and
-/// `params.meters_per_unit` (default 1), the host's conventions.
+/// `params.meters_per_unit` (default 1, the unit of a mesh that names none), the host's
+/// conventions.
 ///
 /// # Errors
-/// `invalid_request` for another axis or a mistyped value.
+/// `invalid_request` for another axis or a mistyped, non-finite or non-positive value.
 pub fn stage_options(request: &Request) -> Result<StageOptions, OpError> {
+    stage_options_in(request, 1.0)
+}
+
+/// As [`stage_options`], with `default_meters_per_unit` when the request names none: a B-Rep's
+/// own units (millimetres: 0.001), so that a part keeps its size in every USD tool.
+///
+/// # Errors
+/// As [`stage_options`].
+pub fn stage_options_in(
+    request: &Request,
+    default_meters_per_unit: f64,
+) -> Result<StageOptions, OpError> {
     let up = match request.str_param("up_axis")? {
         None | Some("Z") | Some("z") => UpAxis::Z,
         Some("Y") | Some("y") => UpAxis::Y,
@@ -58,11 +71,19 @@ pub fn stage_options(request: &Request) -> Result<StageOptions, OpError> {
             )));
         }
     };
-    let mut stage = StageOptions::default().with_up_axis(up);
-    if let Some(m) = request.f64_param("meters_per_unit")? {
-        stage = stage.with_meters_per_unit(m);
-    }
-    Ok(stage)
+    let meters_per_unit = match request.f64_param("meters_per_unit")? {
+        None => default_meters_per_unit,
+        Some(m) if m.is_finite() && m > 0.0 => m,
+        Some(m) => {
+            return Err(OpError::request(format!(
+                "`meters_per_unit` must be a positive number of metres per unit (millimetres: \
+                 0.001), got {m}"
+            )));
+        }
+    };
+    Ok(StageOptions::default()
+        .with_up_axis(up)
+        .with_meters_per_unit(meters_per_unit))
 }
 
 /// The file stem of `path`, or `fallback`.

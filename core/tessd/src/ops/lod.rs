@@ -18,6 +18,7 @@ use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
+use tessd_simplify::{GridSize, Method};
 use tessd_usd::{LodSchemaOptions, MeshPrimOptions};
 
 /// Most levels one request may ask for.
@@ -58,6 +59,132 @@ fn level_values(request: &Request) -> Result<Vec<Value>, OpError> {
         )));
     }
     Ok(values)
+}
+
+/// What a level's goal amounts to on `mesh`, in the unit the chain must move along: cells per
+/// axis (grid), the tolerance in model units (quality: a percentage of the largest side of the
+/// referenced vertices' bounding box), the vertices to keep (complexity: a percentage of the
+/// referenced vertices, rounded as the simplifier rounds it).
+fn resolved_goals(methods: &[Method], mesh: &Mesh) -> Vec<f64> {
+    let mut referenced = vec![false; mesh.positions.len()];
+    for &i in &mesh.face_indices {
+        if let Some(r) = referenced.get_mut(i as usize) {
+            *r = true;
+        }
+    }
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    let mut vertices = 0u64;
+    for (p, _) in mesh.positions.iter().zip(&referenced).filter(|(_, r)| **r) {
+        vertices += 1;
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let size = (0..3)
+        .map(|k| f64::from(hi[k] - lo[k]))
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max);
+    methods
+        .iter()
+        .map(|m| match *m {
+            Method::Grid(GridSize::CellsPerAxis(n)) => f64::from(n),
+            Method::Grid(GridSize::CellSize(side)) => side,
+            Method::Quality(length) => length.resolve(size),
+            Method::Complexity(count) => count.resolve(vertices) as f64,
+        })
+        .collect()
+}
+
+/// A level as the request gave it (`"50%"`, `20000`).
+fn shown(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.trim().to_string(),
+        other => other.to_string(),
+    }
+}
+
+/// Refuses a chain whose levels do not get coarser from one to the next: for quality the
+/// levels are tolerances and must grow, for complexity vertex counts and for grid cells per
+/// axis, which must shrink. Percentages are resolved against `mesh` first, so that `"1%"` and
+/// `0.2` compare as the distances they are. The message names `levels`, says how the method
+/// reads them and offers the levels in an order that works.
+///
+/// # Errors
+/// `invalid_request` naming `levels`, the two levels at fault and the method.
+fn check_coarsening(
+    kind: MethodKind,
+    values: &[Value],
+    methods: &[Method],
+    mesh: &Mesh,
+) -> Result<(), OpError> {
+    let goals = resolved_goals(methods, mesh);
+    // The goal grows from one level to the next for quality, shrinks for the others.
+    let grows = kind == MethodKind::Quality;
+    let coarser = |a: f64, b: f64| if grows { b > a } else { b < a };
+    let Some(i) = (1..goals.len()).find(|&i| !coarser(goals[i - 1], goals[i])) else {
+        return Ok(());
+    };
+    let (reads, must, unit) = match kind {
+        MethodKind::Quality => (
+            "the largest error a vertex may move (a distance, or a percentage of the bounding \
+             box's largest side), which must grow",
+            "above",
+            "",
+        ),
+        MethodKind::Complexity => (
+            "the vertices to keep (a count, or a percentage of the input's vertices), which \
+             must shrink",
+            "below",
+            " vertices",
+        ),
+        MethodKind::Grid => ("the cells per axis, which must shrink", "below", ""),
+    };
+    let level = |j: usize| {
+        let given = shown(&values[j]);
+        let resolved = goals[j];
+        let exact = given.parse::<f64>().is_ok_and(|g| g == resolved);
+        if exact {
+            format!("LOD{}'s {given}{unit}", j + 1)
+        } else {
+            format!("LOD{}'s {given} ({}{unit})", j + 1, round_sig(resolved))
+        }
+    };
+    // The same levels, coarsening, each goal once.
+    let mut order: Vec<usize> = (0..goals.len()).collect();
+    order.sort_by(|&a, &b| {
+        let o = goals[a].total_cmp(&goals[b]);
+        if grows { o } else { o.reverse() }
+    });
+    order.dedup_by(|b, a| goals[*a] == goals[*b]);
+    let suggestion = order
+        .iter()
+        .map(|&j| shown(&values[j]))
+        .collect::<Vec<_>>()
+        .join(",");
+    Err(OpError::request(format!(
+        "`levels` must get coarser from each level to the next: with method {} a level is {}, \
+         but {} is not {must} {}; did you mean {suggestion}?",
+        kind.name(),
+        reads,
+        level(i),
+        level(i - 1),
+    )))
+}
+
+/// `x` to 4 significant digits (a resolved goal in a message).
+fn round_sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 17) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// The folder for one file per level: `per_level` = `true` (the output's folder) or a folder.
@@ -171,6 +298,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     };
 
     let mesh = input_mesh(&mut request, ctx)?;
+    check_coarsening(kind, &values, &methods, &mesh)?;
     ctx.progress(0.05, "simplify", "")?;
     let mut progress = |f: f64, stage: &str| ctx.progress(0.05 + 0.8 * f, stage, "").is_ok();
     let chain = tessd_simplify::lod::lod_chain(&mesh, &methods, &options, &mut progress)
@@ -188,6 +316,23 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             r
         })
         .collect();
+    // The goals get coarser (checked above), but what they give need not: grid cells are not
+    // nested, and a tolerance may keep every vertex. Each level that keeps no fewer vertices
+    // than the one before is named.
+    let mut previous = chain[0].report.input_vertices;
+    let mut warnings: Vec<String> = Vec::new();
+    for (i, (s, goal)) in chain.iter().zip(&values).enumerate() {
+        let kept = s.report.output_vertices;
+        if kept >= previous {
+            warnings.push(format!(
+                "LOD{} (goal {}) has {kept} vertices, not fewer than LOD{i}'s {previous}: it is \
+                 no coarser than the level before it",
+                i + 1,
+                shown(goal)
+            ));
+        }
+        previous = kept;
+    }
     let mut result = json!({
         "method": kind.name(),
         "lod_schema": match schema {
@@ -198,6 +343,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         "input_faces": chain[0].report.input_faces,
         "lod0": {"points": mesh.positions.len(), "faces": mesh.face_count()},
         "levels": levels,
+        "warnings": warnings,
     });
 
     let meshes: Vec<&Mesh> = std::iter::once(&mesh)

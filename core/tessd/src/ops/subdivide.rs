@@ -107,6 +107,8 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     let output = output_path(&request)?;
     if let Some(path) = output.as_deref() {
         check_mesh_output(path)?;
+        // Bad stage options are refused before the work, not when writing.
+        stage_options(&request)?;
     }
     let usd = match request.str_param("usd")?.unwrap_or("refined") {
         "refined" => UsdOutput::Refined,

@@ -12,7 +12,7 @@
 //! Parameters are described in docs/protocol.md ("tessellate").
 
 use super::brep_load::{brep_error, request_brep};
-use super::common::{check_mesh_output, is_usda, plain_number, stage_options, stem, usd_error};
+use super::common::{check_mesh_output, is_usda, plain_number, stage_options_in, stem, usd_error};
 use super::mesh_arrays::{mesh_error, mesh_to_arrays, output_path};
 use serde_json::{Value, json};
 use std::path::Path;
@@ -23,7 +23,7 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_tessellate::origin::SPACING_FRACTION;
 use tessd_tessellate::{Options, Origin, TessellateError, Tessellation};
-use tessd_usd::{MeshPrim, MeshPrimOptions};
+use tessd_usd::{MeshPrim, MeshPrimOptions, StageOptions};
 
 /// Parses a length: a positive number (document units) or a string holding one, optionally
 /// with a unit suffix (`"0.1mm"`, `"0.01 in"`, `"2cm"`, `"0.001m"`) converted into `units`.
@@ -173,12 +173,13 @@ pub fn parse_positions(v: Option<&Value>) -> Result<bool, OpError> {
     }
 }
 
-/// Writes the tessellation to `path`: a `.usda` with the f32 points relative to the origin and
-/// the origin as the prim's `xformOp:translate`; OBJ, PLY, OFF with absolute f64 coordinates
+/// Writes the tessellation to `path`: a `.usda` (stage options `stage`) with the f32 points
+/// relative to the origin and the origin as the prim's `xformOp:translate`; OBJ, PLY, OFF with
+/// absolute f64 coordinates
 /// when the points are shifted (as before, f32, when not); STL with absolute f32 ones. Returns
 /// the warnings that go with the file.
 fn write_output(
-    request: &Request,
+    stage: &StageOptions,
     t: &Tessellation,
     path: &Path,
     name: &str,
@@ -187,13 +188,12 @@ fn write_output(
 ) -> Result<Vec<String>, OpError> {
     let placement = &t.placement;
     if is_usda(path) {
-        let stage = stage_options(request)?;
         let mut prim =
             MeshPrim::new(&t.mesh).with_options(MeshPrimOptions::default().with_name(name));
         if placement.shifted() {
             prim = prim.with_translate(placement.origin);
         }
-        tessd_usd::write_usda_file(path, |w| tessd_usd::write_stage(w, &stage, &[prim]))
+        tessd_usd::write_usda_file(path, |w| tessd_usd::write_stage(w, stage, &[prim]))
             .map_err(usd_error)?;
         return Ok(t.warnings.clone());
     }
@@ -262,6 +262,9 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         (_, o) => o,
     };
     let (tolerance, diagonal) = absolute_tolerance(asked, &doc)?;
+    // A stage's metres per unit follow the document's units (mm: 0.001) unless the request
+    // names its own.
+    let stage = stage_options_in(&request, doc.units.meters_per_unit())?;
     ctx.progress(0.05, "validate", "")?;
     let total = doc.faces.len();
     // A cancelled job's progress call fails: the remaining faces are skipped.
@@ -323,9 +326,13 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
                 None => stem(Some(&path), "part"),
             };
             let units = doc.units.name();
-            let warnings = write_output(&request, &t, &path, &name, tolerance, units)?;
+            let warnings = write_output(&stage, &t, &path, &name, tolerance, units)?;
             ctx.progress(1.0, "done", "")?;
             result["output"] = json!(path.display().to_string());
+            if is_usda(&path) {
+                result["meters_per_unit"] = json!(stage.meters_per_unit);
+                result["up_axis"] = json!(stage.up_axis.token());
+            }
             if !is_usda(&path) && t.placement.shifted() {
                 // OBJ, PLY, OFF and STL hold absolute coordinates.
                 result["origin"] = json!([0.0, 0.0, 0.0]);
