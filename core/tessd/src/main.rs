@@ -3,7 +3,7 @@
 mod report;
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use report::{print_compare, print_lod, print_simplify, print_stats};
 use std::io::IsTerminal;
@@ -86,11 +86,12 @@ enum Command {
         /// Grid: cells along each axis of the bounding box.
         #[arg(long, conflicts_with = "cell_size")]
         cells: Option<u64>,
-        /// Grid: side of the cubic cells, in model units.
-        #[arg(long, allow_negative_numbers = true)]
-        cell_size: Option<f64>,
-        /// Quality: largest vertex displacement, in model units or as a percentage of the
-        /// largest side of the bounding box ("0.5%").
+        /// Grid: side of the cubic cells, in model units or a length with a unit ("2mm", with
+        /// --units).
+        #[arg(long, value_name = "X|LENGTH", allow_hyphen_values = true)]
+        cell_size: Option<String>,
+        /// Quality: largest vertex displacement, in model units, a length with a unit ("5mm",
+        /// with --units) or a percentage of the largest side of the bounding box ("0.5%").
         #[arg(long, value_name = "X|X%", allow_hyphen_values = true)]
         max_error: Option<String>,
         /// Complexity: vertices to keep, a count or a percentage of the input's ("20%").
@@ -154,8 +155,9 @@ enum Command {
         /// Goals of LOD1, LOD2..., comma-separated, each level coarser than the one before
         /// (a chain that does not get coarser is refused): for --method complexity the vertices
         /// to keep, counts or percentages of the input's, which shrink ("50%,20%,5%"); for
-        /// quality the largest error, distances or percentages of the bounding box's largest
-        /// side, which grow ("0.5%,2%"); for grid the cells per axis, which shrink ("32,16,8").
+        /// quality the largest error, distances (model units, or "5mm" with --units) or
+        /// percentages of the bounding box's largest side, which grow ("0.5%,2%"); for grid the
+        /// cells per axis, which shrink ("32,16,8").
         #[arg(
             long,
             value_delimiter = ',',
@@ -411,6 +413,10 @@ struct ClusterArgs {
     /// Never merge boundary or feature-edge vertices with other vertices.
     #[arg(long)]
     preserve_boundaries: bool,
+    /// The unit of the mesh's coordinates (mm, cm, m, in), which a mesh file does not say:
+    /// needed for lengths given with a unit ("5mm"), which are converted into it.
+    #[arg(long, value_parser = ["mm", "cm", "m", "in"])]
+    units: Option<String>,
 }
 
 impl ClusterArgs {
@@ -420,6 +426,7 @@ impl ClusterArgs {
         params["weighting"] = serde_json::json!(self.weighting);
         params["triangulate"] = serde_json::json!(self.triangulate);
         params["preserve_boundaries"] = serde_json::json!(self.preserve_boundaries);
+        params["units"] = serde_json::json!(self.units);
     }
 }
 
@@ -1001,7 +1008,15 @@ fn run_local_with(op: &str, params: serde_json::Value, arrays: &[OwnedArray]) ->
         base_dir: Some(cwd),
         arrays: Arrays::from_owned(arrays),
     };
-    let response = with_progress(op, |ctx| tessd::ops::registry().run(op, request, ctx))?;
+    // Errors name the CLI's flags (`--cells`), not the protocol's parameters (`cells`).
+    let response = with_progress(op, |ctx| {
+        tessd::ops::registry()
+            .run(op, request, ctx)
+            .map_err(|mut e| {
+                e.message = report::cli_words(&Cli::command(), op, &e.message);
+                e
+            })
+    })?;
     // Every verb that writes a file says what the file could not hold.
     for line in report::dropped_warnings(op, &response) {
         eprintln!("{line}");

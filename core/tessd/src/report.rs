@@ -251,3 +251,74 @@ pub fn convert_line(output: &Path, r: &serde_json::Value) -> String {
     }
     line
 }
+
+/// The CLI verb that runs protocol operation `op`.
+fn verb_of(op: &str) -> &str {
+    match op {
+        "mesh.convert" => "convert",
+        "mesh.stats" => "stats",
+        "codec.compress" => "compress",
+        "codec.decompress" => "decompress",
+        "codec.view" => "view-decode",
+        other => other,
+    }
+}
+
+/// Parameters whose CLI argument has another name than the parameter (the rest are spelt
+/// alike: `cell_size` is `--cell-size`).
+const RENAMED: &[(&str, &str, &str)] = &[
+    ("lod", "output", "out"),
+    ("lod", "per_level", "per_level_dir"),
+    ("simplify", "partition_output", "partition"),
+    ("subdivide", "normals", "no_normals"),
+    ("subdivide", "usd", "usd_cage"),
+    ("compare", "direction", "one_sided"),
+];
+
+/// An operation's error message in the words of the CLI: each backticked protocol parameter
+/// (`` `cells` ``, `` `output` ``) becomes the verb's flag (`` `--cells` ``, `` `--out` ``) or
+/// positional argument (`` `OUTPUT` ``), found in the verb's own argument definitions (`cli`,
+/// the clap command), so a new flag needs no table entry unless its name differs from the
+/// parameter's ([`RENAMED`]). Backticked words that are no argument of the verb stay as they
+/// are. Daemon clients get the op's own message, with parameter names.
+pub fn cli_words(cli: &clap::Command, op: &str, message: &str) -> String {
+    let verb = verb_of(op);
+    let Some(cmd) = cli.get_subcommands().find(|c| c.get_name() == verb) else {
+        return message.to_string();
+    };
+    let shown = |param: &str| -> Option<String> {
+        let id = RENAMED
+            .iter()
+            .find(|(v, p, _)| *v == verb && *p == param)
+            .map_or(param, |r| r.2);
+        let arg = cmd.get_arguments().find(|a| a.get_id().as_str() == id)?;
+        Some(match arg.get_long() {
+            Some(long) => format!("--{long}"),
+            None => arg
+                .get_value_names()
+                .and_then(|n| n.first())
+                .map_or_else(|| id.to_ascii_uppercase(), |n| n.to_string()),
+        })
+    };
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(start) = rest.find('`') {
+        let Some(len) = rest[start + 1..].find('`') else {
+            break;
+        };
+        let word = &rest[start + 1..start + 1 + len];
+        out.push_str(&rest[..=start]);
+        let is_name = !word.is_empty()
+            && word
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+        match shown(word).filter(|_| is_name) {
+            Some(flag) => out.push_str(&flag),
+            None => out.push_str(word),
+        }
+        out.push('`');
+        rest = &rest[start + len + 2..];
+    }
+    out.push_str(rest);
+    out
+}

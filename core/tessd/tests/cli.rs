@@ -110,7 +110,8 @@ fn job_file_matches_socket_and_writes_outputs() {
         )
         .unwrap();
     assert_eq!(lines[0]["result"], over_socket);
-    // The converted file is the same mesh again.
+    // The converted file is the same surface again, its vertices split at the UV seams (PLY
+    // holds one UV per vertex): 295 more vertices, the same faces and bounds.
     let (ply_stats, _) = c
         .call(
             "mesh.stats",
@@ -119,7 +120,18 @@ fn job_file_matches_socket_and_writes_outputs() {
             |_| {},
         )
         .unwrap();
-    assert_eq!(ply_stats, over_socket);
+    for key in [
+        "faces",
+        "triangles",
+        "face_sizes",
+        "bounds",
+        "non_manifold_edges",
+    ] {
+        assert_eq!(ply_stats[key], over_socket[key], "{key}");
+    }
+    assert_eq!(ply_stats["stored_vertices"], 2930 + 295);
+    assert_eq!(lines[1]["result"]["written"]["split_vertices"], 295);
+    assert_eq!(lines[1]["result"]["dropped_attributes"], json!([]));
 }
 
 #[test]

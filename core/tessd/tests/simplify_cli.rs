@@ -190,38 +190,39 @@ fn bad_options_fail_clearly_and_write_nothing() {
         c.arg("simplify").args([&spot, &out]).args(args);
         c
     };
+    // The CLI's messages name its flags (the daemon's name the parameters).
     for (args, message) in [
         (
             &["--method", "quality", "--max-error", "-1"][..],
-            "invalid_request: `max_error` must be positive, got -1",
+            "invalid_request: `--max-error` must be positive, got -1",
         ),
         (
             &["--method", "quality", "--max-error", "abc%"],
-            "`max_error` must be a positive number or a percentage",
+            "`--max-error` must be a positive number or a percentage",
         ),
         (
             &["--method", "quality", "--max-error", "NaN%"],
-            "`max_error` must be a positive number or a percentage",
+            "`--max-error` must be a positive number or a percentage",
         ),
         (
             &["--method", "quality"],
-            "method \"quality\" needs `max_error`",
+            "method \"quality\" needs `--max-error`",
         ),
         (
             &["--method", "complexity", "--target-vertices", "2930"],
-            "`target_vertices`: the target of 2930 vertices must be between 1 and the input's 2930",
+            "`--target-vertices`: the target of 2930 vertices must be between 1 and the input's 2930",
         ),
         (
             &["--method", "complexity", "--target-vertices", "0%"],
-            "`target_vertices` must be positive, got 0%",
+            "`--target-vertices` must be positive, got 0%",
         ),
         (
             &["--method", "grid", "--cells", "0"],
-            "`cells` must be a positive integer",
+            "`--cells` must be a positive integer",
         ),
         (
             &["--method", "grid", "--cell-size", "-2"],
-            "`cell_size` must be a positive number",
+            "`--cell-size` must be a positive number",
         ),
     ] {
         let stderr = run_err(&mut simplify(args));

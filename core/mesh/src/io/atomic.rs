@@ -110,6 +110,13 @@ impl TempOutput {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
+        // Say what is missing, not only "No such file or directory".
+        if !dir.exists() {
+            return Err(std::io::Error::new(
+                ErrorKind::NotFound,
+                format!("the folder {}/ does not exist", dir.display()),
+            ));
+        }
         sweep_stale_temps(dir);
         static COUNTER: AtomicU64 = AtomicU64::new(0);
         let (file, temp) = create_temp(dir, &name.to_string_lossy(), &COUNTER)?;

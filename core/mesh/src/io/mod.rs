@@ -38,6 +38,11 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+/// The end of [`Format::from_path`]'s message for an extension it does not know: the formats
+/// this crate reads and writes (a caller that also handles other formats, such as tessd's USD
+/// stages, may extend it).
+pub const EXPECTED_EXTENSIONS: &str = "expected .obj, .ply, .stl or .off";
+
 /// Mesh file formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -60,7 +65,7 @@ impl Format {
     pub fn from_path(path: &Path) -> Result<Format, MeshError> {
         let Some(ext) = path.extension() else {
             return Err(MeshError::Unsupported(format!(
-                "{}: no file extension; expected .obj, .ply, .stl or .off",
+                "{}: no file extension; {EXPECTED_EXTENSIONS}",
                 path.display()
             )));
         };
@@ -71,7 +76,7 @@ impl Format {
             "stl" => Ok(Format::Stl),
             "off" => Ok(Format::Off),
             _ => Err(MeshError::Unsupported(format!(
-                "unsupported mesh file extension '.{ext}'; expected .obj, .ply, .stl or .off"
+                "unsupported mesh file extension '.{ext}'; {EXPECTED_EXTENSIONS}"
             ))),
         }
     }

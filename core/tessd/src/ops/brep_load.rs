@@ -90,7 +90,10 @@ pub fn request_brep(request: &mut Request) -> Result<Document, OpError> {
                 return read_occt(&text, units, &name, file_name);
             }
             let value = serde_json::from_str(&text).map_err(|e| {
-                OpError::new(ErrorCode::InvalidBrep, format!("{name}: not JSON: {e}"))
+                OpError::new(
+                    ErrorCode::InvalidBrep,
+                    format!("{name}: not JSON: {e}{}", cad_file_hint(&path)),
+                )
             })?;
             (value, name)
         }
@@ -301,6 +304,31 @@ fn number(x: f64) -> Value {
     } else {
         serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)
     }
+}
+
+/// The next step for a CAD exchange file tessd does not read itself (STEP, IGES): export it
+/// to a `tessd-brep` JSON document through OCP; empty for other files.
+pub fn cad_file_hint(path: &std::path::Path) -> String {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let kind = match ext.as_str() {
+        "step" | "stp" => "STEP",
+        "iges" | "igs" => "IGES",
+        _ => return String::new(),
+    };
+    let file = path
+        .file_name()
+        .map_or_else(|| "PART".into(), |n| n.to_string_lossy().into_owned());
+    let json = path
+        .file_stem()
+        .map_or_else(|| "PART".into(), |n| n.to_string_lossy().into_owned());
+    format!(
+        "; tessd reads B-Rep JSON documents and OpenCASCADE .brep files, not {kind}: export it \
+         first with `python -m tessd.brep export {file} {json}.json` (it needs OCP: \
+         `pip install 'tessd[cad]'`, or the CAD venv .venv-cad from scripts/setup.sh)"
+    )
 }
 
 #[cfg(test)]

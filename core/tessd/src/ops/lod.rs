@@ -245,6 +245,9 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             )));
         }
     }
+    if kind == MethodKind::Quality {
+        super::simplify::lengths_in_model_units(&mut request, &["levels"])?;
+    }
     let values = level_values(&request)?;
     let methods = values
         .iter()

@@ -198,6 +198,62 @@ pub fn report_json(r: &Report) -> Value {
     })
 }
 
+/// Rewrites the length parameters `keys` (a value, or a list of values such as `lod`'s
+/// `levels`) given with a unit (`"5mm"`, `"0.2 in"`; mm, cm, m, in) as numbers in the mesh's
+/// model unit, which `params.units` names: a mesh file carries no unit, so a length with one
+/// needs it (refused otherwise, saying so). Plain numbers (`0.2`, `"0.2"`) are model units and
+/// percentages (`"1%"`) stay as they are.
+///
+/// # Errors
+/// `invalid_request` for an unknown `units`, a unit-bearing length without `units`, or a
+/// length [`super::tessellate::parse_length`] refuses.
+pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<(), OpError> {
+    let units = match request.str_param("units")? {
+        None => None,
+        Some(name) => Some(tessd_brep::Units::from_name(name).ok_or_else(|| {
+            OpError::request(format!(
+                "`units` (the unit of the mesh's coordinates) must be mm, cm, m or in, got {name:?}"
+            ))
+        })?),
+    };
+    let convert = |key: &str, v: &mut Value| -> Result<(), OpError> {
+        let Some(text) = v.as_str() else {
+            return Ok(());
+        };
+        let t = text.trim();
+        let has_unit = !t.ends_with('%')
+            && t.chars()
+                .any(|c| c.is_ascii_alphabetic() && c != 'e' && c != 'E');
+        if !has_unit {
+            // A plain number written as text is a number in model units.
+            if let Some(x) = super::common::plain_number(t) {
+                *v = json!(x);
+            }
+            return Ok(());
+        }
+        let Some(units) = units else {
+            return Err(OpError::request(format!(
+                "`{key}` {text:?} has a unit, but a mesh file has none: give `units` (the unit \
+                 of the mesh's coordinates: mm, cm, m or in), or a number in model units"
+            )));
+        };
+        *v = json!(super::tessellate::parse_length(key, v, units)?);
+        Ok(())
+    };
+    for &key in keys {
+        match request.params.get_mut(key) {
+            Some(Value::Array(items)) => {
+                for item in items {
+                    convert(key, item)?;
+                }
+            }
+            Some(v) => convert(key, v)?,
+            None => {}
+        }
+    }
+    Ok(())
+}
+
 /// Parameters that only one method takes.
 const METHOD_PARAMS: [(&str, MethodKind); 4] = [
     ("cells", MethodKind::Grid),
@@ -318,6 +374,7 @@ pub fn remove_all(files: &[std::path::PathBuf]) {
 /// output format tessd cannot write, `io`, `cancelled`.
 pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> {
     ctx.progress(0.0, "read", "")?;
+    lengths_in_model_units(&mut request, &["max_error", "cell_size"])?;
     let (kind, method, what) = parse_method(&request)?;
     let partition_path = request
         .str_param("partition_output")?

@@ -329,6 +329,8 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             let warnings = write_output(&stage, &t, &path, &name, tolerance, units)?;
             ctx.progress(1.0, "done", "")?;
             result["output"] = json!(path.display().to_string());
+            // The B-Rep faces are face groups: PLY, STL and OFF cannot hold them.
+            result["dropped_attributes"] = json!(super::common::file_dropped(&t.mesh, &path));
             if is_usda(&path) {
                 result["meters_per_unit"] = json!(stage.meters_per_unit);
                 result["up_axis"] = json!(stage.up_axis.token());
