@@ -14,6 +14,15 @@ swaps the object's mesh data (the object keeps its name, transform and modifiers
 that fails or is already below the target is skipped and reported; the others finish. The
 report and the redo panel say what was achieved per object: vertices, faces, the maximum
 deviation in scene units and in % of the object's size, the daemon's note.
+
+Twisted polygons (issue 32): the quality and complexity goals bound the distance to the fan
+triangulation of each polygon (first corner to the others), which for quads is Blender's own
+split (its loop triangles take the first-to-third diagonal unless that folds the quad over).
+When the daemon reports input polygons twisted by more than the tolerance (or the error
+reached), another split of them (another tool's diagonal, Blender's ear-clipping of an n-gon)
+may lie up to `polygon_twist` farther: that is reported as a WARNING and shown in the redo
+panel (:func:`twist_line`). Polygons are sent as they are, not as Blender's loop triangles;
+docs/simplify.md ("Twisted polygons") says why.
 """
 
 import bpy
@@ -218,9 +227,21 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
         return results
 
     def summary(self, context, tasks):
-        lines = [achieved_line(context, t.label, t.requests[0].result, t.unit.objects[0],
-                               t.requests[0].scale) for t in tasks]
-        self.achieved = "\n".join(lines)
+        lines, panel = [], []
+        for t in tasks:
+            result, scale = t.requests[0].result, t.requests[0].scale
+            twist = twist_line(context, t.label, result, scale)
+            # A twist note goes out as a warning of its own, not inside the summary too.
+            note = result.get("note") or ""
+            if twist:
+                note = note.split(TWIST_NOTE)[0].rstrip("; ")
+            line = achieved_line(context, t.label, result, t.unit.objects[0], scale, note)
+            lines.append(line)
+            panel.append(line)
+            if twist:
+                self.report({'WARNING'}, "tessd simplify: " + twist)
+                panel.append("⚠ " + twist)
+        self.achieved = "\n".join(panel)
         dropped = ["%s: %s" % (t.label, ", ".join(t.dropped)) for t in tasks if t.dropped]
         if dropped:
             self.report({'WARNING'}, "tessd simplify: not carried to the result: "
@@ -228,9 +249,33 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
         return "tessd simplify: " + "; ".join(lines)
 
 
-def achieved_line(context, label, result, obj, scale):
+#: How the daemon's note about twisted polygons begins (after any other note and "; ").
+TWIST_NOTE = "the bound holds for tessd's fan triangulation"
+
+
+def twist_line(context, label, result, scale):
+    """The warning for input polygons twisted by more than the tolerance (quality goal) or
+    the error reached (complexity goal), with lengths in scene units; None when there are
+    none (or the method does not bound the surfaces)."""
+    n = result.get("twisted_polygons") or 0
+    twist = result.get("polygon_twist")
+    if n <= 0 or not twist:
+        return None
+    limit = result.get("tolerance")
+    what = "the tolerance"
+    if limit is None:
+        limit, what = result.get("surface_error"), "the deviation reached"
+    ratio = " (%.3g× %s)" % (twist / limit, what) if limit else ""
+    return ("%s: %d polygon%s twisted by up to %s%s; the deviation holds for tessd's split of "
+            "each polygon (first corner to the others, as Blender splits quads), another "
+            "split (another tool's diagonal, an n-gon's triangulation) may lie up to that "
+            "much farther" % (label, n, " is" if n == 1 else "s are",
+                              common.length_text(context, twist * scale), ratio))
+
+
+def achieved_line(context, label, result, obj, scale, note=None):
     """One object's figures: vertices, faces, the deviation (world space, scene units, and
-    % of the object's largest side), clusters, the daemon's note."""
+    % of the object's largest side), clusters, and `note` (default: the daemon's)."""
     text = "%s: %d → %d vertices, %d → %d faces" % (
         label, result["input_vertices"], result["output_vertices"], result["input_faces"],
         result["output_faces"])
@@ -244,8 +289,9 @@ def achieved_line(context, label, result, obj, scale):
                                              100.0 * world / size)
     if result.get("clusters") is not None:
         text += ", %d clusters" % result["clusters"]
-    if result.get("note"):
-        text += " (%s)" % result["note"]
+    note = result.get("note") if note is None else note
+    if note:
+        text += " (%s)" % note
     return text
 
 

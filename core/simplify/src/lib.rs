@@ -20,7 +20,9 @@
 //! 5. elimination of what collapsed (`elimination.rs`);
 //! 6. beyond the paper, for the quality goal: cells split further until every collapsed face's
 //!    image lies on the output (`coverage.rs`), so the tolerance bounds the distance between the
-//!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`);
+//!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`),
+//!    with how far another triangulation of the input's non-planar polygons may lie from the
+//!    fan that bound holds for ([`polygon_twist`]);
 //!
 //! The passes over vertices, faces and clusters (weights, bounds, binning, statistics,
 //! quadrics, representatives, elimination) run on every core of rayon's pool (`--threads` /
@@ -64,6 +66,7 @@ pub mod lod;
 mod options;
 mod partition;
 pub mod partition_boxes;
+pub mod polygon_twist;
 mod quadric;
 mod representative;
 mod surface_bound;
@@ -120,6 +123,16 @@ pub struct Report {
     pub tolerance: Option<f64>,
     /// The complexity goal's vertex count, when that method was used.
     pub target_vertices: Option<u64>,
+    /// Quality and complexity goals: the largest distance between an input polygon's fan
+    /// triangulation (the one tessd bounds the surfaces for: first corner to every other
+    /// edge) and any other triangulation of it; exact for quads, an upper bound for polygons
+    /// of five corners or more, 0 for triangles (see `polygon_twist.rs`). Another reader's
+    /// split of the input may lie up to this much farther from the output than
+    /// `surface_error`. `None` for the grid goal.
+    pub polygon_twist: Option<f64>,
+    /// Input polygons twisted by more than the tolerance (quality goal) or the surface error
+    /// reached (complexity goal); [`Report::twist_note`] speaks of them.
+    pub twisted_polygons: u64,
 }
 
 /// The simplified mesh, its partition's cells (when asked for) and the figures.
@@ -158,6 +171,8 @@ pub(crate) struct Prepared<'a> {
     size: f64,
     classes: Option<Vec<u8>>,
     input_vertices: u64,
+    /// The input polygons' twists, measured when the fan triangulation was forced.
+    twists: polygon_twist::Twists,
 }
 
 impl<'a> Prepared<'a> {
@@ -173,7 +188,14 @@ impl<'a> Prepared<'a> {
             return Err(SimplifyError::Empty);
         }
         let triangulate = options.triangulate || force_triangles;
-        let work: Cow<Mesh> = if triangulate && mesh.faces().any(|f| f.len() > 3) {
+        let polygons = mesh.faces().any(|f| f.len() > 3);
+        // The bounded goals report how far another split of the polygons may lie.
+        let twists = if force_triangles && polygons {
+            polygon_twist::Twists::of(mesh)
+        } else {
+            polygon_twist::Twists::default()
+        };
+        let work: Cow<Mesh> = if triangulate && polygons {
             Cow::Owned(triangulate::triangulate(mesh))
         } else {
             Cow::Borrowed(mesh)
@@ -194,6 +216,7 @@ impl<'a> Prepared<'a> {
             size,
             classes,
             input_vertices,
+            twists,
         })
     }
 
@@ -481,6 +504,11 @@ impl<'a> Prepared<'a> {
         } else {
             None
         };
+        if bounded {
+            report.polygon_twist = Some(self.twists.max());
+            let limit = report.tolerance.or(report.surface_error);
+            report.twisted_polygons = limit.map_or(0, |l| self.twists.count_above(l));
+        }
         report.clusters = partition.clusters as u64;
         report.output_vertices = used as u64;
         report.output_faces = out.face_count() as u64;

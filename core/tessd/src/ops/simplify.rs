@@ -174,14 +174,17 @@ pub fn target_note(r: &Report) -> Option<String> {
     })
 }
 
-/// The report's figures as JSON, with [`target_note`] as `note` (`null` when there is none)
-/// and `dropped_attributes`: simplification carries everything a mesh holds (normals, UVs,
-/// creases, face groups, sharp edges, generic attributes), so the list starts empty; a file
-/// output adds what its format cannot hold.
+/// The report's figures as JSON, with [`target_note`] and [`Report::twist_note`] as `note`
+/// (joined by "; "; `null` when there is none) and `dropped_attributes`: simplification
+/// carries everything a mesh holds (normals, UVs, creases, face groups, sharp edges, generic
+/// attributes), so the list starts empty; a file output adds what its format cannot hold.
 pub fn report_json(r: &Report) -> Value {
+    let notes: Vec<String> = target_note(r).into_iter().chain(r.twist_note()).collect();
     json!({
         "dropped_attributes": [],
-        "note": target_note(r),
+        "note": (!notes.is_empty()).then(|| notes.join("; ")),
+        "polygon_twist": r.polygon_twist,
+        "twisted_polygons": r.polygon_twist.map(|_| r.twisted_polygons),
         "input_vertices": r.input_vertices,
         "input_faces": r.input_faces,
         "output_vertices": r.output_vertices,
