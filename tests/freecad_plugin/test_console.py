@@ -317,6 +317,9 @@ class Simplify(DocCase):
         self.assertEqual(out["vertices"], expect["output_vertices"])
         self.assertEqual(out["faces"], expect["output_faces"])
         self.assertAlmostEqual(out["surface_error"], expect["surface_error"], places=9)
+        # FreeCAD meshes are triangles: no twisted polygon, so no note about one (issue 32).
+        self.assertEqual((out["report"]["polygon_twist"], out["report"]["twisted_polygons"]),
+                         (0.0, 0))
         self.assertEqual(self.names(), before)
 
 
