@@ -285,3 +285,133 @@ def test_render_draws_a_usd_core_lod_stage_one_panel_per_variant(tmp_path):
                                   "--columns", "1", "--json").stdout)
         assert ra["panels"][0]["triangles"] == r["panels"][i]["triangles"]
         assert np.array_equal(grid_png[:, 64 * i:64 * (i + 1)], np.asarray(read_png(alone))[:48])
+
+
+# ------------------------------------------------------------------------------------------
+# References and payloads (what the Blender add-on's export_usd writes)
+
+
+def _part_layer(path: Path, seed: int, translate=None, default: bool = True) -> None:
+    """A layer written by usd-core: `/Part` (an Xform, translated when asked) holding a bumpy
+    grid mesh, its defaultPrim."""
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    part = UsdGeom.Xform.Define(stage, "/Part")
+    if translate is not None:
+        part.AddTranslateOp().Set(Gf.Vec3d(*translate))
+        part.AddRotateXYZOp().Set(Gf.Vec3f(30, 0, 45))
+    define_mesh(stage, "/Part/geo", *grid(3, seed=seed))
+    if default:
+        stage.SetDefaultPrim(part.GetPrim())
+    stage.GetRootLayer().Save()
+
+
+def _matrix(tx: float, ty: float, tz: float, angle: float) -> Gf.Matrix4d:
+    """A world matrix as the add-on writes it (`matrix4d xformOp:transform`)."""
+    m = Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(1, 0, 0), angle))
+    m.SetTranslateOnly(Gf.Vec3d(tx, ty, tz))
+    return m
+
+
+@pytest.fixture
+def assembly(tmp_path, shared_data) -> Path:
+    """What `export_usd` writes for three objects: `scene.usda` (usd-core here) with one Xform
+    per object carrying its world matrix as `xformOp:transform` and `prepend references =
+    @./scene_<name>.usda@`, beside the objects' own stages. One object's stage is what the
+    daemon's `mesh.convert` writes for the add-on (tessd's writer), the others usd-core's:
+    one with its own transform on the referenced prim, one reached through a payload and a
+    second reference from a subfolder, one referenced twice (instanced)."""
+    run_tessd("convert", shared_data / "mesh/spot_triangulated.obj", tmp_path / "scene_Spot.usda")
+    _part_layer(tmp_path / "scene_Plate.usda", 1, translate=(0, 0, 2))
+    (tmp_path / "parts").mkdir()
+    _part_layer(tmp_path / "parts/inner.usda", 2)
+    # A layer whose default prim has a payload to a sibling file (resolved relative to itself).
+    stage = Usd.Stage.CreateNew(str(tmp_path / "parts/holder.usda"))
+    holder = UsdGeom.Xform.Define(stage, "/Holder")
+    holder.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
+    holder.GetPrim().GetPayloads().AddPayload("./inner.usda")
+    stage.SetDefaultPrim(holder.GetPrim())
+    stage.GetRootLayer().Save()
+
+    path = tmp_path / "scene.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    scene = UsdGeom.Xform.Define(stage, "/Scene")
+    stage.SetDefaultPrim(scene.GetPrim())
+    for name, file, m in [("Spot", "./scene_Spot.usda", _matrix(1, 2, 3, 90)),
+                          ("Plate", "./scene_Plate.usda", None),
+                          ("Holder", "parts/holder.usda", _matrix(-4, 0, 0, 0)),
+                          ("Spot_001", "./scene_Spot.usda", _matrix(0, 5, 0, -90))]:
+        x = UsdGeom.Xform.Define(stage, "/Scene/" + name)
+        if m is not None:
+            x.AddTransformOp().Set(m)
+        x.GetPrim().GetReferences().AddReference(file)
+    stage.GetRootLayer().Save()
+    text = path.read_text()
+    assert "prepend references = @./scene_Spot.usda@" in text
+    return path
+
+
+def test_references_and_payloads_compose_as_usd_core_does(assembly):
+    stage = Usd.Stage.Open(str(assembly))
+    ref = reference(stage)
+    got = stats(assembly)
+    # Two spots, the plate's grid, the holder's grid: all four reached.
+    assert ref["faces"] == 2 * 5856 + 2 * 9
+    assert_matches(got, ref)
+    # Each object alone where usd-core puts it (the referenced prim's own transform kept under
+    # a referencing prim without one; the payload's scale under the holder's matrix): the
+    # others deactivated in a copy of the assembly beside it.
+    for name in ("Spot", "Plate", "Holder", "Spot_001"):
+        one = Usd.Stage.Open(str(assembly))
+        for other in ("Spot", "Plate", "Holder", "Spot_001"):
+            if other != name:
+                one.GetPrimAtPath("/Scene/" + other).SetActive(False)
+        alone = assembly.with_name(f"only_{name}.usda")
+        one.GetRootLayer().Export(str(alone))
+        one.GetRootLayer().Reload(True)  # the assembly's layer is shared by the next Open
+        one_ref = reference(Usd.Stage.Open(str(alone)))
+        assert one_ref["faces"] == (5856 if name.startswith("Spot") else 9)
+        assert_matches(stats(alone), one_ref)
+
+
+def test_a_stage_reached_through_references_renders(assembly, tmp_path, daemon):
+    out = tmp_path / "scene.png"
+    r = json.loads(run_tessd("render", assembly, out, "--size", "96x64", "--json").stdout)
+    assert r["triangles"] == 2 * 5856 + 2 * 18
+    assert r["covered"] > 100 and out.exists()
+    # Over the socket too: mesh.stats of the assembly.
+    with tessd.Client(daemon.socket, timeout=60) as c:
+        s, _ = c.call("mesh.stats", {"input": str(assembly)})
+    assert s["faces"] == 2 * 5856 + 2 * 9
+
+
+def test_arcs_tessd_does_not_follow_are_refused_naming_them(tmp_path):
+    _part_layer(tmp_path / "part.usda", 3)
+    assert Usd.Stage.Open(str(tmp_path / "part.usda")).Export(str(tmp_path / "part.usdc"))
+    path = tmp_path / "s.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    stage.DefinePrim("/A").GetReferences().AddReference("./part.usdc")
+    stage.GetRootLayer().Save()
+    # usd-core composes it; tessd says which arc of which prim it does not follow, and how.
+    assert reference(Usd.Stage.Open(str(path)))["faces"] == 9
+    run = run_tessd("stats", path, check=False)
+    assert run.returncode == 1
+    assert "unsupported:" in run.stderr
+    assert "/A: references @./part.usdc@: only .usda layers are followed, not .usdc" in run.stderr
+    assert str(path) in run.stderr and "usdcat" in run.stderr
+    # A missing file names the arc and the resolved path.
+    path.write_text(path.read_text().replace("part.usdc", "gone.usda"))
+    run = run_tessd("stats", path, check=False)
+    assert run.returncode == 1 and "io:" in run.stderr
+    assert "gone.usda (/A: references @./gone.usda@" in run.stderr, run.stderr
+    # A cycle: a layer referencing itself through another.
+    for a, b in (("x", "y"), ("y", "x")):
+        s = Usd.Stage.CreateNew(str(tmp_path / f"{a}.usda"))
+        p = s.DefinePrim(f"/{a.upper()}")
+        p.GetReferences().AddReference(f"./{b}.usda")
+        s.SetDefaultPrim(p)
+        s.GetRootLayer().Save()
+    run = run_tessd("stats", tmp_path / "x.usda", check=False)
+    assert run.returncode == 1 and "a cycle of references" in run.stderr, run.stderr

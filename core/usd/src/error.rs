@@ -49,10 +49,8 @@ pub enum UsdError {
     #[error("{0}")]
     Unsupported(String),
     /// The stage holds no mesh a viewer would show (no visible `def Mesh` prim, in the selected
-    /// variants; references and payloads are not followed).
-    #[error(
-        "{path}: the stage has no visible Mesh prim (references and payloads are not followed)"
-    )]
+    /// variants, of its own or through its references and payloads to local `.usda` files).
+    #[error("{path}: the stage has no visible Mesh prim")]
     NoMeshes {
         /// The file (or the name given to [`crate::reader::parse_usda`]).
         path: String,

@@ -8,7 +8,8 @@
 //! It also reads `.usda` stages back as meshes ([`reader`]: [`read_usda`], [`parse_usda`]):
 //! every `Mesh` prim with its transforms applied, the variant sets (a LOD chain's levels as
 //! [`UsdStage::variant_panels`]) and what a viewer shows by default ([`UsdStage::composed`]).
-//! Binary crate files (`.usdc`) and `.usdz` packages are refused with a clear error.
+//! References and payloads to local `.usda` files are followed. Binary crate files (`.usdc`)
+//! and `.usdz` packages are refused with a clear error.
 //!
 //! Each stage has one root `Xform` (kind `component`, the layer's `defaultPrim`) with:
 //!
@@ -53,6 +54,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod compose;
 mod error;
 mod file;
 mod names;
@@ -72,7 +74,7 @@ pub use options::{
     LodSchemaOptions, MeshPrim, MeshPrimOptions, StageOptions, SubdivisionScheme, UpAxis,
 };
 pub use primvars::dropped_by_usd;
-pub use reader::{UsdMesh, UsdStage, UsdVariantSet, parse_usda, read_usda};
+pub use reader::{UsdLodRoot, UsdMesh, UsdStage, UsdVariantSet, parse_usda, read_usda};
 pub use writer::{write_lod_schema, write_lod_variants, write_mesh_stage, write_stage};
 
 #[cfg(test)]

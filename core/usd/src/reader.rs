@@ -8,8 +8,13 @@
 //! `xform_ops.rs`, and builds a [`tessd_mesh::Mesh`] per `Mesh` prim (`usda_mesh.rs`):
 //!
 //! - prims: `def` prims of any type, nested; `over` and `class` prims (and what they hold) are
-//!   not shown, nor inactive ones (`active = false`). Only this layer is read: `references`,
-//!   `payload`, `subLayers` and `inherits` are skipped, not followed.
+//!   not shown, nor inactive ones (`active = false`).
+//! - composition: `references` and `payload`s to prims of local `.usda` files (relative to the
+//!   layer naming them, or absolute) and of the same layer are followed (`compose.rs`; what the
+//!   Blender add-on's `export_usd` writes); other assets (`.usdc`, URLs, resolver paths) are
+//!   refused naming the arc and the file; cycles and depth are bounded. `subLayers`,
+//!   `inherits` and `specializes` are not followed. [`parse_usda`], which reads no file, follows
+//!   internal arcs only.
 //! - transforms: the `xformOp:*` of `xformOpOrder` on the prim and its Xformable ancestors
 //!   (translate, scale, rotate*, orient, transform, single-axis forms, `!invert!`,
 //!   `!resetXformStack!`), applied in double precision as `UsdGeomXformable` does; points end in
@@ -21,8 +26,10 @@
 //!   the owning prim) are not applied; in a variant nested in another one only the nested
 //!   set's selected variant (or first) is read.
 //! - visibility: `visibility = "invisible"` hides a prim and its descendants from
-//!   [`UsdStage::composed`] and [`UsdStage::variant_panels`] (the `UsdLod` schema's non-default
-//!   levels, for instance); [`UsdMesh::visible`] says so.
+//!   [`UsdStage::composed`] and [`UsdStage::variant_panels`]; [`UsdMesh::visible`] says so.
+//! - LOD: a prim with the `LODRootAPI` schema (`UsdLod`) has its ordered children as levels
+//!   ([`UsdStage::lod_roots`]); [`UsdStage::composed`] shows the visible (default) one,
+//!   [`UsdStage::variant_panels`] each level, as for a `LOD` variant set.
 //! - a mesh: `points`, `faceVertexCounts` and `faceVertexIndices` are required and checked
 //!   (counts ≥ 3 adding up to the indices, indices in range, finite points); face-varying,
 //!   vertex, uniform or constant `primvars:normals` (or `normals`) and `primvars:st` (or the
@@ -60,7 +67,7 @@ use std::path::Path;
 use tessd_mesh::{FaceVarying, Mesh};
 
 use crate::UsdError;
-use crate::usda_parse::{Item, PrimSpec, Specifier, Value, parse_layer};
+use crate::usda_parse::{Item, Layer, PrimSpec, Specifier, Value, parse_layer};
 use crate::xform_ops::{self, Mat4};
 
 /// One mesh prim of a stage, with the transform of its ancestors and itself applied.
@@ -74,6 +81,9 @@ pub struct UsdMesh {
     /// Whether a viewer draws it: `false` when the prim or an ancestor has
     /// `visibility = "invisible"`.
     pub visible: bool,
+    /// The paths of the prims that hide it (itself or ancestors with `visibility =
+    /// "invisible"`): a `UsdLod` level's own invisibility does not hide it in its panel.
+    hidden_by: Vec<String>,
     /// The mesh: positions transformed to stage space; `face_groups` / `group_names`: the
     /// prim's face `GeomSubset`s (those of the `materialBind` family when there are several
     /// families; faces in no subset get a group named after the prim), else one group named
@@ -94,14 +104,25 @@ pub struct UsdVariantSet {
     pub selected: Option<String>,
 }
 
-/// What a stage holds: its visible and invisible mesh prims (in file order), its variant sets
-/// and its layer metadata.
+/// A prim with the `UsdLod` schema's `LODRootAPI`: its children are the levels, finest first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UsdLodRoot {
+    /// Path of the LOD root prim (`"/Root/mesh"`).
+    pub prim: String,
+    /// Its defined, active child prims in order (`["LOD0", "LOD1", "LOD2"]`).
+    pub levels: Vec<String>,
+}
+
+/// What a stage holds: its visible and invisible mesh prims (in file order), its variant sets,
+/// its `UsdLod` roots and its layer metadata.
 #[derive(Clone, Debug, PartialEq)]
 pub struct UsdStage {
     /// Every defined, active `Mesh` prim, in every variant.
     pub meshes: Vec<UsdMesh>,
     /// Every variant set, in file order.
     pub variant_sets: Vec<UsdVariantSet>,
+    /// Every prim with `LODRootAPI`, in file order.
+    pub lod_roots: Vec<UsdLodRoot>,
     /// The `upAxis` layer metadata (`"Y"`, `"Z"`), if authored.
     pub up_axis: Option<String>,
     /// The `metersPerUnit` layer metadata, if authored.
@@ -133,15 +154,21 @@ impl UsdStage {
     /// The "panels" of a LOD chain: when some variant set's variants hold meshes, one merged
     /// Mesh per variant of the FIRST such set (in file order), labelled by the variant name,
     /// with the meshes [`UsdStage::composed`] shows outside that set added to each (a variant
-    /// without meshes gives an empty Mesh, or those outside meshes only); otherwise one panel,
-    /// labelled with the file stem of [`UsdStage::source`] (or `"stage"`), holding
-    /// [`UsdStage::composed`]. Groups as in [`UsdStage::composed`].
+    /// without meshes gives an empty Mesh, or those outside meshes only); else, when a
+    /// `UsdLod` root's levels hold meshes, one panel per level of the first such root,
+    /// labelled by the level's name, each level shown whatever its own `visibility`, with the
+    /// meshes shown outside the root added; otherwise one panel, labelled with the file stem
+    /// of [`UsdStage::source`] (or `"stage"`), holding [`UsdStage::composed`]. Groups as in
+    /// [`UsdStage::composed`].
     ///
     /// # Errors
     /// As [`UsdStage::composed`].
     pub fn variant_panels(&self) -> Result<Vec<(String, Mesh)>, UsdError> {
         let owners: Vec<Option<usize>> = self.meshes.iter().map(|m| self.owner(m)).collect();
         let Some(set) = (0..self.variant_sets.len()).find(|s| owners.contains(&Some(*s))) else {
+            if let Some(panels) = self.lod_panels()? {
+                return Ok(panels);
+            }
             let label = Path::new(&self.source)
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -165,6 +192,40 @@ impl UsdStage {
         Ok(panels)
     }
 
+    /// One panel per level of the first `UsdLod` root whose levels hold meshes.
+    fn lod_panels(&self) -> Result<Option<Vec<(String, Mesh)>>, UsdError> {
+        let under = |path: &str, prim: &str| {
+            path.strip_prefix(prim)
+                .is_some_and(|r| r.is_empty() || r.starts_with('/'))
+        };
+        let root = self.lod_roots.iter().find(|r| {
+            r.levels.iter().any(|l| {
+                let level = format!("{}/{l}", r.prim);
+                self.meshes.iter().any(|m| under(&m.path, &level))
+            })
+        });
+        let Some(root) = root else {
+            return Ok(None);
+        };
+        let mut panels = Vec::with_capacity(root.levels.len());
+        for l in &root.levels {
+            let level = format!("{}/{l}", root.prim);
+            let parts: Vec<&UsdMesh> = (self.meshes.iter())
+                .filter(|m| {
+                    if under(&m.path, &root.prim) {
+                        under(&m.path, &level)
+                            && m.hidden_by.iter().all(|h| *h == level)
+                            && self.variant_shown(m)
+                    } else {
+                        self.shown(m)
+                    }
+                })
+                .collect();
+            panels.push((l.clone(), merge(&parts, &self.source)?));
+        }
+        Ok(Some(panels))
+    }
+
     /// The index of the variant set a mesh's variant belongs to: the nearest set of that name
     /// and variant on the mesh's prim or an ancestor.
     fn owner(&self, m: &UsdMesh) -> Option<usize> {
@@ -184,15 +245,19 @@ impl UsdStage {
 
     /// Whether [`UsdStage::composed`] shows `m`.
     fn shown(&self, m: &UsdMesh) -> bool {
-        m.visible
-            && match (&m.variant, self.owner(m)) {
-                (None, _) => true,
-                (Some((_, v)), Some(s)) => {
-                    let set = &self.variant_sets[s];
-                    set.selected.as_ref().or(set.variants.first()) == Some(v)
-                }
-                (Some(_), None) => false,
+        m.visible && self.variant_shown(m)
+    }
+
+    /// Whether `m` is outside variants or in a selected one.
+    fn variant_shown(&self, m: &UsdMesh) -> bool {
+        match (&m.variant, self.owner(m)) {
+            (None, _) => true,
+            (Some((_, v)), Some(s)) => {
+                let set = &self.variant_sets[s];
+                set.selected.as_ref().or(set.variants.first()) == Some(v)
             }
+            (Some(_), None) => false,
+        }
     }
 }
 
@@ -202,8 +267,22 @@ impl UsdStage {
 /// [`UsdError::Io`] when it cannot be read; [`UsdError::Unsupported`] for a binary crate file
 /// (`PXR-USDC`, whatever its extension) or a `.usdz` package; [`UsdError::Parse`] for text that
 /// is not UTF-8 and as [`parse_usda`].
+///
+/// References and payloads to local `.usda` files are followed (module docs); their failures
+/// name the arc, the prim and the layer: [`UsdError::Io`] for a missing file,
+/// [`UsdError::Unsupported`] for other assets, [`UsdError::Parse`] for a cycle, a missing
+/// target prim or too deep a chain, [`UsdError::TooLarge`] past the limits.
 pub fn read_usda(path: &Path) -> Result<UsdStage, UsdError> {
     let name = path.display().to_string();
+    let layer = load_layer(path, &name)?;
+    let load = |p: &Path| load_layer(p, &p.display().to_string());
+    let layer = crate::compose::compose(layer, Some(path), &name, &load)?;
+    stage_of(layer, &name)
+}
+
+/// Reads and parses one layer file, its arcs not followed.
+fn load_layer(path: &Path, name: &str) -> Result<Layer, UsdError> {
+    let name = name.to_string();
     let bytes = std::fs::read(path).map_err(|source| UsdError::Io {
         path: name.clone(),
         source,
@@ -226,7 +305,8 @@ pub fn read_usda(path: &Path) -> Result<UsdStage, UsdError> {
             .count(),
         message: "the text is not valid UTF-8".to_string(),
     })?;
-    parse_usda(text, &name)
+    check_binary(text.as_bytes(), &name)?;
+    parse_layer(text, &name)
 }
 
 /// Parses the text of a `.usda` layer; `source` names it in errors and labels.
@@ -234,21 +314,36 @@ pub fn read_usda(path: &Path) -> Result<UsdStage, UsdError> {
 /// # Errors
 /// [`UsdError::Parse`], naming `source`, the line and the element (prim path and attribute),
 /// for bad syntax, a truncated text, or a mesh whose arrays break the `Mesh` schema;
-/// [`UsdError::Unsupported`] for the text of a binary crate file.
+/// [`UsdError::Unsupported`] for the text of a binary crate file. Internal references and
+/// payloads (`</Prim>`) are followed; those to other files are not (a text has no folder to
+/// resolve them in: [`read_usda`] follows them).
 pub fn parse_usda(text: &str, source: &str) -> Result<UsdStage, UsdError> {
     check_binary(text.as_bytes(), source)?;
     let layer = parse_layer(text, source)?;
+    let no_files = |p: &Path| -> Result<Layer, UsdError> {
+        Err(UsdError::Unsupported(format!(
+            "{source}: {} is not read: a text's references to files are not followed",
+            p.display()
+        )))
+    };
+    let layer = crate::compose::compose(layer, None, source, &no_files)?;
+    stage_of(layer, source)
+}
+
+/// The stage a composed layer shows.
+fn stage_of(layer: Layer, source: &str) -> Result<UsdStage, UsdError> {
     let mut walk = Walk {
-        source,
         meshes: Vec::new(),
         sets: Vec::new(),
+        lod_roots: Vec::new(),
     };
     for prim in &layer.prims {
-        walk.prim(prim, "", None, true, None)?;
+        walk.prim(prim, "", None, &[], None)?;
     }
     Ok(UsdStage {
         meshes: walk.meshes,
         variant_sets: walk.sets,
+        lod_roots: walk.lod_roots,
         up_axis: layer.up_axis,
         meters_per_unit: layer.meters_per_unit,
         source: source.to_string(),
@@ -318,37 +413,38 @@ fn append<T: Copy>(
 }
 
 /// The walk over the prim specs (usd-core's default traversal, with every variant).
-struct Walk<'s> {
-    source: &'s str,
+struct Walk {
     meshes: Vec<UsdMesh>,
     sets: Vec<UsdVariantSet>,
+    lod_roots: Vec<UsdLodRoot>,
 }
 
 /// The variant a walk is in: (set, variant).
 type InVariant<'v> = Option<(&'v str, &'v str)>;
 
-impl Walk<'_> {
-    fn fail(&self, line: usize, message: String) -> UsdError {
+impl Walk {
+    fn fail(p: &PrimSpec, line: usize, message: String) -> UsdError {
         UsdError::Parse {
-            path: self.source.to_string(),
+            path: p.layer.to_string(),
             line,
             message,
         }
     }
 
+    /// A prim and what it holds; `parent_hidden`: the invisible ancestors.
     fn prim(
         &mut self,
         p: &PrimSpec,
         parent: &str,
         parent_world: Option<Mat4>,
-        parent_visible: bool,
+        parent_hidden: &[String],
         variant: InVariant<'_>,
     ) -> Result<(), UsdError> {
         if p.specifier != Specifier::Def || !p.active {
             return Ok(());
         }
         let path = format!("{parent}/{}", p.name);
-        let world = match self.local_transform(p, &path)? {
+        let world = match Self::local_transform(p, &path)? {
             None => parent_world,
             Some((local, true)) => Some(local),
             Some((local, false)) => Some(match parent_world {
@@ -356,17 +452,38 @@ impl Walk<'_> {
                 None => local,
             }),
         };
-        let visible = parent_visible && p.token("visibility") != Some("invisible");
+        let own;
+        let hidden = if p.token("visibility") == Some("invisible") {
+            own = [parent_hidden, std::slice::from_ref(&path)].concat();
+            &own[..]
+        } else {
+            parent_hidden
+        };
         if p.type_name == "Mesh" {
-            let mesh = crate::usda_mesh::build(p, &path, world.as_ref(), self.source)?;
+            let mesh = crate::usda_mesh::build(p, &path, world.as_ref(), &p.layer)?;
             self.meshes.push(UsdMesh {
                 path: path.clone(),
                 variant: variant.map(|(s, v)| (s.to_string(), v.to_string())),
-                visible,
+                visible: hidden.is_empty(),
+                hidden_by: hidden.to_vec(),
                 mesh,
             });
         }
-        self.items(&p.items, p, &path, world, visible, variant)
+        if p.api_schemas.iter().any(|s| s == "LODRootAPI") {
+            let levels = (p.items.iter())
+                .filter_map(|i| match i {
+                    Item::Prim(c) if c.specifier == Specifier::Def && c.active => {
+                        Some(c.name.clone())
+                    }
+                    _ => None,
+                })
+                .collect();
+            self.lod_roots.push(UsdLodRoot {
+                prim: path.clone(),
+                levels,
+            });
+        }
+        self.items(&p.items, p, &path, world, hidden, variant)
     }
 
     /// A prim's (or a variant's) child prims and variant sets.
@@ -376,12 +493,12 @@ impl Walk<'_> {
         owner: &PrimSpec,
         path: &str,
         world: Option<Mat4>,
-        visible: bool,
+        hidden: &[String],
         variant: InVariant<'_>,
     ) -> Result<(), UsdError> {
         for item in items {
             match item {
-                Item::Prim(c) => self.prim(c, path, world, visible, variant)?,
+                Item::Prim(c) => self.prim(c, path, world, hidden, variant)?,
                 Item::VariantSet(set) => {
                     let selected = (owner.selections.iter().rev())
                         .find(|(s, _)| *s == set.name)
@@ -402,7 +519,7 @@ impl Walk<'_> {
                             continue;
                         }
                         let inner = variant.or(Some((set.name.as_str(), v.as_str())));
-                        self.items(vitems, owner, path, world, visible, inner)?;
+                        self.items(vitems, owner, path, world, hidden, inner)?;
                     }
                 }
             }
@@ -412,7 +529,7 @@ impl Walk<'_> {
 
     /// The prim's local transform from its `xformOpOrder` (`None` when it has none or is not
     /// Xformable) and whether it resets the parents' transform.
-    fn local_transform(&self, p: &PrimSpec, path: &str) -> Result<Option<(Mat4, bool)>, UsdError> {
+    fn local_transform(p: &PrimSpec, path: &str) -> Result<Option<(Mat4, bool)>, UsdError> {
         const NOT_XFORMABLE: [&str; 8] = [
             "",
             "Scope",
@@ -434,7 +551,8 @@ impl Walk<'_> {
             Some(Value::Numbers { nums, .. }) if nums.is_empty() => &[],
             None => return Ok(None),
             Some(_) => {
-                return Err(self.fail(
+                return Err(Self::fail(
+                    p,
                     order.line,
                     format!("{path}.xformOpOrder: expected a list of op names"),
                 ));
@@ -452,9 +570,11 @@ impl Walk<'_> {
                 Some(n) => (n, true),
                 None => (op.as_str(), false),
             };
-            let at = |line: usize, msg: String| self.fail(line, format!("{path}.{name}: {msg}"));
+            let at =
+                |line: usize, msg: String| Self::fail(p, line, format!("{path}.{name}: {msg}"));
             let attr = p.attr(name).ok_or_else(|| {
-                self.fail(
+                Self::fail(
+                    p,
                     order.line,
                     format!("{path}.xformOpOrder names {name}, which the prim does not author"),
                 )

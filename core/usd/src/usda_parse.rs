@@ -23,6 +23,10 @@
 //! rest is skipped with balanced brackets. Of `.timeSamples` only the earliest sample is kept.
 //! Nesting is limited to [`MAX_DEPTH`] levels, so hostile input cannot overflow the stack, and
 //! nothing is allocated beyond what the text holds.
+//!
+//! Of the metadata, the layer's `upAxis`, `metersPerUnit` and `defaultPrim`, and a prim's
+//! `active`, `variants` (selections), `apiSchemas`, `references` and `payload` arcs (their asset
+//! and prim paths; layer offsets skipped) are kept; `crate::compose` follows the arcs.
 
 use crate::UsdError;
 use crate::usda_tokens::{Lexer, Tok};
@@ -47,7 +51,7 @@ pub(crate) enum Value {
 }
 
 /// One attribute that meshes need, with its default value and earliest time sample.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct Attr {
     /// Name without `.timeSamples` (`primvars:st`).
     pub(crate) name: String,
@@ -86,8 +90,40 @@ pub(crate) enum Specifier {
     Class,
 }
 
+/// The kind of a composition arc kept from a prim's metadata.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ArcKind {
+    /// `references = ...`.
+    Reference,
+    /// `payload = ...` (weaker than the references, loaded as usd-core's default does).
+    Payload,
+}
+
+impl ArcKind {
+    /// The metadata key, for messages.
+    pub(crate) fn key(self) -> &'static str {
+        match self {
+            ArcKind::Reference => "references",
+            ArcKind::Payload => "payload",
+        }
+    }
+}
+
+/// One reference or payload: `@asset@</prim>`, `@asset@` (the layer's default prim) or
+/// `</prim>` (a prim of the same layer).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct ArcSpec {
+    pub(crate) kind: ArcKind,
+    /// The asset path, without its `@`s; `None` for an internal arc.
+    pub(crate) asset: Option<String>,
+    /// The target prim path, if given.
+    pub(crate) prim: Option<String>,
+    /// Line of the arc.
+    pub(crate) line: usize,
+}
+
 /// A prim spec.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct PrimSpec {
     pub(crate) specifier: Specifier,
     /// Type name (`Mesh`), empty for typeless prims.
@@ -97,8 +133,15 @@ pub(crate) struct PrimSpec {
     /// `active = false` makes it false.
     pub(crate) active: bool,
     /// Variant selections (`variants = { string LOD = "LOD0" }`), also those authored in its
-    /// variants' metadata.
+    /// variants' metadata; the last one of a set wins.
     pub(crate) selections: Vec<(String, String)>,
+    /// `apiSchemas` (`LODRootAPI`, ...).
+    pub(crate) api_schemas: Vec<String>,
+    /// References, then payloads, strongest first; emptied once composed.
+    pub(crate) arcs: Vec<ArcSpec>,
+    /// The layer the prim (its mesh attributes, when composed from several) was read from,
+    /// for messages.
+    pub(crate) layer: std::sync::Arc<str>,
     pub(crate) attrs: Vec<Attr>,
     /// Child prims and variant sets in file order.
     pub(crate) items: Vec<Item>,
@@ -120,14 +163,14 @@ impl PrimSpec {
 }
 
 /// What a prim body (or a variant's) holds besides properties.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) enum Item {
     Prim(PrimSpec),
     VariantSet(VariantSetSpec),
 }
 
 /// `variantSet "name" = { "a" { ... } "b" { ... } }`.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct VariantSetSpec {
     pub(crate) name: String,
     /// Each variant's name and the prims and variant sets it holds (its properties, opinions
@@ -140,6 +183,8 @@ pub(crate) struct VariantSetSpec {
 pub(crate) struct Layer {
     pub(crate) up_axis: Option<String>,
     pub(crate) meters_per_unit: Option<f64>,
+    /// `defaultPrim`: the root prim a reference without a prim path targets.
+    pub(crate) default_prim: Option<String>,
     pub(crate) prims: Vec<PrimSpec>,
 }
 
@@ -149,6 +194,8 @@ struct Meta {
     active: Option<bool>,
     interpolation: Option<String>,
     selections: Vec<(String, String)>,
+    api_schemas: Vec<String>,
+    arcs: Vec<ArcSpec>,
 }
 
 type R<T> = Result<T, UsdError>;
@@ -159,6 +206,7 @@ pub(crate) fn parse_layer(text: &str, source: &str) -> R<Layer> {
     let mut p = Parser {
         lx: Lexer::new(text),
         source,
+        layer: std::sync::Arc::from(source),
         ctx: String::new(),
         depth: 0,
     };
@@ -230,6 +278,8 @@ fn wanted(name: &str, type_name: &str) -> bool {
 struct Parser<'a> {
     lx: Lexer<'a>,
     source: &'a str,
+    /// `source`, shared by the prim specs.
+    layer: std::sync::Arc<str>,
     /// The element being read (`/Root/mesh` or `/Root/mesh.points`), for messages.
     ctx: String,
     depth: usize,
@@ -317,6 +367,10 @@ impl<'a> Parser<'a> {
                     layer.meters_per_unit = Some(self.number(n, false, line)?);
                     self.next()?;
                 }
+                ("defaultPrim", (Tok::Str(s), _)) => {
+                    layer.default_prim = Some(s.into_owned());
+                    self.next()?;
+                }
                 _ => self.skip_value()?,
             }
         }
@@ -358,6 +412,9 @@ impl<'a> Parser<'a> {
             line,
             active: true,
             selections: Vec::new(),
+            api_schemas: Vec::new(),
+            arcs: Vec::new(),
+            layer: self.layer.clone(),
             attrs: Vec::new(),
             items: Vec::new(),
         };
@@ -365,6 +422,10 @@ impl<'a> Parser<'a> {
             let meta = self.metadata("the prim's metadata")?;
             prim.active = meta.active.unwrap_or(true);
             prim.selections = meta.selections;
+            prim.api_schemas = meta.api_schemas;
+            // References are stronger than payloads (LIVRPS).
+            prim.arcs = meta.arcs;
+            prim.arcs.sort_by_key(|a| a.kind == ArcKind::Payload);
         }
         let open = self.expect(b'{', "to open the prim's body")?;
         let mut items = Vec::new();
@@ -594,10 +655,14 @@ impl<'a> Parser<'a> {
         let mut meta = Meta::default();
         loop {
             let (t, line) = self.next()?;
+            let mut op = "";
             let key = match t {
                 Tok::Punct(b')') => return Ok(meta),
                 Tok::Punct(b';') | Tok::Str(_) => continue,
-                Tok::Ident(k) if is_listop(k) => self.ident("a metadata name")?,
+                Tok::Ident(k) if is_listop(k) => {
+                    op = k;
+                    self.ident("a metadata name")?
+                }
                 Tok::Ident(k) => k,
                 Tok::Eof => return Err(self.unclosed(line, what, open)),
                 t => {
@@ -620,9 +685,97 @@ impl<'a> Parser<'a> {
                     self.next()?;
                 }
                 ("variants", Tok::Punct(b'{')) => self.selections(&mut meta.selections)?,
+                ("references" | "payload", _) if op != "delete" => {
+                    let kind = if key == "payload" {
+                        ArcKind::Payload
+                    } else {
+                        ArcKind::Reference
+                    };
+                    // A plain (explicit) list replaces; list ops add to it.
+                    if op.is_empty() {
+                        meta.arcs.retain(|a| a.kind != kind);
+                    }
+                    self.arcs(kind, &mut meta.arcs)?;
+                }
+                ("apiSchemas", Tok::Punct(b'[')) if op != "delete" => {
+                    let (_, l) = self.next()?;
+                    match self.list(false, l)? {
+                        Value::Strings(s) => meta.api_schemas.extend(s),
+                        Value::Numbers { nums, .. } if nums.is_empty() => {}
+                        _ => return Err(self.fail(l, "apiSchemas: expected a list of names")),
+                    }
+                }
                 _ => self.skip_value()?,
             }
         }
+    }
+
+    /// The value of `references` or `payload`: `None`, one arc, or `[arc, ...]`.
+    fn arcs(&mut self, kind: ArcKind, out: &mut Vec<ArcSpec>) -> R<()> {
+        match self.peek()? {
+            (Tok::Ident("None"), _) => {
+                self.next()?;
+                Ok(())
+            }
+            (Tok::Punct(b'['), open) => {
+                self.next()?;
+                loop {
+                    match self.peek()?.0 {
+                        Tok::Punct(b']') => {
+                            self.next()?;
+                            return Ok(());
+                        }
+                        Tok::Punct(b',') => {
+                            self.next()?;
+                        }
+                        Tok::Eof => {
+                            let (_, l) = self.next()?;
+                            return Err(self.unclosed(l, kind.key(), open));
+                        }
+                        _ => self.arc(kind, out)?,
+                    }
+                }
+            }
+            _ => self.arc(kind, out),
+        }
+    }
+
+    /// One arc: `@asset@`, `@asset@</prim>` or `</prim>`, then an optional `( ... )` (layer
+    /// offset, custom data), skipped.
+    fn arc(&mut self, kind: ArcKind, out: &mut Vec<ArcSpec>) -> R<()> {
+        let (t, line) = self.next()?;
+        let (asset, prim) = match t {
+            Tok::Asset(a) => {
+                let prim = match self.peek()?.0 {
+                    Tok::Path(p) => {
+                        self.next()?;
+                        Some(p.to_string())
+                    }
+                    _ => None,
+                };
+                (Some(a.to_string()), prim)
+            }
+            Tok::Path(p) => (None, Some(p.to_string())),
+            t => {
+                let msg = format!(
+                    "{}: expected an asset path (@file.usda@) or a prim path (</Prim>), found {}",
+                    kind.key(),
+                    t.describe()
+                );
+                return Err(self.fail(line, msg));
+            }
+        };
+        if self.peek_punct(b'(')? {
+            let (_, l) = self.next()?;
+            self.skip_balanced(b'(', l)?;
+        }
+        out.push(ArcSpec {
+            kind,
+            asset,
+            prim,
+            line,
+        });
+        Ok(())
     }
 
     /// `{ string LOD = "LOD0" ... }`.

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use tessd_mesh::Mesh;
-use tessd_usd::reader::{UsdStage, UsdVariantSet, parse_usda, read_usda};
+use tessd_usd::reader::{UsdLodRoot, UsdStage, UsdVariantSet, parse_usda, read_usda};
 use tessd_usd::{
     LodSchemaOptions, MeshPrim, MeshPrimOptions, StageOptions, UsdError, write_lod_schema,
     write_lod_variants, write_mesh_stage, write_stage, write_usda_file,
@@ -233,8 +233,20 @@ fn lod_schema_shows_only_the_default_level() {
         ]
     );
     assert_eq!(stage.composed().unwrap().face_count(), 2000);
+    assert_eq!(
+        stage.lod_roots,
+        [UsdLodRoot {
+            prim: "/Root/mesh".into(),
+            levels: vec!["LOD0".into(), "LOD1".into(), "LOD2".into()],
+        }]
+    );
+    // Every level a panel, as for a LOD variant set, whatever its own visibility.
     let panels = stage.variant_panels().unwrap();
-    assert_eq!((panels.len(), panels[0].0.as_str()), (1, "usdlod"));
+    let summary: Vec<_> = panels
+        .iter()
+        .map(|(l, m)| (l.as_str(), m.face_count()))
+        .collect();
+    assert_eq!(summary, [("LOD0", 5856), ("LOD1", 2000), ("LOD2", 500)]);
 }
 
 #[test]
@@ -715,7 +727,7 @@ fn stages_without_meshes() {
     assert!(e.meshes.is_empty());
     assert_eq!(
         e.composed().unwrap_err().to_string(),
-        "empty.usda: the stage has no visible Mesh prim (references and payloads are not followed)"
+        "empty.usda: the stage has no visible Mesh prim"
     );
     assert_eq!(e.composed().unwrap_err().code(), "invalid_mesh");
     assert_eq!(
