@@ -464,14 +464,19 @@ class Render(DocCase):
 
 
 class Errors(DocCase):
-    def cli_message(self, *args):
-        """The message the CLI prints for a failing verb: `tessd: <op>: <code>: <message>`."""
+    def cli_message(self, *args, flags=()):
+        """The message the CLI prints for a failing verb: `tessd: <op>: <code>: <message>`, with
+        each of `flags` ((`--flag`, `param`) pairs), which the CLI names where the daemon names
+        the request's parameter, put back as the parameter (and checked to be there)."""
         status, _, err = checks.cli(*args)
         self.assertNotEqual(status, 0)
         line = err.strip().splitlines()[-1]
         prefix, _, rest = line.partition(": ")
         self.assertEqual(prefix, "tessd")
         op, code, message = rest.split(": ", 2)
+        for flag, param in flags:
+            self.assertIn("`%s`" % flag, message)
+            message = message.replace("`%s`" % flag, "`%s`" % param)
         return code, message
 
     def test_tessellate_error_is_the_daemons(self):
@@ -481,7 +486,8 @@ class Errors(DocCase):
             api.tessellate(obj, tolerance="0%")
         doc = TMP / "loft.json"
         doc.write_text(json.dumps(export_shape(obj.Shape)))
-        code, message = self.cli_message("tessellate", doc, TMP / "x.obj", "--tolerance", "0%")
+        code, message = self.cli_message("tessellate", doc, TMP / "x.obj", "--tolerance", "0%",
+                                         flags=[("--tolerance", "tolerance")])
         self.assertEqual((cm.exception.code, cm.exception.message), (code, message))
         print("tessellate error: %s" % cm.exception.message)
         self.assertEqual(self.names(), before)
@@ -493,7 +499,8 @@ class Errors(DocCase):
             api.simplify(m, method="complexity", target=10 ** 7)
         checks.write_obj(TMP / "rev.obj", m.Mesh)
         code, message = self.cli_message("simplify", TMP / "rev.obj", TMP / "x.obj", "--method",
-                                         "complexity", "--target-vertices", str(10 ** 7))
+                                         "complexity", "--target-vertices", str(10 ** 7),
+                                         flags=[("--target-vertices", "target_vertices")])
         self.assertEqual((cm.exception.code, cm.exception.message), (code, message))
         with self.assertRaises(api.TessdError) as cm:
             api.simplify(m, method="complexity")  # no goal: the daemon says what is missing
