@@ -13,7 +13,9 @@
 //    the top).
 //
 // The search runs in **batches of seed cells**, one dispatch each, every invocation carrying
-// its pixel's nearest hit so far in `hits` from one batch to the next. One loop over all cells
+// its pixel's nearest hit so far in `hits` from one batch to the next; the host submits it one
+// region of the image (`row0`, `col0`) and a few batches at a time, so that it can report
+// progress and hear a cancel between submissions (`ray_cast.rs`, `RayCastPass::cast`). One loop over all cells
 // would be simpler, but llvmpipe (lavapipe) bounds the iterations of a loop nest — the
 // outermost loop and everything nested in it, Newton's steps and the B-spline basis loops
 // included — to 65 535 per invocation, and silently leaves the loops past that: a thread's
@@ -40,8 +42,10 @@ struct RayParams {
     // tan(fov/2)·W/H and tan(fov/2).
     tan_x: f32,
     tan_y: f32,
-    pad0: u32,
-    pad1: u32,
+    // The first pixel row and column of the region `cast_rays` searches (the search runs in
+    // regions of the image, one submission at a time); `resolve_hits` covers the whole image.
+    row0: u32,
+    col0: u32,
 }
 
 // `ray_cast::SeedBox` (32 bytes): a world box (relative to the scene origin). The first
@@ -108,11 +112,12 @@ fn ray_box(o: vec3<f32>, inv: vec3<f32>, b: SeedBox, t_max: f32) -> bool {
 }
 
 @compute @workgroup_size(8, 8)
-fn cast_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn cast_rays(@builtin(global_invocation_id) id: vec3<u32>) {
+    let gid = vec2<u32>(id.x + params.col0, id.y + params.row0);
     if gid.x >= params.width || gid.y >= params.height {
         return;
     }
-    let dir = pixel_ray(gid.xy);
+    let dir = pixel_ray(gid);
     let o = params.eye;
     // 1/dir, with zero components replaced so the slabs stay finite and ordered.
     let safe = select(dir, vec3<f32>(1e-30), abs(dir) < vec3<f32>(1e-30));

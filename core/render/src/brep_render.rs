@@ -312,16 +312,20 @@ impl BrepPasses {
         Ok((frame, report))
     }
 
-    /// Full-scene ray casting of `part` from `camera` (the comparison of paper 001 §4.1.2).
+    /// Full-scene ray casting of `part` from `camera` (the comparison of paper 001 §4.1.2),
+    /// submitted in slices (see [`RayCastPass::cast`]): `progress` gets the fraction done
+    /// after each and stops the pass by answering `false`.
     ///
     /// # Errors
-    /// As [`render`](Self::render).
+    /// As [`render`](Self::render); [`RenderError::Cancelled`] when `progress` answers
+    /// `false`.
     pub fn ray_cast(
         &self,
         gpu: &GpuContext,
         part: &GpuBrepScene,
         camera: &Camera,
         settings: &RenderSettings,
+        progress: &mut dyn FnMut(f64) -> bool,
     ) -> Result<(Frame, BrepReport), RenderError> {
         let (width, height) = (settings.width, settings.height);
         check_frame(gpu, camera, width, height)?;
@@ -330,19 +334,21 @@ impl BrepPasses {
         let scopes = ErrorScopes::push(device);
         let buffers = FrameBuffers::new(device, width, height);
         let (seeds, seed_buffer) = part.ray_seeds(device)?;
-        step(gpu, &mut report.timings.ray_cast, |e| {
-            self.ray_cast.encode(
-                device,
-                e,
-                &part.group,
-                (seeds, seed_buffer),
-                &part.scene,
-                camera,
-                settings,
-                &buffers,
-            )
-        })?;
+        let start = Instant::now();
+        let cast = self.ray_cast.cast(
+            gpu,
+            &part.group,
+            (seeds, seed_buffer),
+            &part.scene,
+            camera,
+            settings,
+            &buffers,
+            progress,
+        );
+        report.timings.ray_cast += start.elapsed();
+        // The device's own errors first: they explain a failed wait.
         scopes.pop_blocking()?;
+        cast?;
         let start = Instant::now();
         let (frame, _) = buffers.read(device, &gpu.queue)?;
         report.timings.readback = start.elapsed();

@@ -42,7 +42,9 @@ pub struct Camera {
 }
 
 /// Standard views of a part, fitted to its bounding box. Z is up; "front" looks along +Y (the
-/// eye on the −Y side), as in Blender and FreeCAD.
+/// eye on the −Y side), as in Blender and FreeCAD. With [`UpAxis::Y`] (scans, glTF, OBJ) the
+/// same views turn with the world: Y is up and "front" looks along −Z (the eye on the +Z
+/// side), as Blender shows a Y-up file it imports ([`UpAxis::from_z_up`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum View {
     /// From the (+1, −1, +1) direction (front, right, above), Z up.
@@ -106,6 +108,52 @@ impl View {
     }
 }
 
+/// The world's up axis, for the standard views.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum UpAxis {
+    /// +Y up (Stanford scans, glTF, OBJ and most DCC exports).
+    Y,
+    /// +Z up (CAD, Blender, tessd's own stages): the default.
+    #[default]
+    Z,
+}
+
+impl UpAxis {
+    /// `"Y"` or `"Z"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            UpAxis::Y => "Y",
+            UpAxis::Z => "Z",
+        }
+    }
+
+    /// The axis named `s` (`"Y"`, `"Z"`; USD's `upAxis` spelling).
+    pub fn parse(s: &str) -> Option<UpAxis> {
+        match s {
+            "Y" => Some(UpAxis::Y),
+            "Z" => Some(UpAxis::Z),
+            _ => None,
+        }
+    }
+
+    /// The up vector.
+    pub fn vector(self) -> Vec3 {
+        match self {
+            UpAxis::Y => Vec3::Y,
+            UpAxis::Z => Vec3::Z,
+        }
+    }
+
+    /// A direction given in the Z-up convention, in this world: unchanged for Z; for Y the
+    /// rotation taking +Z to +Y and −Y (the Z-up front) to +Z: (x, y, z) → (x, z, −y).
+    pub fn from_z_up(self, v: Vec3) -> Vec3 {
+        match self {
+            UpAxis::Z => v,
+            UpAxis::Y => Vec3::new(v.x, v.z, -v.y),
+        }
+    }
+}
+
 /// An axis-aligned box in world coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {
@@ -153,7 +201,13 @@ impl Camera {
     /// at the box's centre from the view's direction, far enough that the sphere around the box
     /// fits both the vertical and the horizontal field of view.
     pub fn fit(view: View, bounds: &Bounds, fov: f64, aspect: f64) -> Camera {
-        let (dir, up) = view.direction();
+        Camera::fit_up(view, UpAxis::Z, bounds, fov, aspect)
+    }
+
+    /// [`fit`](Self::fit) in a world whose up axis is `up` (the views turned with it).
+    pub fn fit_up(view: View, up: UpAxis, bounds: &Bounds, fov: f64, aspect: f64) -> Camera {
+        let (dir, hint) = view.direction();
+        let (dir, up) = (up.from_z_up(dir), up.from_z_up(hint));
         let half_v = 0.5 * fov.to_radians();
         let half_h = (half_v.tan() * aspect).atan();
         let half = half_v.min(half_h);
@@ -394,6 +448,27 @@ mod tests {
                     "{v:?}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn y_up_views_turn_with_the_world() {
+        let b = unit_box();
+        let front = Camera::fit_up(View::Front, UpAxis::Y, &b, 30.0, 1.0);
+        let (_, right, up) = front.basis();
+        // From +Z looking along −Z, +Y up in the image, +X to the right.
+        assert!(front.eye[2] > 1.0 && right[0] > 0.99 && up[1] > 0.99);
+        let top = Camera::fit_up(View::Top, UpAxis::Y, &b, 30.0, 1.0);
+        let (_, right, up) = top.basis();
+        assert!(top.eye[1] > 1.0 && right[0] > 0.99 && up[2] < -0.99);
+        let iso = Camera::fit_up(View::Iso, UpAxis::Y, &b, 30.0, 1.0);
+        assert!(iso.eye[0] > 1.0 && iso.eye[1] > 1.0 && iso.eye[2] > 1.0);
+        assert!(iso.basis().2[1] > 0.5);
+        for v in View::ALL {
+            assert_eq!(
+                Camera::fit_up(v, UpAxis::Z, &b, 30.0, 2.0),
+                Camera::fit(v, &b, 30.0, 2.0)
+            );
         }
     }
 

@@ -66,7 +66,7 @@ mod wgsl_check;
 
 pub use brep_render::{BrepReport, Cracks, GpuBrepScene, StepTimings};
 pub use brep_scene::BrepScene;
-pub use camera::{Bounds, Camera, View};
+pub use camera::{Bounds, Camera, UpAxis, View};
 pub use scene::Scene;
 pub use trim_walk::TrimWalk;
 
@@ -100,6 +100,9 @@ pub enum RenderError {
     /// A file could not be written.
     #[error("{0}")]
     Io(String),
+    /// The caller's progress callback asked to stop.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 impl From<tessd_mesh::MeshError> for RenderError {
@@ -352,8 +355,24 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<(Frame, BrepReport), RenderError> {
+        self.ray_cast_brep_with_progress(part, camera, settings, &mut |_| true)
+    }
+
+    /// [`ray_cast_brep`](Self::ray_cast_brep) telling `progress` the fraction done after
+    /// each slice of about [`ray_cast::SLICE`] of device time; answering `false` stops it.
+    ///
+    /// # Errors
+    /// As [`brep_render::BrepPasses::ray_cast`]: [`RenderError::Cancelled`] when `progress`
+    /// answers `false`.
+    pub fn ray_cast_brep_with_progress(
+        &self,
+        part: &GpuBrepScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) -> Result<(Frame, BrepReport), RenderError> {
         self.brep_passes()?
-            .ray_cast(&self.gpu, part, camera, settings)
+            .ray_cast(&self.gpu, part, camera, settings, progress)
     }
 
     /// The adapter as one line: name, backend, device type, driver.

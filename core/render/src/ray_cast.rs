@@ -21,11 +21,14 @@
 
 use crate::camera::Vec3;
 use bytemuck::{Pod, Zeroable};
+use std::time::{Duration, Instant};
 use tessd_brep::{Curve, Curve3, Face, Surface};
+use tessd_gpu::{GpuContext, GpuError};
 use wgpu::util::DeviceExt;
 
+use crate::RenderError;
 use crate::RenderSettings;
-use crate::bindings::{self, storage, uniform};
+use crate::bindings::{self, PIXEL_TILE, storage, uniform};
 use crate::brep_scene::BrepScene;
 use crate::camera::Camera;
 use crate::frame_buffers::FrameBuffers;
@@ -83,7 +86,10 @@ struct Params {
     shading: u32,
     tan_x: f32,
     tan_y: f32,
-    pad: [u32; 2],
+    /// The first pixel row and column of the region being searched (the search runs in
+    /// regions of the image, one slice at a time).
+    row0: u32,
+    col0: u32,
 }
 
 /// The loop iterations one search dispatch may spend per invocation: lavapipe ends an
@@ -129,6 +135,10 @@ fn eval_loops(surface: &Surface) -> u32 {
 pub fn cell_cost(surface: &Surface) -> u32 {
     NEWTON_STEPS * (1 + eval_loops(surface)) + 32
 }
+
+/// About how long one submission of the search should keep the device busy: the caller's
+/// progress and cancel are heard between submissions.
+pub const SLICE: Duration = Duration::from_millis(25);
 
 /// Bytes between two batch records in the batch uniform buffer (wgpu's dynamic-offset
 /// alignment).
@@ -354,25 +364,37 @@ impl RayCastPass {
         }
     }
 
-    /// Records both passes: every pixel of `out` (its `width × height`) of the part `scene`
+    /// Runs both passes: every pixel of `out` (its `width × height`) of the part `scene`
     /// (on the device as `brep`, bound as `brep_group`) seen from `camera` written to the
     /// frame's colour (RGBA8 packed), depth (camera z, or the background depth), face (its
     /// index plus one, or 0) and (u, v) (native) buffers; index y·W + x, row 0 at the top.
     /// Shaded in `settings.shading` with the raster pass's key light; Newton's tolerance is
     /// [`NEWTON_TOLERANCE`] of the part's box diagonal (as object filling). The crack flags
     /// are left as they are.
+    ///
+    /// The search is submitted in slices of about [`SLICE`] of device time each: regions of
+    /// the image in reading order (part of a row of [`PIXEL_TILE`]-pixel tiles, or whole tile
+    /// rows), each through all its batches before the next; the region's size and the batches
+    /// per submission are sized from what each batch cost per tile in the same tile columns
+    /// of the rows above (measured as it goes). After each submission `progress` gets the fraction of the search done; when it
+    /// answers `false` nothing more is submitted and the pass ends with
+    /// [`RenderError::Cancelled`]. A slice is at least one batch over one tile.
+    ///
+    /// # Errors
+    /// [`RenderError::Cancelled`]; [`RenderError::Gpu`] when waiting for the device fails.
     #[allow(clippy::too_many_arguments)]
-    pub fn encode(
+    pub fn cast(
         &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        gpu: &GpuContext,
         brep_group: &wgpu::BindGroup,
         (seeds, seed_buffer): (&RaySeeds, &wgpu::Buffer),
         scene: &BrepScene,
         camera: &Camera,
         settings: &RenderSettings,
         out: &FrameBuffers,
-    ) {
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) -> Result<(), RenderError> {
+        let device = &gpu.device;
         let (width, height) = (out.width, out.height);
         let (forward, right, up) = camera.basis();
         let lit = crate::surface::Params::new(camera, scene.origin, width, height, settings);
@@ -391,9 +413,15 @@ impl RayCastPass {
             shading: lit.shading,
             tan_x: (tan_y * width as f64 / height.max(1) as f64) as f32,
             tan_y: tan_y as f32,
-            pad: [0; 2],
+            row0: 0,
+            col0: 0,
         };
-        let uniform = bindings::uniform_buffer(device, "ray_cast params", &params);
+        let mut params = params;
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ray_cast params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
         let hits = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ray_cast hits"),
             size: (width as u64 * height as u64 * HIT_BYTES).max(HIT_BYTES),
@@ -499,19 +527,147 @@ impl RayCastPass {
         .chain([batch, items_buffer.as_entire_binding()]);
         let group = bindings::bind_resources(device, "ray_cast", &self.layout, resources);
         let groups = bindings::dispatch_pixels(width, height);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("ray_cast"),
-            timestamp_writes: None,
-        });
-        pass.set_bind_group(1, brep_group, &[]);
-        pass.set_pipeline(&self.cast);
-        for k in 0..batches.len() {
-            pass.set_bind_group(0, &group, &[(k as u64 * BATCH_STRIDE) as u32]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        // One submission: `record` in a compute pass, then a wait for the device.
+        let submit = |record: &mut dyn FnMut(&mut wgpu::ComputePass<'_>)| {
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("ray_cast"),
+            });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("ray_cast"),
+                    timestamp_writes: None,
+                });
+                pass.set_bind_group(1, brep_group, &[]);
+                record(&mut pass);
+            }
+            let index = gpu.queue.submit([encoder.finish()]);
+            gpu.device
+                .poll(wgpu::PollType::Wait {
+                    submission_index: Some(index),
+                    timeout: None,
+                })
+                .map_err(|e| GpuError::Wgpu(e.to_string()))
+        };
+        let (tiles_x, tiles_y) = (groups.0, groups.1);
+        let nb = batches.len();
+        let slice = SLICE.as_secs_f64();
+        let tx = tiles_x as usize;
+        // Seconds per tile of each batch in each tile column, as last measured (the rows
+        // above predict the next: a part's silhouette changes little from one tile row to the
+        // next, while the nearest faces' batches, first, cost far more than the rest);
+        // `None` before a column is measured.
+        let mut cost: Vec<Option<f64>> = vec![None; nb * tx];
+        let total = tiles_x as u64 * tiles_y as u64;
+        let (mut row, mut col) = (0u32, 0u32);
+        // The last region's tiles: an unmeasured stretch grows at most twice as large.
+        let mut last = 2u32;
+        while row < tiles_y {
+            // The region: from `col`, as many columns as the dearest batch of each can do in a
+            // slice; whole tile rows when a whole row fits.
+            let dearest = |c: usize| {
+                (0..nb)
+                    .filter_map(|b| cost[b * tx + c])
+                    .fold(None, |a: Option<f64>, x| Some(a.map_or(x, |a| a.max(x))))
+            };
+            let (mut cols, mut spent) = (0u32, 0.0);
+            let mut unknown = 0u32;
+            while col + cols < tiles_x {
+                let c = dearest((col + cols) as usize);
+                if c.is_none() {
+                    unknown += 1;
+                }
+                let next = spent + c.unwrap_or(0.0);
+                if cols > 0 && (next > slice || unknown > 2 * last) {
+                    break;
+                }
+                spent = next;
+                cols += 1;
+            }
+            let rows = if col == 0 && cols == tiles_x && unknown == 0 {
+                ((slice / spent.max(1e-12)) as u32).clamp(1, tiles_y - row)
+            } else {
+                1
+            };
+            last = cols * rows;
+            let span = col as usize..(col + cols) as usize;
+            // Batch `b`'s predicted seconds over the region (`None`: unknown somewhere).
+            let predict = |cost: &[Option<f64>], b: usize| {
+                span.clone()
+                    .map(|c| cost[b * tx + c])
+                    .sum::<Option<f64>>()
+                    .map(|s| s * rows as f64)
+            };
+            params.row0 = row * PIXEL_TILE;
+            params.col0 = col * PIXEL_TILE;
+            gpu.queue
+                .write_buffer(&uniform, 0, bytemuck::bytes_of(&params));
+            let mut b = 0;
+            while b < nb {
+                // As many batches as fit a slice by their predictions (one at least; one
+                // without a prediction goes alone).
+                let (mut count, mut spent) = (0, 0.0);
+                while b + count < nb {
+                    match predict(&cost, b + count) {
+                        Some(t) if count == 0 || spent + t <= slice => {
+                            spent += t;
+                            count += 1;
+                        }
+                        None if count == 0 => {
+                            count = 1;
+                            break;
+                        }
+                        _ => break,
+                    }
+                }
+                let start = Instant::now();
+                submit(&mut |pass| {
+                    pass.set_pipeline(&self.cast);
+                    for k in b..b + count {
+                        pass.set_bind_group(0, &group, &[(k as u64 * BATCH_STRIDE) as u32]);
+                        pass.dispatch_workgroups(cols, rows, 1);
+                    }
+                })?;
+                // The time shared over the batches and columns in proportion to what was
+                // predicted (evenly where nothing was).
+                let took = start.elapsed().as_secs_f64();
+                let mut weights = Vec::with_capacity(count * span.len());
+                for k in b..b + count {
+                    for c in span.clone() {
+                        weights.push(cost[k * tx + c].unwrap_or(0.0));
+                    }
+                }
+                let sum: f64 = weights.iter().sum();
+                let even = sum <= 0.0 || weights.contains(&0.0);
+                let cells = weights.len() as f64;
+                let mut w = weights.into_iter();
+                for k in b..b + count {
+                    for c in span.clone() {
+                        let share = match (even, w.next()) {
+                            (false, Some(x)) => took * x / sum,
+                            _ => took / cells,
+                        };
+                        cost[k * tx + c] = Some(share / rows as f64);
+                    }
+                }
+                b += count;
+                let done = (row as u64 * tiles_x as u64 + col as u64) as f64
+                    + (cols * rows) as f64 * b as f64 / nb as f64;
+                if !progress(done / total as f64) {
+                    return Err(RenderError::Cancelled);
+                }
+            }
+            col += cols;
+            if col >= tiles_x {
+                col = 0;
+                row += rows;
+            }
         }
-        pass.set_bind_group(0, &group, &[0]);
-        pass.set_pipeline(&self.resolve);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        submit(&mut |pass| {
+            pass.set_bind_group(0, &group, &[0]);
+            pass.set_pipeline(&self.resolve);
+            pass.dispatch_workgroups(tiles_x, tiles_y, 1);
+        })?;
+        Ok(())
     }
 }
 

@@ -336,7 +336,8 @@ enum Command {
         /// square-ish grid).
         #[arg(long, value_name = "N")]
         columns: Option<u64>,
-        /// A standard view fitted to the part's bounding box (Z up; front looks along +Y).
+        /// A standard view fitted to the part's bounding box (Z up: front looks along +Y;
+        /// with --up-axis Y, Y up: front looks along -Z).
         #[arg(long, value_parser = ["iso", "front", "back", "left", "right", "top", "bottom"], conflicts_with = "eye")]
         view: Option<String>,
         /// Explicit eye position, X,Y,Z (instead of --view).
@@ -350,7 +351,8 @@ enum Command {
             requires = "eye"
         )]
         target: Option<String>,
-        /// The up direction, X,Y,Z (default: Z, or Y when looking along Z).
+        /// The camera's up direction with --eye, X,Y,Z (default: the --up-axis, or the top
+        /// view's up when looking along it).
         #[arg(
             long,
             value_name = "X,Y,Z",
@@ -358,6 +360,10 @@ enum Command {
             requires = "eye"
         )]
         up: Option<String>,
+        /// The world's up axis for the views: Y for scans, glTF and OBJ exports (front then
+        /// looks along -Z). Default: a .usda stage's own upAxis, else Z.
+        #[arg(long, value_parser = ["Y", "Z"])]
+        up_axis: Option<String>,
         /// Vertical field of view, degrees.
         #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
         fov: f64,
@@ -849,6 +855,7 @@ fn run(cli: Cli) -> Result<()> {
             eye,
             target,
             up,
+            up_axis,
             fov,
             cracks,
             tolerance,
@@ -881,6 +888,7 @@ fn run(cli: Cli) -> Result<()> {
                 "edges": edges,
                 "face_ids": face_ids,
                 "turntable": turntable,
+                "up_axis": up_axis,
             });
             report_or_json(run_local("render", params)?, json, |r| {
                 let r = &r.result;

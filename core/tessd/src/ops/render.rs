@@ -20,7 +20,7 @@ use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
-use tessd_render::camera::{DEFAULT_FOV, Vec3};
+use tessd_render::camera::{DEFAULT_FOV, UpAxis, Vec3};
 use tessd_render::{
     Bounds, BrepReport, BrepScene, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
     Scene, Shading, StepTimings, View, panels,
@@ -51,6 +51,9 @@ fn renderer() -> Result<Arc<Renderer>, OpError> {
 
 /// Maps a renderer error onto the protocol's codes.
 fn render_error(e: RenderError) -> OpError {
+    if matches!(e, RenderError::Cancelled) {
+        return OpError::cancelled();
+    }
     let code = match &e {
         RenderError::Size(_) | RenderError::Camera(_) => ErrorCode::InvalidRequest,
         RenderError::Io(_) => ErrorCode::Io,
@@ -131,6 +134,9 @@ struct Params {
     /// B-Rep parts: full-scene ray casting instead of the raster pipeline.
     raycast: bool,
     spec: CameraSpec,
+    /// `up_axis`: the world's up axis for the standard views, when given (else the stage's,
+    /// else Z).
+    up_axis: Option<UpAxis>,
     fov: f64,
     settings: RenderSettings,
     frames: u32,
@@ -194,6 +200,12 @@ fn parse(request: &Request) -> Result<Params, OpError> {
             CameraSpec::View(view)
         }
     };
+    let up_axis = match request.str_param("up_axis")? {
+        None => None,
+        Some(a) => Some(UpAxis::parse(a).ok_or_else(|| {
+            OpError::request(format!("`up_axis` must be \"Y\" or \"Z\", got {a:?}"))
+        })?),
+    };
     let output = output_path(request)?;
     let face_ids = request.str_param("face_ids")?.map(|p| request.resolve(p));
     for (key, path) in [("output", &output), ("face_ids", &face_ids)] {
@@ -241,6 +253,7 @@ fn parse(request: &Request) -> Result<Params, OpError> {
         cracks,
         raycast,
         spec,
+        up_axis,
         fov,
         settings: RenderSettings::new(width, height)
             .with_shading(shading)
@@ -251,20 +264,24 @@ fn parse(request: &Request) -> Result<Params, OpError> {
     })
 }
 
-/// The cameras of the frames: the view fitted to `bounds` or the explicit eye, turned about the
-/// up axis through the target for a turntable.
-fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
+/// The cameras of the frames: the view fitted to `bounds` (in a world whose up axis is
+/// `axis`) or the explicit eye, turned about the up axis through the target for a turntable.
+fn cameras(p: &Params, axis: UpAxis, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
     let aspect = p.settings.aspect();
     let base = match p.spec {
-        CameraSpec::View(v) => Camera::fit(v, bounds, p.fov, aspect),
+        CameraSpec::View(v) => Camera::fit_up(v, axis, bounds, p.fov, aspect),
         CameraSpec::Explicit { eye, target, up } => {
             let eye = Vec3::from(eye);
             let target = target.map_or_else(|| bounds.center(), Vec3::from);
             let up = up.map_or_else(
                 || {
-                    // Z up, unless the view is along Z.
+                    // The up axis, unless the view is along it (then the top view's up).
                     let d = tessd_render::camera::normalize(target - eye);
-                    if d.z.abs() > 0.999 { Vec3::Y } else { Vec3::Z }
+                    if d.dot(axis.vector()).abs() > 0.999 {
+                        axis.from_z_up(Vec3::Y)
+                    } else {
+                        axis.vector()
+                    }
                 },
                 Vec3::from,
             );
@@ -289,7 +306,8 @@ fn cameras(p: &Params, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
 /// As [`run`] for bad parameters: `invalid_request` naming the parameter and the value,
 /// `unsupported` for outputs that are not `.png`.
 pub fn plan_cameras(request: &Request, bounds: &Bounds) -> Result<Vec<Camera>, OpError> {
-    cameras(&parse(request)?, bounds)
+    let p = parse(request)?;
+    cameras(&p, p.up_axis.unwrap_or_default(), bounds)
 }
 
 /// One mesh panel: its label (file stem, or LOD variant), triangles on the device and count.
@@ -305,11 +323,15 @@ enum Part {
     Brep(Box<tessd_render::GpuBrepScene>),
 }
 
+/// The panels of a mesh render, and the up axis their USD stages author.
+type Panels = (Vec<(String, Mesh)>, Option<UpAxis>);
+
 /// The meshes of a mesh render, labelled: `input` as a list of files gives one panel per file
-/// (a LOD chain, a cage beside its subdivided surface); one USD stage one panel per variant of
-/// its first variant set that holds meshes (the LOD chain `tessd lod` writes), else one; any
-/// other file or the mesh arrays one panel.
-fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, Mesh)>, OpError> {
+/// (a LOD chain, a cage beside its subdivided surface); one USD stage one panel per level of
+/// its LOD chain (the variants of its first variant set that holds meshes, else the levels of
+/// its first `UsdLod` root: both `tessd lod` schemas), else one; any other file or the mesh
+/// arrays one panel. With them, the `upAxis` of the (first) USD stage that authors one.
+fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Panels, OpError> {
     let label = |path: &Path| stem(Some(path), "mesh");
     match request.params.get("input") {
         Some(Value::Array(items)) => {
@@ -321,6 +343,7 @@ fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, M
             }
             let options = read_options(ctx);
             let mut out = Vec::with_capacity(items.len());
+            let mut axis = None;
             for (i, item) in items.iter().enumerate() {
                 let path = item.as_str().map(|p| request.resolve(p)).ok_or_else(|| {
                     OpError::request(format!("`input[{i}]` must be a file path, got {item}"))
@@ -335,17 +358,23 @@ fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, M
                     ));
                 }
                 ctx.checkpoint()?;
-                let mesh = read_mesh_file(&path, &options)
-                    .map_err(|e| prefixed(&format!("`input[{i}]`"), e))?;
-                out.push((label(&path), mesh));
+                let what = format!("`input[{i}]`");
+                let mesh = if is_usd_input(&path) {
+                    let stage = tessd_usd::read_usda(&path).map_err(usd_error);
+                    let stage = stage.map_err(|e| prefixed(&what, e))?;
+                    axis = axis.or(stage_axis(&stage));
+                    stage.composed().map_err(usd_error)
+                } else {
+                    read_mesh_file(&path, &options)
+                };
+                out.push((label(&path), mesh.map_err(|e| prefixed(&what, e))?));
             }
-            Ok(out)
+            Ok((out, axis))
         }
         Some(Value::String(p)) if is_usd_input(Path::new(p)) => {
             let path = request.resolve(p);
-            let panels = tessd_usd::read_usda(&path)
-                .and_then(|stage| stage.variant_panels())
-                .map_err(usd_error)?;
+            let stage = tessd_usd::read_usda(&path).map_err(usd_error)?;
+            let panels = stage.variant_panels().map_err(usd_error)?;
             if panels.len() > MAX_PANELS {
                 return Err(OpError::request(format!(
                     "{}: {} variants, more than the {MAX_PANELS} panels a render draws",
@@ -354,15 +383,20 @@ fn mesh_panels(request: &mut Request, ctx: &JobContext) -> Result<Vec<(String, M
                 )));
             }
             // Each prim's mesh is validated as the reader builds it; merging keeps it valid.
-            Ok(panels)
+            Ok((panels, stage_axis(&stage)))
         }
         _ => {
             let name = request
                 .str_param("input")?
                 .map_or_else(|| "arrays".to_string(), |p| label(Path::new(p)));
-            Ok(vec![(name, input_mesh(request, ctx)?)])
+            Ok((vec![(name, input_mesh(request, ctx)?)], None))
         }
     }
+}
+
+/// A stage's authored `upAxis` (`None` when absent or neither Y nor Z).
+fn stage_axis(stage: &tessd_usd::UsdStage) -> Option<UpAxis> {
+    stage.up_axis.as_deref().and_then(UpAxis::parse)
 }
 
 /// `error` with its message prefixed by `what`.
@@ -466,7 +500,9 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             min: b.min,
             max: b.max,
         };
-        let cams = cameras(&p, &bounds)?;
+        let axis = p.up_axis.unwrap_or_default();
+        result["up_axis"] = json!(axis.name());
+        let cams = cameras(&p, axis, &bounds)?;
         let trim_tolerance = match &asked_tolerance {
             Some(v) => Some(match parse_tolerance(v, doc.units)? {
                 super::tessellate::Tolerance::Length(x) => x,
@@ -509,8 +545,11 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
                  rasterised as it is",
             ));
         }
-        let meshes = mesh_panels(&mut request, ctx)?;
+        let (meshes, stage_axis) = mesh_panels(&mut request, ctx)?;
         ctx.checkpoint()?;
+        // The request's axis, else the stage's own, else Z.
+        let axis = p.up_axis.or(stage_axis).unwrap_or_default();
+        result["up_axis"] = json!(axis.name());
         // One camera for every panel, fitted to them all: the panels compare at one scale.
         let mut scenes = Vec::with_capacity(meshes.len());
         let mut bounds: Option<Bounds> = None;
@@ -527,7 +566,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         }
         drop(meshes);
         let bounds = bounds.ok_or_else(|| OpError::request("no mesh to render"))?;
-        let cams = cameras(&p, &bounds)?;
+        let cams = cameras(&p, axis, &bounds)?;
         result["faces"] = json!(scenes.iter().map(|(_, s)| s.max_id).max().unwrap_or(0));
         result["timings_ms"] = json!({"read": ms(t.elapsed())});
         ctx.progress(0.4, "upload", "")?;
@@ -582,7 +621,30 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             }
             Part::Brep(gpu) => {
                 let (frame, report) = if p.raycast {
-                    renderer.ray_cast_brep(gpu, camera, &p.settings)
+                    // Progress and cancel between the ray caster's slices (~25 ms each).
+                    let mut stop = None;
+                    let frames = cams.len();
+                    let mut tell = |done: f64| {
+                        let at = 0.5 + 0.5 * (i as f64 + done) / frames as f64;
+                        let msg = format!(
+                            "frame {} of {frames}: ray cast {:.0} %",
+                            i + 1,
+                            100.0 * done
+                        );
+                        match ctx.progress(at.min(1.0), "render", &msg) {
+                            Ok(()) => true,
+                            Err(e) => {
+                                stop = Some(e);
+                                false
+                            }
+                        }
+                    };
+                    let cast =
+                        renderer.ray_cast_brep_with_progress(gpu, camera, &p.settings, &mut tell);
+                    if let (Err(RenderError::Cancelled), Some(e)) = (&cast, stop) {
+                        return Err(e);
+                    }
+                    cast
                 } else {
                     renderer.render_brep(gpu, camera, &p.settings, p.cracks)
                 }
