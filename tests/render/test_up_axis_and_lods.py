@@ -122,6 +122,9 @@ def test_y_up_stage_renders_upright_without_the_flag(tmp_path):
     assert r["up_axis"] == "Z"
     w, h = _box(tmp_path / "z.png")
     assert w > 1.5 * h, (w, h)
+    # In a list of inputs too (the first stage that authors an upAxis).
+    r = _tessd("render", y_up, y_up, tmp_path / "l.png", *size)
+    assert r["up_axis"] == "Y" and len(r["panels"]) == 2
     # The flag overrides the stage's own axis.
     r = _tessd("render", y_up, tmp_path / "o.png", *size, "--up-axis", "Z")
     assert r["up_axis"] == "Z"
