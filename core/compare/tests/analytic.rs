@@ -438,7 +438,10 @@ fn a_cancel_stops_the_comparison_mid_way() {
     let flag = Arc::new(AtomicBool::new(true));
     let o = opts(1000).with_cancel(flag.clone());
     assert!(matches!(compare(&a, &b, &o), Err(CompareError::Cancelled)));
-    assert!(matches!(one_sided(&a, &b, &o), Err(CompareError::Cancelled)));
+    assert!(matches!(
+        one_sided(&a, &b, &o),
+        Err(CompareError::Cancelled)
+    ));
     // Set while 50 M samples are being measured (seconds of work): the answer comes within
     // a few milliseconds of work.
     flag.store(false, Ordering::Relaxed);
