@@ -153,6 +153,36 @@ def test_lod(tmp_path):
     assert_units(out, 1.0, "Z")
 
 
+def test_a_usda_input_keeps_its_conventions(tmp_path):
+    """A stage in, a stage out: the input's own metersPerUnit and upAxis carry over to every
+    mesh writer unless a flag says otherwise; a flag wins for its own option only."""
+    src = tmp_path / "src.usda"
+    run("convert", SPOT, src, "--up-axis", "Y", "--meters-per-unit", "0.001")
+    assert_units(src, 0.001, "Y")
+    out = tmp_path / "out.usda"
+    run("convert", src, out)
+    assert_units(out, 0.001, "Y")
+    run("simplify", src, out, "--method", "complexity", "--target-vertices", "20%")
+    assert_units(out, 0.001, "Y")
+    run("lod", src, "--levels", "50%", "--out", out)
+    assert_units(out, 0.001, "Y")
+    run("convert", src, out, "--meters-per-unit", "0.01")
+    assert_units(out, 0.01, "Y")
+    run("convert", src, out, "--up-axis", "Z")
+    assert_units(out, 0.001, "Z")
+
+
+def test_mesh_units_decide_meters_per_unit(tmp_path):
+    """`--units` says what a mesh's coordinates are in (for lengths such as `--max-error
+    5mm`): the stage written says so too, unless --meters-per-unit overrides it."""
+    out = tmp_path / "s.usda"
+    run("simplify", SPOT, out, "--method", "quality", "--max-error", "1mm", "--units", "cm")
+    assert_units(out, 0.01, "Z")
+    run("simplify", SPOT, out, "--method", "quality", "--max-error", "1mm", "--units", "cm",
+        "--meters-per-unit", "1")
+    assert_units(out, 1.0, "Z")
+
+
 def test_decompress_and_view_decode(tmp_path):
     tsc = tmp_path / "spot.tsc"
     run("compress", SPOT, tsc)

@@ -439,11 +439,12 @@ impl ClusterArgs {
 /// The USD stage settings of every verb that can write a `.usda`.
 #[derive(clap::Args)]
 struct StageArgs {
-    /// A .usda output's up axis (default Z).
+    /// A .usda output's up axis (default: a .usda input's own, else Z).
     #[arg(long, value_parser = ["Y", "Z"])]
     up_axis: Option<String>,
-    /// A .usda output's metres per model unit (default: a B-Rep's own units, mm → 0.001;
-    /// for meshes, which name none, 1; FreeCAD's millimetres: 0.001).
+    /// A .usda output's metres per model unit (default: a B-Rep's own units, mm → 0.001; for
+    /// a mesh, its --units where the verb takes them, else a .usda input's own, else 1, as
+    /// mesh files name none; FreeCAD's millimetres: 0.001).
     #[arg(long, value_name = "M", value_parser = positive_f64)]
     meters_per_unit: Option<f64>,
 }

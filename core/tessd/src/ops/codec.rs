@@ -13,7 +13,7 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
 
-use super::common::{file_dropped, stage_options, u64_param, write_mesh_file};
+use super::common::{check_stage_options, file_dropped, u64_param, write_mesh_file};
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use super::render::{parse_size, vec3_param};
 
@@ -153,7 +153,7 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
     let max_bits = u64_param(&request, "max_bits")?.map(|b| b.min(u32::MAX as u64) as u32);
     let output = output_path(&request)?;
     // Bad stage options are refused before the work, not when writing.
-    stage_options(&request)?;
+    check_stage_options(&request)?;
     ctx.progress(0.0, "read", "")?;
     let tsc = Tsc::open_file(&input).map_err(codec_error)?;
     let p = tsc.header.params.bits;
@@ -307,7 +307,7 @@ pub fn view(request: Request, ctx: &JobContext) -> Result<Response, OpError> {
             .ok_or_else(|| OpError::request(format!("parameter `{key}` ([x, y, z]) is required")))
     };
     let (width, height) = parse_size(request.params.get("size"))?;
-    stage_options(&request)?;
+    check_stage_options(&request)?;
     let camera = Camera {
         eye: need("eye")?,
         target: need("target")?,

@@ -43,14 +43,56 @@ pub fn check_mesh_output(path: &Path) -> Result<(), OpError> {
     }
 }
 
-/// The stage options of a request: `params.up_axis` (`"Y"`/`"Z"`, default Z) and
-/// `params.meters_per_unit` (default 1, the unit of a mesh that names none), the host's
-/// conventions.
+/// The stage options of a request that writes a USD stage. Each of `params.up_axis`
+/// (`"Y"`/`"Z"`) and `params.meters_per_unit` that the request gives wins; one it leaves out
+/// comes from what the input says, so that a converted, simplified or subdivided model keeps
+/// its size and orientation in every USD tool:
+/// - `meters_per_unit`: the mesh's unit `params.units` (mm: 0.001), else an input `.usda`
+///   stage's own `metersPerUnit`, else 1;
+/// - `up_axis`: an input `.usda` stage's own `upAxis`, else Z.
 ///
 /// # Errors
-/// `invalid_request` for another axis or a mistyped, non-finite or non-positive value.
+/// `invalid_request` for another axis, a mistyped, non-finite or non-positive value, or an
+/// unknown `units`.
 pub fn stage_options(request: &Request) -> Result<StageOptions, OpError> {
-    stage_options_in(request, 1.0)
+    let (up, meters_per_unit) = explicit_stage_options(request)?;
+    let mesh_unit = match request.str_param("units")? {
+        Some(name) => Some(
+            tessd_brep::Units::from_name(name)
+                .ok_or_else(|| {
+                    OpError::request(format!(
+                        "`units` (the unit of the mesh's coordinates) must be mm, cm, m or in, \
+                         got {name:?}"
+                    ))
+                })?
+                .meters_per_unit(),
+        ),
+        None => None,
+    };
+    // Only a missing option sends us to the input stage (parsed again: its layer metadata is
+    // not part of the mesh read from it).
+    let input_stage = if up.is_none() || (meters_per_unit.is_none() && mesh_unit.is_none()) {
+        input_stage_conventions(request)
+    } else {
+        (None, None)
+    };
+    Ok(StageOptions::default()
+        .with_up_axis(up.or(input_stage.0).unwrap_or(UpAxis::Z))
+        .with_meters_per_unit(
+            meters_per_unit
+                .or(mesh_unit)
+                .or(input_stage.1)
+                .unwrap_or(1.0),
+        ))
+}
+
+/// Refuses bad stage options before the work is done, without looking at the input
+/// ([`stage_options`] is called again when the stage is written).
+///
+/// # Errors
+/// As [`stage_options`].
+pub fn check_stage_options(request: &Request) -> Result<(), OpError> {
+    explicit_stage_options(request).map(|_| ())
 }
 
 /// As [`stage_options`], with `default_meters_per_unit` when the request names none: a B-Rep's
@@ -62,9 +104,18 @@ pub fn stage_options_in(
     request: &Request,
     default_meters_per_unit: f64,
 ) -> Result<StageOptions, OpError> {
+    let (up, meters_per_unit) = explicit_stage_options(request)?;
+    Ok(StageOptions::default()
+        .with_up_axis(up.unwrap_or(UpAxis::Z))
+        .with_meters_per_unit(meters_per_unit.unwrap_or(default_meters_per_unit)))
+}
+
+/// `params.up_axis` and `params.meters_per_unit` as the request gives them (checked).
+fn explicit_stage_options(request: &Request) -> Result<(Option<UpAxis>, Option<f64>), OpError> {
     let up = match request.str_param("up_axis")? {
-        None | Some("Z") | Some("z") => UpAxis::Z,
-        Some("Y") | Some("y") => UpAxis::Y,
+        None => None,
+        Some("Z") | Some("z") => Some(UpAxis::Z),
+        Some("Y") | Some("y") => Some(UpAxis::Y),
         Some(other) => {
             return Err(OpError::request(format!(
                 "`up_axis` must be \"Y\" or \"Z\", got {other:?}"
@@ -72,8 +123,8 @@ pub fn stage_options_in(
         }
     };
     let meters_per_unit = match request.f64_param("meters_per_unit")? {
-        None => default_meters_per_unit,
-        Some(m) if m.is_finite() && m > 0.0 => m,
+        None => None,
+        Some(m) if m.is_finite() && m > 0.0 => Some(m),
         Some(m) => {
             return Err(OpError::request(format!(
                 "`meters_per_unit` must be a positive number of metres per unit (millimetres: \
@@ -81,9 +132,30 @@ pub fn stage_options_in(
             )));
         }
     };
-    Ok(StageOptions::default()
-        .with_up_axis(up)
-        .with_meters_per_unit(meters_per_unit))
+    Ok((up, meters_per_unit))
+}
+
+/// The `upAxis` and `metersPerUnit` an input `.usda` stage (`params.input`) authors, each
+/// `None` when it authors none, the input is no stage, or it cannot be read (reading the
+/// input itself reports that).
+fn input_stage_conventions(request: &Request) -> (Option<UpAxis>, Option<f64>) {
+    let Ok(Some(input)) = request.str_param("input") else {
+        return (None, None);
+    };
+    let path = request.resolve(input);
+    if !super::mesh_arrays::is_usd_input(&path) {
+        return (None, None);
+    }
+    let Ok(stage) = tessd_usd::read_usda(&path) else {
+        return (None, None);
+    };
+    let up = match stage.up_axis.as_deref() {
+        Some("Y") => Some(UpAxis::Y),
+        Some("Z") => Some(UpAxis::Z),
+        _ => None,
+    };
+    let meters_per_unit = stage.meters_per_unit.filter(|m| m.is_finite() && *m > 0.0);
+    (up, meters_per_unit)
 }
 
 /// The file stem of `path`, or `fallback`.

@@ -2,7 +2,7 @@
 //! stage for `.usda`), or returns it as arrays; `dropped_attributes` names what the output
 //! format could not hold.
 
-use super::common::{check_mesh_output, file_dropped, stage_options, stem, write_mesh_file};
+use super::common::{check_mesh_output, check_stage_options, file_dropped, stem, write_mesh_file};
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::json;
 use tessd_ipc::error::OpError;
@@ -22,7 +22,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         // Refuse an unknown format before reading a large input.
         check_mesh_output(path)?;
         // Bad stage options are refused before the work, not when writing.
-        stage_options(&request)?;
+        check_stage_options(&request)?;
     }
     let mesh = input_mesh(&mut request, ctx)?;
     ctx.progress(0.5, "write", "")?;

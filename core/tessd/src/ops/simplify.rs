@@ -5,8 +5,8 @@
 //! the settings the `lod` operation shares.
 
 use super::common::{
-    Amount, as_u64, bool_param, check_mesh_output, file_dropped, parse_amount, stage_options, stem,
-    write_mesh_file,
+    Amount, as_u64, bool_param, check_mesh_output, check_stage_options, file_dropped, parse_amount,
+    stem, write_mesh_file,
 };
 use super::mesh_arrays::{input_mesh, mesh_error, mesh_to_arrays, output_path};
 use serde_json::{Value, json};
@@ -394,7 +394,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         Some(n) => n.to_string(),
         None => stem(output.as_deref(), "mesh"),
     };
-    stage_options(&request)?;
+    check_stage_options(&request)?;
     let mesh = input_mesh(&mut request, ctx)?;
     ctx.progress(0.05, "simplify", "")?;
     let mut progress = |f: f64, stage: &str| ctx.progress(0.05 + 0.85 * f, stage, "").is_ok();

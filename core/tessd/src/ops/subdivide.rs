@@ -4,8 +4,8 @@
 //! Parameters are described in docs/protocol.md ("subdivide").
 
 use super::common::{
-    as_u64, bool_param, check_mesh_output, file_dropped, is_usda, merge_names, stage_options, stem,
-    usd_error, write_mesh_file,
+    as_u64, bool_param, check_mesh_output, check_stage_options, file_dropped, is_usda, merge_names,
+    stage_options, stem, usd_error, write_mesh_file,
 };
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::json;
@@ -108,7 +108,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     if let Some(path) = output.as_deref() {
         check_mesh_output(path)?;
         // Bad stage options are refused before the work, not when writing.
-        stage_options(&request)?;
+        check_stage_options(&request)?;
     }
     let usd = match request.str_param("usd")?.unwrap_or("refined") {
         "refined" => UsdOutput::Refined,
