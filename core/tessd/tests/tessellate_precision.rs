@@ -401,5 +401,6 @@ fn cli_origin_flag() {
         .output()
         .unwrap();
     assert!(!bad.status.success());
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("`origin`"));
+    // The CLI names its flag where the op names its parameter.
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("`--origin`"));
 }
