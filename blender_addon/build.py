@@ -159,12 +159,15 @@ def blender_ext_places():
     seconds), the `bpy` of the repository's .venv, then a `blender` on PATH (a Blender install
     keeps its scripts in `<version>/scripts` beside the executable, or below share/blender on
     Linux distributions)."""
-    places = []
+    import sysconfig
+
+    # The running Python's site-packages first: once bpy is imported, its scripts' own `bpy`
+    # module folder is on sys.path too and would be found before the package.
+    places = [os.path.join(sysconfig.get_paths()[key], "bpy", "*", BLENDER_EXT)
+              for key in ("purelib", "platlib")]
     try:
         import importlib.machinery
 
-        # The installed package on sys.path (an imported bpy would answer with its scripts'
-        # module folder instead).
         spec = importlib.machinery.PathFinder.find_spec("bpy")
     except (ImportError, ValueError):
         spec = None
@@ -180,7 +183,7 @@ def blender_ext_places():
         real = os.path.dirname(os.path.realpath(blender))
         places.append(os.path.join(real, "*", BLENDER_EXT))
         places.append(os.path.join(os.path.dirname(real), "share", "blender", "*", BLENDER_EXT))
-    return places
+    return list(dict.fromkeys(places))
 
 
 def find_blender_ext(places=None):
