@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use report::{print_compare, print_lod, print_simplify, print_stats};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use tessd::ops::common::significant;
 use tessd_ipc::arrays::{Arrays, OwnedArray};
 use tessd_ipc::job::{CancelToken, JobContext, JobLimits, Progress};
 use tessd_ipc::registry::{Request, Response};
@@ -983,21 +984,6 @@ fn report_or_json(response: Response, json: bool, summary: impl FnOnce(&Response
         summary(&response);
     }
     Ok(())
-}
-
-/// `x` to 4 significant digits without trailing zeros (`0.01234`, `24.6`, `0.05`), for the
-/// summary of a relative tessellation tolerance.
-fn significant(x: f64) -> String {
-    if !x.is_finite() || x == 0.0 {
-        return x.to_string();
-    }
-    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 17) as usize;
-    let s = format!("{x:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }
 
 /// Runs one operation in this process with a progress bar on a terminal — the same registry

@@ -148,7 +148,11 @@ fn check_coarsening(
         if exact {
             format!("LOD{}'s {given}{unit}", j + 1)
         } else {
-            format!("LOD{}'s {given} ({}{unit})", j + 1, round_sig(resolved))
+            format!(
+                "LOD{}'s {given} ({}{unit})",
+                j + 1,
+                super::common::significant(resolved)
+            )
         }
     };
     // The same levels, coarsening, each goal once.
@@ -171,20 +175,6 @@ fn check_coarsening(
         level(i),
         level(i - 1),
     )))
-}
-
-/// `x` to 4 significant digits (a resolved goal in a message).
-fn round_sig(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return x.to_string();
-    }
-    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 17) as usize;
-    let s = format!("{x:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }
 
 /// The folder for one file per level: `per_level` = `true` (the output's folder) or a folder.
