@@ -74,11 +74,12 @@ pub struct JobContext<'a> {
     sink: &'a (dyn Fn(Progress) + Sync),
     cancel: CancelToken,
     limits: JobLimits,
-    last: std::sync::Mutex<Option<Instant>>,
+    /// When the last report was sent, and its stage.
+    last: std::sync::Mutex<Option<(Instant, String)>>,
 }
 
-/// Progress reports closer together than this are dropped (except the final one), so a tight
-/// loop cannot flood the socket.
+/// Progress reports closer together than this are dropped (except the final one and the first
+/// of each stage, which a client may be waiting for), so a tight loop cannot flood the socket.
 const PROGRESS_INTERVAL: Duration = Duration::from_millis(10);
 
 impl<'a> JobContext<'a> {
@@ -122,7 +123,8 @@ impl<'a> JobContext<'a> {
         Ok(())
     }
 
-    /// Reports progress (rate-limited), then checks for cancellation.
+    /// Reports progress (rate-limited: a new stage and the final report always go out), then
+    /// checks for cancellation.
     ///
     /// # Errors
     /// [`OpError::cancelled`] when the job was cancelled.
@@ -130,9 +132,12 @@ impl<'a> JobContext<'a> {
         let now = Instant::now();
         let send = {
             let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-            let due = last.is_none_or(|t| now - t >= PROGRESS_INTERVAL) || fraction >= 1.0;
+            let due = fraction >= 1.0
+                || last
+                    .as_ref()
+                    .is_none_or(|(t, s)| now - *t >= PROGRESS_INTERVAL || s != stage);
             if due {
-                *last = Some(now);
+                *last = Some((now, stage.to_string()));
             }
             due
         };
@@ -161,5 +166,34 @@ impl<'a> JobContext<'a> {
     /// The job's cancel token, for handing to library code that polls it.
     pub fn cancel_token(&self) -> &CancelToken {
         &self.cancel
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reports inside the interval are dropped, except a new stage's first and the final one.
+    #[test]
+    fn a_new_stage_and_the_end_always_go_out() {
+        let sent = std::sync::Mutex::new(Vec::new());
+        let sink = |p: Progress| sent.lock().unwrap().push((p.stage, p.fraction));
+        let ctx = JobContext::new(&sink, CancelToken::default());
+        // All within microseconds, far inside the 10 ms interval.
+        ctx.progress(0.0, "read", "").unwrap();
+        ctx.progress(0.05, "read", "").unwrap();
+        ctx.progress(0.1, "read", "").unwrap();
+        ctx.progress(0.2, "a_to_b", "").unwrap();
+        ctx.progress(0.3, "a_to_b", "").unwrap();
+        ctx.progress(1.0, "done", "").unwrap();
+        let sent = sent.lock().unwrap().clone();
+        assert_eq!(
+            sent,
+            vec![
+                ("read".to_string(), 0.0),
+                ("a_to_b".to_string(), 0.2),
+                ("done".to_string(), 1.0)
+            ]
+        );
     }
 }
