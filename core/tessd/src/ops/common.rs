@@ -334,6 +334,21 @@ pub fn plain_number(text: &str) -> Option<f64> {
     if plain { text.parse().ok() } else { None }
 }
 
+/// `x` to 4 significant digits without trailing zeros (`0.01234`, `24.6`, `0.05`): lengths and
+/// goals in messages and summaries.
+pub fn significant(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return x.to_string();
+    }
+    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 17) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -386,20 +401,5 @@ mod tests {
         assert_eq!(as_u64(&json!(8.5)), None);
         assert_eq!(as_u64(&json!(-1)), None);
         assert_eq!(as_u64(&json!("8")), None);
-    }
-}
-
-/// `x` to 4 significant digits without trailing zeros (`0.01234`, `24.6`, `0.05`): lengths and
-/// goals in messages and summaries.
-pub fn significant(x: f64) -> String {
-    if !x.is_finite() || x == 0.0 {
-        return x.to_string();
-    }
-    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 17) as usize;
-    let s = format!("{x:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
     }
 }
