@@ -324,6 +324,7 @@ fn classify_rate(doc: &Document, built: &[(usize, TrimStructure)], eps_mm: f64, 
 }
 
 /// CPU time of this process (all threads, user + system), milliseconds.
+#[cfg(unix)]
 fn cpu_ms() -> f64 {
     // SAFETY: getrusage only writes the struct it is given.
     let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
@@ -332,6 +333,12 @@ fn cpu_ms() -> f64 {
     }
     let ms = |t: libc::timeval| t.tv_sec as f64 * 1e3 + t.tv_usec as f64 * 1e-3;
     ms(ru.ru_utime) + ms(ru.ru_stime)
+}
+
+/// Not measured off Unix (`getrusage` is POSIX): NaN, as when the call fails.
+#[cfg(not(unix))]
+fn cpu_ms() -> f64 {
+    f64::NAN
 }
 
 /// One tessellation, under `catch_unwind`: the result, the call's wall time and CPU time

@@ -17,7 +17,8 @@ pub fn status_kib(key: &str) -> u64 {
 /// one, so that a later `VmHWM` is the peak of what ran in between. `false` when the kernel
 /// refused the reset (then `VmHWM` still includes earlier peaks).
 pub fn reset_peak() -> bool {
-    // SAFETY: malloc_trim only releases free memory of glibc's heap.
+    // SAFETY: malloc_trim only releases free memory of glibc's heap (which only Linux has).
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
     unsafe {
         libc::malloc_trim(0);
     }

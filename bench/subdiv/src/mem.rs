@@ -18,7 +18,8 @@ pub fn status_kib(key: &str) -> u64 {
 /// resident set, so that a later `VmHWM` is the peak of what ran in between. Returns `false`
 /// when the kernel refused the reset (the peak then still covers everything before).
 pub fn reset_peak() -> bool {
-    // SAFETY: malloc_trim only returns free pages of glibc's heap to the OS.
+    // SAFETY: malloc_trim only returns free pages of glibc's heap to the OS (Linux only).
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
     unsafe {
         libc::malloc_trim(0);
     }

@@ -17,6 +17,7 @@ use crate::error::CodecError;
 use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_coder::{self, Limits, Span, kd_key};
 use crate::nsp_tree::Node;
+use crate::positional_io;
 
 /// An opened `.tsc` file: its header, models and tree, with the file's bytes.
 pub struct Tsc {
@@ -54,9 +55,8 @@ impl Storage {
                 &b[offset as usize..(offset + len) as usize],
             )),
             Storage::File(f, _) => {
-                use std::os::unix::fs::FileExt;
                 let mut buf = vec![0u8; len as usize];
-                f.read_exact_at(&mut buf, offset).map_err(|e| {
+                positional_io::read_exact_at(f, &mut buf, offset).map_err(|e| {
                     CodecError::io(format!("reading {len} bytes at offset {offset}"), e)
                 })?;
                 Ok(std::borrow::Cow::Owned(buf))

@@ -32,6 +32,7 @@ pub mod kd_coder;
 pub mod nsp_tree;
 pub mod partition;
 pub mod ply_out;
+mod positional_io;
 pub mod quantize;
 pub mod source;
 pub mod symbols;

@@ -9,12 +9,12 @@
 //! stay on disk, in the input file and the RWI.
 
 use std::fs::File;
-use std::os::unix::fs::FileExt;
 
 use rustc_hash::FxHashMap;
 
 use crate::error::CodecError;
 use crate::nsp_tree::{Node, Params};
+use crate::positional_io;
 use crate::quantize::Quantizer;
 use crate::source::{MeshSource, mesh_error};
 
@@ -78,8 +78,7 @@ impl Partition {
     pub fn leaf(&self, i: usize) -> Result<Vec<[u32; 3]>, CodecError> {
         let (first, count) = self.regions[i];
         let mut bytes = vec![0u8; count as usize * 12];
-        self.rwi
-            .read_exact_at(&mut bytes, first * 12)
+        positional_io::read_exact_at(&self.rwi, &mut bytes, first * 12)
             .map_err(|e| CodecError::io("reading the raw index file", e))?;
         Ok(bytes
             .chunks_exact(12)
@@ -347,7 +346,7 @@ pub fn build(
             }
             if b.len() >= FLUSH {
                 let off = (regions[leaf].0 + written[leaf]) * 12;
-                if let Err(e) = rwi.write_all_at(b, off) {
+                if let Err(e) = positional_io::write_all_at(&rwi, b, off) {
                     failure.get_or_insert(e);
                 }
                 written[leaf] += (b.len() / 12) as u64;
@@ -369,7 +368,7 @@ pub fn build(
     for (leaf, b) in buffers.iter().enumerate() {
         if !b.is_empty() {
             let off = (regions[leaf].0 + written[leaf]) * 12;
-            if let Err(e) = rwi.write_all_at(b, off) {
+            if let Err(e) = positional_io::write_all_at(&rwi, b, off) {
                 failure.get_or_insert(e);
             }
         }

@@ -7,7 +7,6 @@
 //! and a few neighbours' keys are in memory, whatever the file's size.
 
 use std::io::{BufWriter, Write};
-use std::os::unix::fs::FileExt;
 
 use rustc_hash::FxHashMap;
 
@@ -15,6 +14,7 @@ use crate::complex::{Complex, POINT};
 use crate::decode::Tsc;
 use crate::error::CodecError;
 use crate::kd_coder::kd_key;
+use crate::positional_io;
 
 /// What [`Tsc::write_ply`] wrote.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,8 +123,7 @@ impl Tsc {
                 }
                 let (base, count) = bases[leaf];
                 let mut bytes = vec![0u8; 8 * count as usize];
-                keys_file
-                    .read_exact_at(&mut bytes, 8 * base)
+                positional_io::read_exact_at(&keys_file, &mut bytes, 8 * base)
                     .map_err(|e| CodecError::io("reading the scratch key file", e))?;
                 cache.insert(
                     leaf,

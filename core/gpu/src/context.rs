@@ -2,8 +2,9 @@
 //! here, the renderer of `tessd-render`), so that all of them pick adapters, raise limits and
 //! report failures the same way.
 //!
-//! Vulkan is the backend (which covers lavapipe, Mesa's software driver, what CI runs on); a
-//! real GPU is preferred and a CPU adapter accepted. wgpu's validation and out-of-memory errors
+//! The backends are the platform's (core/gpu/Cargo.toml): Vulkan on Linux (which covers
+//! lavapipe, Mesa's software driver, what CI runs on), DX12 and Vulkan on Windows, Metal on
+//! macOS; a real GPU is preferred and a CPU adapter accepted, and the adapter is reported. wgpu's validation and out-of-memory errors
 //! are caught with [`ErrorScopes`], so bad input gives an error, never wgpu's default panic.
 
 use crate::GpuError;
@@ -19,8 +20,7 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// Opens a device labelled `label`: the Vulkan backend plus whatever other backend this
-    /// build has, preferring a real GPU but accepting a fallback (CPU) adapter. Limits are
+    /// Opens a device labelled `label` on the best adapter of this build's backends, preferring a real GPU but accepting a fallback (CPU) adapter. Limits are
     /// wgpu's defaults except buffer sizes and the 2D texture size, raised to the adapter's so
     /// large meshes and large images fit.
     ///
@@ -89,7 +89,8 @@ impl GpuContext {
 }
 
 /// The window-system surface extensions a headless instance leaves out (see
-/// [`headless_instance`]).
+/// [`vulkan_without_window_systems`]).
+#[cfg(all(unix, not(target_vendor = "apple")))]
 const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
     c"VK_KHR_wayland_surface",
     c"VK_KHR_xcb_surface",
@@ -97,8 +98,27 @@ const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
 ];
 
 /// A wgpu instance for offscreen work: the backends of this build (and `WGPU_BACKEND`,
-/// `WGPU_VALIDATION`... from the environment), its Vulkan instance created without the
-/// window-system surface extensions.
+/// `WGPU_VALIDATION`... from the environment). On Linux and the BSDs its Vulkan instance is
+/// created without the window-system surface extensions ([`vulkan_without_window_systems`]);
+/// elsewhere (DX12 and Vulkan on Windows, Metal on macOS) wgpu creates it as it is, and the
+/// adapter request picks among all backends.
+///
+/// # Errors
+/// [`GpuError::NoAdapter`] when Vulkan is the only backend and cannot be initialised (no
+/// loader: `libvulkan1` missing).
+fn headless_instance() -> Result<wgpu::Instance, GpuError> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Instance::enabled_backend_features();
+    let desc = desc.with_env();
+    #[cfg(all(unix, not(target_vendor = "apple")))]
+    if desc.backends.contains(wgpu::Backends::VULKAN) {
+        return vulkan_without_window_systems(desc);
+    }
+    Ok(wgpu::Instance::new(desc))
+}
+
+/// The Vulkan instance of `desc`, created through wgpu-hal without the window-system surface
+/// extensions (Wayland, XCB, Xlib), which only Unix desktops have.
 ///
 /// wgpu enables every surface extension the loader offers, and Mesa's device-selection layer
 /// (an implicit layer of `mesa-vulkan-drivers`) takes `VK_KHR_wayland_surface` as a sign that
@@ -108,16 +128,14 @@ const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
 /// adapter enumeration (issue 32). tessd never presents, so it never needs them: wgpu-hal checks
 /// that an extension was enabled before creating a surface with it.
 ///
+/// Should Vulkan fail while other backends are enabled (`WGPU_BACKEND`), those are used.
+///
 /// # Errors
-/// [`GpuError::NoAdapter`] when Vulkan is the only backend and cannot be initialised (no
-/// loader: `libvulkan1` missing).
-fn headless_instance() -> Result<wgpu::Instance, GpuError> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Instance::enabled_backend_features();
-    let desc = desc.with_env();
-    if !desc.backends.contains(wgpu::Backends::VULKAN) {
-        return Ok(wgpu::Instance::new(desc));
-    }
+/// As [`headless_instance`].
+#[cfg(all(unix, not(target_vendor = "apple")))]
+fn vulkan_without_window_systems(
+    desc: wgpu::InstanceDescriptor,
+) -> Result<wgpu::Instance, GpuError> {
     let hal_desc = wgpu::hal::InstanceDescriptor {
         name: "tessd",
         flags: desc.flags,

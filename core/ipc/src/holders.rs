@@ -78,8 +78,11 @@ fn prune(map: &mut BTreeMap<u32, String>) {
 /// On Unix, `kill(pid, 0)` asks the kernel without sending anything: success or `EPERM`
 /// (the process exists but belongs to someone else) mean alive. A zombie (exited, not yet
 /// reaped by its parent) still passes that test, so on Linux its `/proc/<pid>/stat` state
-/// is read too: a zombie no longer uses the daemon. Elsewhere there is no cheap portable
-/// test, so holders are kept until they release.
+/// is read too: a zombie no longer uses the daemon. On Windows the process is opened by its
+/// pid: no such process means gone, one that cannot be opened (another account's, access
+/// denied) means alive, and an open one is alive while its exit code is `STILL_ACTIVE` (an
+/// exited process whose handle someone still holds is Windows' zombie). Elsewhere there is no
+/// cheap portable test, so holders are kept until they release.
 pub fn process_alive(pid: u32) -> bool {
     #[cfg(unix)]
     {
@@ -100,7 +103,28 @@ pub fn process_alive(pid: u32) -> bool {
         }
         true
     }
-    #[cfg(not(unix))]
+    #[cfg(windows)]
+    {
+        use windows_sys::Win32::Foundation::{
+            CloseHandle, ERROR_INVALID_PARAMETER, GetLastError, STILL_ACTIVE,
+        };
+        use windows_sys::Win32::System::Threading::{
+            GetExitCodeProcess, OpenProcess, PROCESS_QUERY_LIMITED_INFORMATION,
+        };
+        // SAFETY: OpenProcess has no preconditions; it returns null or a handle we own.
+        let handle = unsafe { OpenProcess(PROCESS_QUERY_LIMITED_INFORMATION, 0, pid) };
+        if handle.is_null() {
+            // SAFETY: reads this thread's last error, set by the failed OpenProcess.
+            return unsafe { GetLastError() } != ERROR_INVALID_PARAMETER;
+        }
+        let mut code = 0u32;
+        // SAFETY: `handle` is a valid process handle with query rights; `code` is writable.
+        let ok = unsafe { GetExitCodeProcess(handle, &mut code) } != 0;
+        // SAFETY: `handle` is ours and closed once.
+        unsafe { CloseHandle(handle) };
+        !ok || code == STILL_ACTIVE as u32
+    }
+    #[cfg(not(any(unix, windows)))]
     {
         let _ = pid;
         true
@@ -135,10 +159,16 @@ mod tests {
         assert_eq!(h.release(me), 0);
     }
 
-    #[cfg(unix)]
+    #[cfg(any(unix, windows))]
     #[test]
     fn dead_processes_are_pruned() {
+        #[cfg(unix)]
         let mut child = std::process::Command::new("true").spawn().unwrap();
+        #[cfg(windows)]
+        let mut child = std::process::Command::new("cmd")
+            .args(["/C", "exit 0"])
+            .spawn()
+            .unwrap();
         let pid = child.id();
         child.wait().unwrap();
         let h = Holders::new();

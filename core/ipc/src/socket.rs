@@ -169,6 +169,8 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
         path: path.to_path_buf(),
         reason,
     };
+    #[cfg(windows)]
+    owner_only_pipe().map_err(io_err)?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_folder(parent).map_err(io_err)?;
         check_folder(parent).map_err(unsafe_path)?;
@@ -215,6 +217,19 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
             io_err(e)
         }
     })
+}
+
+/// Windows: refused until the daemon's named pipe gets a per-user name and a security
+/// descriptor that admits only this user (issue 37). Windows' default pipe DACL lets other
+/// accounts read, so binding with it would expose every user's meshes; refusing is the safe
+/// default until then. (`interprocess` also maps only `\\.\pipe\` paths to pipes, not the
+/// file paths [`resolve`] returns.)
+#[cfg(windows)]
+fn owner_only_pipe() -> io::Result<()> {
+    Err(io::Error::new(
+        io::ErrorKind::Unsupported,
+        "serving on Windows needs an owner-only named pipe, not implemented yet (tessd issue 37)",
+    ))
 }
 
 /// Creates `dir` and its missing parents with mode 0700 (nothing is changed when it exists).

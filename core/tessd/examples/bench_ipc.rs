@@ -4,9 +4,14 @@
 //!
 //! Run: `cargo run --release -p tessd --example bench_ipc -- [TRIANGLES_M] [PLY_TRIANGLES_M]`
 //! (defaults 5 and 10). Prints a Markdown table; `bench/run_ipc.sh` stores it in `bench/`.
+//!
+//! Unix only: its baseline is a Unix-socket echo and its memory figure is /proc's `VmHWM`; on
+//! Windows it only says so (the shared helpers are then unused).
+#![cfg_attr(not(unix), allow(dead_code, unused_imports))]
 
 use serde_json::json;
 use std::io::{Read, Write};
+#[cfg(unix)]
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -54,6 +59,7 @@ fn peak_rss_mib() -> f64 {
 }
 
 /// Raw baseline: send `bytes` to an echo thread over a Unix socket and read them back.
+#[cfg(unix)]
 fn raw_echo(dir: &Path, bytes: &[u8]) -> Duration {
     let path = dir.join("raw.sock");
     let _ = std::fs::remove_file(&path);
@@ -87,6 +93,12 @@ fn load_child(path: &str) {
     println!("{:.1}", peak_rss_mib());
 }
 
+#[cfg(not(unix))]
+fn main() {
+    eprintln!("bench_ipc compares with a Unix-socket echo and reads /proc: it runs on Unix only");
+}
+
+#[cfg(unix)]
 fn main() {
     if let [_, mode, path] = &std::env::args().collect::<Vec<_>>()[..]
         && mode == "load"

@@ -960,7 +960,16 @@ fn serve(socket: Option<&str>, log_file: Option<&Path>, options: ServerOptions) 
     let path = tessd_ipc::socket::resolve(socket, true).context("choosing the socket path")?;
     let listener = tessd_ipc::socket::bind(&path)?;
     let server = Server::new(listener, &path, tessd::ops::registry(), options);
-    let handle = server.shutdown_handle();
+    shut_down_on_signals(server.shutdown_handle())?;
+    server.serve()?;
+    Ok(())
+}
+
+/// SIGINT and SIGTERM stop the server as a `shutdown` request does (running requests are
+/// cancelled and answered, then the socket is removed), so that a service manager's stop or a
+/// terminal's Ctrl-C never leaves a client without its answer.
+#[cfg(unix)]
+fn shut_down_on_signals(handle: tessd_ipc::server::ShutdownHandle) -> Result<()> {
     let mut signals = signal_hook::iterator::Signals::new([
         signal_hook::consts::SIGINT,
         signal_hook::consts::SIGTERM,
@@ -972,7 +981,29 @@ fn serve(socket: Option<&str>, log_file: Option<&Path>, options: ServerOptions) 
             handle.trigger();
         }
     });
-    server.serve()?;
+    Ok(())
+}
+
+/// Windows: the C runtime raises SIGINT for the console's Ctrl-C (and SIGTERM only when this
+/// process raises it); signal-hook's iterator is Unix-only, so the signals set a flag that a
+/// thread polls every 100 ms, which is soon enough for a person at a console. Ctrl-Break and
+/// closing the console window (`CTRL_CLOSE_EVENT`, which allows the process about 5 s) are not
+/// caught yet: they need `SetConsoleCtrlHandler`, issue 37.
+#[cfg(windows)]
+fn shut_down_on_signals(handle: tessd_ipc::server::ShutdownHandle) -> Result<()> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let raised = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(sig, raised.clone()).context("installing signal handlers")?;
+    }
+    std::thread::spawn(move || {
+        while !raised.load(Ordering::SeqCst) {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+        log::info!("Ctrl-C received");
+        handle.trigger();
+    });
     Ok(())
 }
 

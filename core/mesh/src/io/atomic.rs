@@ -212,9 +212,11 @@ fn lock_exclusive(file: &File) -> bool {
     unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) == 0 }
 }
 
+/// Not yet on Windows (issue 37: `LockFileEx`): nothing is locked, and `false` says so, so
+/// that [`remove_if_unlocked`] there never takes a file for unheld.
 #[cfg(not(unix))]
 fn lock_exclusive(_file: &File) -> bool {
-    true
+    false
 }
 
 /// How long a folder's sweep holds before the next write into it sweeps again.
@@ -294,14 +296,15 @@ fn remove_if_unlocked(path: &Path) {
     }
 }
 
+/// Not yet on Windows (issue 37): without `LockFileEx` a writer on another machine sharing
+/// the folder cannot be seen, so nothing is removed.
 #[cfg(not(unix))]
-fn remove_if_unlocked(path: &Path) {
-    let _ = std::fs::remove_file(path);
-}
+fn remove_if_unlocked(_path: &Path) {}
 
 /// Whether a process with this pid exists on this machine (`kill(pid, 0)`; a zombie counts as
-/// gone on Linux). Without a cheap test elsewhere, every process counts as alive there, so
-/// nothing is swept.
+/// gone on Linux). Elsewhere every process counts as alive, so nothing is swept: Windows'
+/// test by process handle (`OpenProcess` + `GetExitCodeProcess`) is issue 37's, and lands
+/// with its `LockFileEx` lock, without which a sweep there would not be safe.
 fn process_alive(pid: u32) -> bool {
     #[cfg(unix)]
     {
@@ -358,6 +361,7 @@ mod tests {
     }
 
     /// The pid of a process that has exited and been reaped.
+    #[cfg(target_os = "linux")]
     fn dead_pid() -> u32 {
         let mut child = std::process::Command::new("true").spawn().unwrap();
         let pid = child.id();
