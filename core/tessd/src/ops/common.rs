@@ -56,19 +56,7 @@ pub fn check_mesh_output(path: &Path) -> Result<(), OpError> {
 /// unknown `units`.
 pub fn stage_options(request: &Request) -> Result<StageOptions, OpError> {
     let (up, meters_per_unit) = explicit_stage_options(request)?;
-    let mesh_unit = match request.str_param("units")? {
-        Some(name) => Some(
-            tessd_brep::Units::from_name(name)
-                .ok_or_else(|| {
-                    OpError::request(format!(
-                        "`units` (the unit of the mesh's coordinates) must be mm, cm, m or in, \
-                         got {name:?}"
-                    ))
-                })?
-                .meters_per_unit(),
-        ),
-        None => None,
-    };
+    let mesh_unit = mesh_units(request)?.map(tessd_brep::Units::meters_per_unit);
     // Only a missing option sends us to the input stage (parsed again: its layer metadata is
     // not part of the mesh read from it).
     let input_stage = if up.is_none() || (meters_per_unit.is_none() && mesh_unit.is_none()) {
@@ -84,6 +72,22 @@ pub fn stage_options(request: &Request) -> Result<StageOptions, OpError> {
                 .or(input_stage.1)
                 .unwrap_or(1.0),
         ))
+}
+
+/// `params.units`, the unit of a mesh's coordinates (mm, cm, m, in), when the request names
+/// one: mesh files carry none.
+///
+/// # Errors
+/// `invalid_request` for another name.
+pub fn mesh_units(request: &Request) -> Result<Option<tessd_brep::Units>, OpError> {
+    let Some(name) = request.str_param("units")? else {
+        return Ok(None);
+    };
+    tessd_brep::Units::from_name(name).map(Some).ok_or_else(|| {
+        OpError::request(format!(
+            "`units` (the unit of the mesh's coordinates) must be mm, cm, m or in, got {name:?}"
+        ))
+    })
 }
 
 /// Refuses bad stage options before the work is done, without looking at the input

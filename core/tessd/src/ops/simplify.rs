@@ -211,14 +211,7 @@ pub fn report_json(r: &Report) -> Value {
 /// `invalid_request` for an unknown `units`, a unit-bearing length without `units`, or a
 /// length [`super::tessellate::parse_length`] refuses.
 pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<(), OpError> {
-    let units = match request.str_param("units")? {
-        None => None,
-        Some(name) => Some(tessd_brep::Units::from_name(name).ok_or_else(|| {
-            OpError::request(format!(
-                "`units` (the unit of the mesh's coordinates) must be mm, cm, m or in, got {name:?}"
-            ))
-        })?),
-    };
+    let units = super::common::mesh_units(request)?;
     let convert = |key: &str, v: &mut Value| -> Result<(), OpError> {
         let Some(text) = v.as_str() else {
             return Ok(());
