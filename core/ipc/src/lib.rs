@@ -29,5 +29,6 @@ pub mod memory;
 pub mod registry;
 pub mod server;
 pub mod socket;
+mod socket_watch;
 
 pub use error::{ErrorCode, OpError};

@@ -16,7 +16,8 @@ use crate::frame::{
 use crate::holders::Holders;
 use crate::job::{CancelToken, JobContext, JobLimits, Progress};
 use crate::registry::{Registry, Request, Response, run_guarded, unknown_op};
-use interprocess::local_socket::{Listener, Stream, traits::ListenerExt as _};
+use crate::socket_watch::SocketWatch;
+use interprocess::local_socket::{Listener, Stream, traits::Listener as _};
 use serde_json::{Map, Value, json};
 use std::collections::HashMap;
 use std::io::{self, BufReader};
@@ -49,6 +50,9 @@ pub struct ServerOptions {
     pub job_limits: JobLimits,
     /// How long `shutdown` waits for running requests before the server returns anyway.
     pub shutdown_grace: Duration,
+    /// How often the server checks that its socket path still names the socket it bound
+    /// (one `stat`); when it was removed or replaced the server shuts down (at least 10 ms).
+    pub socket_check: Duration,
 }
 
 impl Default for ServerOptions {
@@ -59,6 +63,7 @@ impl Default for ServerOptions {
             max_jobs: 64,
             job_limits: JobLimits::default(),
             shutdown_grace: Duration::from_secs(10),
+            socket_check: Duration::from_secs(2),
         }
     }
 }
@@ -81,6 +86,18 @@ impl ServerOptions {
         self.job_limits = limits;
         self
     }
+
+    /// Sets how long `shutdown` waits for running requests.
+    pub fn with_shutdown_grace(mut self, grace: Duration) -> Self {
+        self.shutdown_grace = grace;
+        self
+    }
+
+    /// Sets how often the socket file is checked (see [`ServerOptions::socket_check`]).
+    pub fn with_socket_check(mut self, every: Duration) -> Self {
+        self.socket_check = every;
+        self
+    }
 }
 
 struct Shared {
@@ -92,6 +109,10 @@ struct Shared {
     holders: Holders,
     /// Every live connection's running requests, so that shutdown can cancel them all.
     connections: Mutex<Vec<Weak<JobMap>>>,
+    /// Unix: the write end of the pipe whose other end the accept loop polls beside the
+    /// listener, so that a shutdown wakes it without the socket file (which may be gone).
+    #[cfg(unix)]
+    wake: std::io::PipeWriter,
 }
 
 /// A connection's running requests: request id → its cancel token.
@@ -133,7 +154,18 @@ impl ShutdownHandle {
     pub fn trigger(&self) {
         if !self.0.stopping.swap(true, Ordering::SeqCst) {
             log::info!("shutting down");
-            // Wake the accept loop, which blocks in accept().
+            // Wake the accept loop. Unix: one byte down the wake pipe (written once, so it can
+            // never block), which needs no socket file. Windows: the accept loop blocks in
+            // accept(); a connection to the pipe wakes it, and a named pipe cannot be removed
+            // from under the daemon, so the connection always arrives.
+            #[cfg(unix)]
+            {
+                use std::io::Write as _;
+                if let Err(e) = (&self.0.wake).write_all(&[1]) {
+                    log::error!("cannot wake the accept loop: {e}");
+                }
+            }
+            #[cfg(not(unix))]
             let _ = crate::socket::connect(&self.0.socket);
         }
     }
@@ -143,16 +175,32 @@ impl ShutdownHandle {
 pub struct Server {
     shared: Arc<Shared>,
     listener: Listener,
+    watch: SocketWatch,
+    /// Unix: the read end of [`Shared::wake`].
+    #[cfg(unix)]
+    woken: std::io::PipeReader,
 }
 
 impl Server {
-    /// A server answering on `listener` (bound at `socket`, see [`crate::socket::bind`]).
+    /// A server answering on `listener` (bound at `socket`, see [`crate::socket::bind`]); call
+    /// it right after the bind: it records which file the socket is, to notice when the path
+    /// no longer names it.
+    ///
+    /// # Panics
+    /// Unix: when the process cannot create a pipe (out of file descriptors).
     pub fn new(
-        listener: Listener,
+        mut listener: Listener,
         socket: &Path,
         registry: Registry,
         options: ServerOptions,
     ) -> Self {
+        // The socket file is removed on drop by [`SocketWatch::remove_if_ours`], which first
+        // checks that it is still this server's: the listener's own removal would take the
+        // file of a daemon that replaced it.
+        listener.do_not_reclaim_name_on_drop();
+        let watch = SocketWatch::new(socket);
+        #[cfg(unix)]
+        let (woken, wake) = std::io::pipe().expect("creating the shutdown wake pipe");
         let shared = Arc::new(Shared {
             registry,
             options,
@@ -161,8 +209,16 @@ impl Server {
             in_flight: AtomicUsize::new(0),
             holders: Holders::new(),
             connections: Mutex::new(Vec::new()),
+            #[cfg(unix)]
+            wake,
         });
-        Server { shared, listener }
+        Server {
+            shared,
+            listener,
+            watch,
+            #[cfg(unix)]
+            woken,
+        }
     }
 
     /// A handle that stops this server.
@@ -170,41 +226,18 @@ impl Server {
         ShutdownHandle(self.shared.clone())
     }
 
-    /// Serves until shut down, then cancels the running requests and waits (up to the grace
-    /// period) for each to answer (`cancelled`, or its result when it was past its last
-    /// checkpoint).
-    /// The socket file is removed when the server is dropped.
+    /// Serves until shut down — by [`ShutdownHandle::trigger`], or by itself when its socket
+    /// path no longer names the socket it bound (removed or replaced; checked every
+    /// [`ServerOptions::socket_check`]) — then cancels the running requests and waits (up to
+    /// the grace period) for each to answer (`cancelled`, or its result when it was past its
+    /// last checkpoint).
+    /// The socket file is removed when the server is dropped, if it is still this server's.
     ///
     /// # Errors
     /// Only when accepting fails persistently; per-client failures never end the server.
-    pub fn serve(self) -> io::Result<()> {
+    pub fn serve(mut self) -> io::Result<()> {
         log::info!("tessd listening on {}", self.shared.socket.display());
-        let mut failures = 0u32;
-        for conn in self.listener.incoming() {
-            if self.shared.stopping.load(Ordering::SeqCst) {
-                break;
-            }
-            match conn {
-                Ok(stream) => {
-                    failures = 0;
-                    let shared = self.shared.clone();
-                    let spawned = std::thread::Builder::new()
-                        .name("tessd-conn".into())
-                        .spawn(move || Connection::new(stream, shared).run());
-                    if let Err(e) = spawned {
-                        log::error!("cannot start a connection thread: {e}");
-                    }
-                }
-                Err(e) => {
-                    failures += 1;
-                    log::warn!("accept failed: {e}");
-                    if failures > 100 {
-                        return Err(e);
-                    }
-                    std::thread::sleep(Duration::from_millis(10));
-                }
-            }
-        }
+        self.accept_until_stopped()?;
         // Running requests are cancelled, and each answers `cancelled` at its next checkpoint
         // before its count drops; a request that a connection admitted after the first pass
         // is caught by the next one.
@@ -224,6 +257,140 @@ impl Server {
             log::info!("stopped");
         }
         Ok(())
+    }
+
+    /// Unix: accepts connections until a shutdown is triggered or the socket is lost. The
+    /// listener is nonblocking and polled together with the wake pipe; the poll's timeout
+    /// paces the socket check, so an idle daemon wakes once per check and at no other time.
+    #[cfg(unix)]
+    fn accept_until_stopped(&mut self) -> io::Result<()> {
+        use interprocess::local_socket::ListenerNonblockingMode;
+        use std::os::fd::{AsFd as _, AsRawFd as _};
+        // Streams stay blocking: only accept() returns at once when nobody is waiting.
+        self.listener
+            .set_nonblocking(ListenerNonblockingMode::Accept)?;
+        let Listener::UdSocket(uds) = &self.listener;
+        let listener_fd = uds.as_fd().as_raw_fd();
+        let wake_fd = self.woken.as_raw_fd();
+        let every = self
+            .shared
+            .options
+            .socket_check
+            .max(Duration::from_millis(10));
+        let mut next_check = Instant::now() + every;
+        let mut failures = 0u32;
+        loop {
+            let wait = next_check.saturating_duration_since(Instant::now());
+            // rounded up, so that the loop never spins on a timeout of 0 ms before the check
+            let wait_ms = i32::try_from(wait.as_micros().div_ceil(1000)).unwrap_or(i32::MAX);
+            let mut fds = [
+                libc::pollfd {
+                    fd: listener_fd,
+                    events: libc::POLLIN,
+                    revents: 0,
+                },
+                libc::pollfd {
+                    fd: wake_fd,
+                    events: libc::POLLIN,
+                    revents: 0,
+                },
+            ];
+            // SAFETY: `fds` is a valid array of two pollfd for the duration of the call, and
+            // both descriptors stay open while `self` lives.
+            let ready = unsafe { libc::poll(fds.as_mut_ptr(), 2, wait_ms) };
+            if ready < 0 {
+                let e = io::Error::last_os_error();
+                if e.kind() != io::ErrorKind::Interrupted {
+                    failures += 1;
+                    log::warn!("poll failed: {e}");
+                    if failures > 100 {
+                        return Err(e);
+                    }
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                continue;
+            }
+            if self.shared.stopping.load(Ordering::SeqCst) {
+                return Ok(());
+            }
+            if Instant::now() >= next_check {
+                if let Some(why) = self.watch.lost() {
+                    log::warn!("{why}: no client can reach this daemon any more; stopping");
+                    self.shared.stopping.store(true, Ordering::SeqCst);
+                    return Ok(());
+                }
+                next_check = Instant::now() + every;
+            }
+            if fds[0].revents == 0 {
+                continue;
+            }
+            // Every connection waiting now, then back to the poll.
+            loop {
+                match self.listener.accept() {
+                    Ok(stream) => {
+                        failures = 0;
+                        self.spawn_connection(stream);
+                    }
+                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                    Err(e) => {
+                        failures += 1;
+                        log::warn!("accept failed: {e}");
+                        if failures > 100 {
+                            return Err(e);
+                        }
+                        std::thread::sleep(Duration::from_millis(10));
+                        break;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Windows: accepts connections until a shutdown is triggered; the trigger wakes the
+    /// blocking accept() by connecting. The named pipe cannot be removed or taken over while
+    /// this server holds an instance of it, so there is no socket to watch.
+    #[cfg(not(unix))]
+    fn accept_until_stopped(&mut self) -> io::Result<()> {
+        use interprocess::local_socket::traits::ListenerExt as _;
+        let mut failures = 0u32;
+        for conn in self.listener.incoming() {
+            if self.shared.stopping.load(Ordering::SeqCst) {
+                break;
+            }
+            match conn {
+                Ok(stream) => {
+                    failures = 0;
+                    self.spawn_connection(stream);
+                }
+                Err(e) => {
+                    failures += 1;
+                    log::warn!("accept failed: {e}");
+                    if failures > 100 {
+                        return Err(e);
+                    }
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Serves `stream` on a thread of its own.
+    fn spawn_connection(&self, stream: Stream) {
+        let shared = self.shared.clone();
+        let spawned = std::thread::Builder::new()
+            .name("tessd-conn".into())
+            .spawn(move || Connection::new(stream, shared).run());
+        if let Err(e) = spawned {
+            log::error!("cannot start a connection thread: {e}");
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.watch.remove_if_ours();
     }
 }
 

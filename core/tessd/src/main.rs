@@ -968,6 +968,11 @@ fn serve(socket: Option<&str>, log_file: Option<&Path>, options: ServerOptions) 
 /// SIGINT and SIGTERM stop the server as a `shutdown` request does (running requests are
 /// cancelled and answered, then the socket is removed), so that a service manager's stop or a
 /// terminal's Ctrl-C never leaves a client without its answer.
+///
+/// A second SIGINT or SIGTERM while that shutdown runs (its grace period can last 10 s) ends
+/// the process at once with status 128 + the signal's number (130, 143), the shell's status
+/// for a process a signal ended: the caller asked twice, and learns that the shutdown was cut
+/// short (requests may have gone unanswered), where a completed one exits 0.
 #[cfg(unix)]
 fn shut_down_on_signals(handle: tessd_ipc::server::ShutdownHandle) -> Result<()> {
     let mut signals = signal_hook::iterator::Signals::new([
@@ -976,9 +981,15 @@ fn shut_down_on_signals(handle: tessd_ipc::server::ShutdownHandle) -> Result<()>
     ])
     .context("installing signal handlers")?;
     std::thread::spawn(move || {
-        if let Some(sig) = signals.forever().next() {
+        let mut signals = signals.forever();
+        if let Some(sig) = signals.next() {
             log::info!("signal {sig} received");
             handle.trigger();
+        }
+        if let Some(sig) = signals.next() {
+            log::warn!("signal {sig} received again during the shutdown: exiting at once");
+            log::logger().flush();
+            std::process::exit(128 + sig);
         }
     });
     Ok(())
