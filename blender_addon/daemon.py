@@ -7,6 +7,12 @@ launcher has neither a shell PATH nor TESSD_BIN, and because it is the daemon th
 built and tested with. Blender's installer extracts the zip with Python's zipfile, which drops
 permission bits, so the bundled file is made executable (u+x) before it is run.
 
+**Windows.** The daemon is ``bin\\tessd.exe`` and listens on the named pipe
+``\\\\.\\pipe\\tessd-<user>`` (a bare socket name ``N`` in the preferences is
+``\\\\.\\pipe\\tessd-<user>-N``; a file path there is refused). The client package starts it
+without a console window and stops it with ``shutdown`` (then by its process handle if it
+lingers): the code below is the same on every platform.
+
 **Sharing.** One daemon per user serves Blender, FreeCAD and scripts alike. On the first
 connection to a socket in a Blender session the add-on calls ``hello`` and then holds the
 daemon (``session.hold`` with Blender's pid, docs/protocol.md). On exit, or when the add-on is
@@ -95,6 +101,10 @@ def this_platform():
 
 
 def _executable(path):
+    """A program file: on Windows any existing file (it has no execute bit; the system runs
+    ``.exe`` files), elsewhere one with the execute bit for this user."""
+    if sys.platform == "win32":
+        return os.path.isfile(path)
     return os.path.isfile(path) and os.access(path, os.X_OK)
 
 
@@ -150,7 +160,14 @@ def describe_binary(prefs):
 
 
 def socket_path(prefs):
-    return tessd.resolve_socket(prefs.socket or None, create_dir=True)
+    """The socket the preferences name (the client's default when the field is empty). On
+    Windows a named pipe; a file path there is refused with a DaemonError that offers the
+    preferences (``tessd.resolve_socket``'s rules)."""
+    try:
+        return tessd.resolve_socket(prefs.socket or None, create_dir=True)
+    except ValueError as e:  # tessd.socket_path.SocketNameError
+        raise DaemonError("tessd cannot use the socket set in %s: %s"
+                          % (PREFERENCES_PLACE, e), offer_preferences=True) from e
 
 
 def expected_version(prefs):

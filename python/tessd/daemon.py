@@ -6,6 +6,13 @@ background first when none answers; :func:`stop_daemon` asks one to shut down (w
 :func:`find_binary` says which executable is started: the ``binary`` argument, ``$TESSD_BIN``,
 the one the tessd wheel installed for this Python (its scripts folder, found even when the venv
 is not activated), then ``tessd`` on ``PATH`` (docs/install.md).
+
+Windows: the daemon is ``tessd.exe`` and listens on a named pipe (:mod:`tessd.socket_path`).
+It is started without a console window (:func:`spawn_options`: a GUI host such as Blender or
+FreeCAD has no console to share, and a console program started from it would open one), and
+liveness is always a connection to the pipe (there is no socket file to look at). The same
+code runs on every platform; only :func:`spawn_options`' flags and :func:`log_path`'s folder
+differ.
 """
 
 from __future__ import annotations
@@ -18,15 +25,26 @@ import sys
 import sysconfig
 import threading
 import time
-from typing import IO, List, Optional, Sequence
+from typing import IO, Dict, List, Optional, Sequence
 
 from .client import Client, TessdError
 from .frame import ProtocolError
-from .socket_path import default_socket_dir, is_windows, resolve_socket
+from .socket_path import is_windows, resolve_socket
 from .transport import DaemonUnavailable
 
 #: Exit code of ``tessd serve`` when another daemon already serves the socket.
 EXIT_ALREADY_SERVING = 3
+
+#: Windows process creation flags (winbase.h; named here because the subprocess module defines
+#: them on Windows only): no console window, and a process group of its own, so that a Ctrl-C
+#: in a console the host was started from does not reach the daemon.
+CREATE_NO_WINDOW = 0x08000000
+CREATE_NEW_PROCESS_GROUP = 0x00000200
+
+#: The daemons :func:`ensure_daemon` started in this process and that still run, by socket:
+#: :func:`stop_daemon`'s last resort ends one by its handle (see there).
+_spawned: Dict[str, subprocess.Popen] = {}
+_spawned_lock = threading.Lock()
 
 
 class DaemonStartError(DaemonUnavailable):
@@ -47,6 +65,24 @@ def ping(socket: Optional[str] = None, timeout: float = 2.0) -> bool:
 
 def _exe_name() -> str:
     return "tessd.exe" if is_windows() else "tessd"
+
+
+def spawn_options(windows: bool) -> dict:
+    """The ``subprocess.Popen`` keyword arguments that start the daemon detached from the host:
+    on Windows the creation flags :data:`CREATE_NO_WINDOW` and
+    :data:`CREATE_NEW_PROCESS_GROUP` (a console program started from a GUI host would
+    otherwise open a console window, and closing that window would end the daemon); elsewhere a
+    session of its own (``start_new_session``: the host's terminal and its signals stay out).
+    A pure function of ``windows``, so that either answer can be checked on any platform."""
+    if windows:
+        return {"creationflags": CREATE_NO_WINDOW | CREATE_NEW_PROCESS_GROUP}
+    return {"start_new_session": True}
+
+
+def _no_window() -> dict:
+    """Popen's arguments for a short run of the binary (``--version``): no console window on
+    Windows; nothing elsewhere."""
+    return {"creationflags": CREATE_NO_WINDOW} if is_windows() else {}
 
 
 def installed_binary_dirs() -> List[str]:
@@ -139,7 +175,8 @@ def binary_version(binary: Optional[str] = None, timeout: float = 10.0) -> str:
     try:
         out = subprocess.run([exe, "--version"], stdin=subprocess.DEVNULL,
                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                             timeout=timeout, check=False).stdout.decode("utf-8", "replace")
+                             timeout=timeout, check=False,
+                             **_no_window()).stdout.decode("utf-8", "replace")
     except (OSError, subprocess.SubprocessError) as e:
         raise DaemonStartError("cannot run %s --version: %s" % (exe, e)) from e
     words = out.split()
@@ -148,16 +185,26 @@ def binary_version(binary: Optional[str] = None, timeout: float = 10.0) -> str:
     return words[1]
 
 
-def _log_path(socket_path: str) -> Optional[str]:
-    """Where a started daemon's stdout/stderr go: next to the socket (None on Windows)."""
-    if is_windows():  # pragma: no cover
-        directory = default_socket_dir() or os.environ.get("TEMP") or "."
-        return os.path.join(directory, "tessd-" + socket_path.rsplit("\\", 1)[-1] + ".log")
+def log_path(socket_path: str, windows: bool, temp_dir: Optional[str] = None) -> str:
+    """Where a daemon that :func:`ensure_daemon` starts on ``socket_path`` writes its output.
+
+    Linux and macOS: beside the socket, ``<name>.log`` for ``<name>.sock``. Windows: a pipe has
+    no folder, so ``<temp_dir>\\<pipe name>.log`` (``%TEMP%\\tessd-alice.log`` for the pipe
+    ``\\\\.\\pipe\\tessd-alice``), ``temp_dir`` being ``%TEMP%`` when not given. A pure
+    function of its arguments."""
+    if windows:
+        directory = temp_dir or os.environ.get("TEMP") or os.environ.get("TMP") or "."
+        name = socket_path.replace("/", "\\").rstrip("\\").rsplit("\\", 1)[-1] or "tessd"
+        return directory.rstrip("\\/") + "\\" + name + ".log"
     directory = os.path.dirname(socket_path) or "."
     base = os.path.basename(socket_path)
     if base.endswith(".sock"):
         base = base[: -len(".sock")]
     return os.path.join(directory, base + ".log")
+
+
+def _log_path(socket_path: str) -> Optional[str]:
+    return log_path(socket_path, is_windows())
 
 
 def _tail(path: Optional[str], lines: int = 20) -> str:
@@ -186,14 +233,8 @@ def _open_log(path: Optional[str]) -> "IO[bytes] | int":
 
 def _spawn(binary: str, socket_path: str, args: Sequence[str], log: "IO[bytes] | int") -> subprocess.Popen:
     cmd = [binary, "serve", "--socket", socket_path] + [str(a) for a in args]
-    kwargs = dict(stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, close_fds=True)
-    if is_windows():  # pragma: no cover
-        flags = getattr(subprocess, "DETACHED_PROCESS", 0x8) | getattr(
-            subprocess, "CREATE_NEW_PROCESS_GROUP", 0x200)
-        kwargs["creationflags"] = flags
-    else:
-        kwargs["start_new_session"] = True
-    return subprocess.Popen(cmd, **kwargs)
+    return subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                            close_fds=True, **spawn_options(is_windows()))
 
 
 def ensure_daemon(socket: Optional[str] = None, binary: Optional[str] = None, timeout: float = 10.0,
@@ -231,7 +272,7 @@ def ensure_daemon(socket: Optional[str] = None, binary: Optional[str] = None, ti
             raise DaemonStartError(_start_failure(
                 "tessd serve --socket %s exited with status %d" % (path, code), log_path))
         if ping(path, timeout=max(0.1, min(2.0, deadline - time.monotonic()))):
-            _reap_later(proc)
+            _reap_later(path, proc)
             return path
         if time.monotonic() >= deadline:
             proc.kill()
@@ -242,10 +283,42 @@ def ensure_daemon(socket: Optional[str] = None, binary: Optional[str] = None, ti
         delay = min(delay * 2, 0.2)
 
 
-def _reap_later(proc: subprocess.Popen) -> None:
-    """Waits for the detached daemon in a background thread, so that it leaves no zombie
-    process when it exits while this host process runs on."""
-    threading.Thread(target=proc.wait, name="tessd-daemon-reaper", daemon=True).start()
+def _reap_later(path: str, proc: subprocess.Popen) -> None:
+    """Keeps the started daemon's handle in :data:`_spawned` and waits for it in a background
+    thread, so that it leaves no zombie process when it exits while this host process runs on
+    (and leaves :data:`_spawned` then)."""
+    with _spawned_lock:
+        _spawned[path] = proc
+
+    def reap() -> None:
+        proc.wait()
+        with _spawned_lock:
+            if _spawned.get(path) is proc:
+                del _spawned[path]
+
+    threading.Thread(target=reap, name="tessd-daemon-reaper", daemon=True).start()
+
+
+def _end_started(path: str, grace: float = 5.0) -> bool:
+    """Ends the daemon this process started on ``path`` (when it did and it still runs):
+    ``terminate()`` (SIGTERM, which the daemon answers like ``shutdown``; on Windows
+    TerminateProcess), then after ``grace`` seconds ``kill()``. Returns whether such a process
+    was there and has exited."""
+    with _spawned_lock:
+        proc = _spawned.get(path)
+    if proc is None:
+        return False
+    for end in (proc.terminate, proc.kill):
+        try:
+            end()
+        except OSError:  # exited meanwhile
+            pass
+        deadline = time.monotonic() + grace
+        while proc.returncode is None and time.monotonic() < deadline:
+            time.sleep(0.02)  # the reaper thread's wait() sets returncode
+        if proc.returncode is not None:
+            return True
+    return False
 
 
 def _start_failure(what: str, log_path: Optional[str]) -> str:
@@ -262,8 +335,14 @@ def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0, *,
     With ``only_if_unheld``, the daemon stops only when no live process holds it
     (``session.hold``; the daemon decides, so a hold arriving meanwhile is never overrun).
     Returns True when the daemon stopped, False if no daemon was running there or (with
-    ``only_if_unheld``) it is still held and keeps running. Raises ``TimeoutError`` if it
-    still answers after ``timeout`` seconds.
+    ``only_if_unheld``) it is still held and keeps running.
+
+    When :func:`ensure_daemon` started the daemon in this process, its process handle is the
+    last resort: one that accepted the shutdown but still answers after ``timeout`` seconds, or
+    (without ``only_if_unheld``: then nobody else's hold can be overrun) one that did not
+    answer the shutdown within ``timeout``, is ended (``terminate()``: TerminateProcess on
+    Windows, SIGTERM then SIGKILL elsewhere) and True returned once it has exited. Otherwise
+    such a daemon raises ``TimeoutError``.
     """
     path = resolve_socket(socket)
     params = {"if_unheld": True} if only_if_unheld else None
@@ -272,6 +351,10 @@ def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0, *,
             result, _ = client.call("shutdown", params, timeout=timeout)
     except DaemonUnavailable:
         return False
+    except TimeoutError:
+        if not only_if_unheld and _end_started(path, grace=min(5.0, timeout)):
+            return True
+        raise
     if result.get("ok") is False:
         return False
     deadline = time.monotonic() + timeout
@@ -282,12 +365,14 @@ def stop_daemon(socket: Optional[str] = None, timeout: float = 10.0, *,
             return True
         probe.close()
         time.sleep(0.02)
+    if _end_started(path, grace=min(5.0, timeout)):
+        return True
     raise TimeoutError("the daemon on %s still accepts connections %gs after shutdown"
                        % (path, timeout))
 
 
 __all__ = ["DaemonStartError", "binary_version", "ensure_daemon", "find_binary",
-           "installed_binary_dirs", "ping", "stop_daemon"]
+           "installed_binary_dirs", "log_path", "ping", "spawn_options", "stop_daemon"]
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use: python -m tessd.daemon [socket]

@@ -94,7 +94,10 @@ class PipeTransport:  # pragma: no cover - Windows only, untested here
                     raise
                 if deadline is not None and time.monotonic() >= deadline:
                     raise DaemonUnavailable("timed out connecting to %s" % path) from None
-                _winapi.WaitNamedPipe(path, 100)
+                try:  # every instance busy: wait up to 100 ms for one, then try again
+                    _winapi.WaitNamedPipe(path, 100)
+                except OSError:  # ERROR_SEM_TIMEOUT, or the pipe went away: CreateFile says
+                    pass
         self.path = path
         self._closed = False
         self._pending_read = None

@@ -15,12 +15,18 @@ Preferences live in FreeCAD's parameter tree, ``User parameter:BaseApp/Preferenc
   the tessd wheel installed for this Python, else ``tessd`` on ``PATH``
   (:func:`tessd.daemon.find_binary`);
 - ``Socket`` (string): the socket path or bare name, as ``tessd serve --socket``; empty: the
-  client's default (``$XDG_RUNTIME_DIR/tessd.sock`` or ``/tmp/tessd-<uid>/tessd.sock``);
+  client's default (``$XDG_RUNTIME_DIR/tessd.sock`` or ``/tmp/tessd-<uid>/tessd.sock``; on
+  Windows the named pipe ``\\\\.\\pipe\\tessd-<user>``, a bare name ``N`` being
+  ``\\\\.\\pipe\\tessd-<user>-N`` and a file path refused);
 - ``StopOnExit`` (bool, default true): stop a daemon this process started when FreeCAD exits
   (never one somebody else started, never one another program holds);
 - ``StartTimeout`` (float, seconds, default 15): how long a started daemon may take to answer.
 
 :func:`client` may be called from any thread (the GUI runs tasks off its own thread).
+
+On Windows the same code runs: the client package starts ``tessd.exe`` without a console window
+and ends a daemon that lingers after ``shutdown`` by its process handle; liveness is a
+connection to the pipe.
 """
 
 import atexit
@@ -73,7 +79,11 @@ def settings() -> Settings:
 def socket_path(prefs: Settings = None) -> str:
     """The socket the preferences name (the client's default when empty)."""
     prefs = prefs or settings()
-    return tessd.resolve_socket(prefs.socket or None, create_dir=True)
+    try:
+        return tessd.resolve_socket(prefs.socket or None, create_dir=True)
+    except ValueError as e:  # tessd.socket_path.SocketNameError (a file path on Windows)
+        raise tessd.DaemonStartError("tessd cannot use the Socket set in %s: %s"
+                                     % (PREFERENCES_PLACE, e)) from e
 
 
 def describe_binary(prefs: Settings = None) -> str:
@@ -88,7 +98,7 @@ def describe_binary(prefs: Settings = None) -> str:
 def _start(prefs: Settings, path: str) -> None:
     """Starts the configured binary on ``path``; the error names the preference to change."""
     binary = prefs.binary_path or None
-    if binary and not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
+    if binary and not (os.path.isfile(binary) and (os.name == "nt" or os.access(binary, os.X_OK))):
         raise tessd.DaemonStartError(
             "tessd could not start: BinaryPath (%s) is %s, which is not an executable file; "
             "choose the tessd program there or clear it to use $TESSD_BIN or PATH"
