@@ -12,7 +12,10 @@ blender_manifest.toml gets `platforms = ["<platform>"]` (Blender refuses to inst
 elsewhere; the manifest in git lists none). `--binary PATH` names the daemon (default the
 release build in cargo's target folder, $CARGO_TARGET_DIR or target/, which must exist:
 `cargo build --release -p tessd`), `--platform` its platform (default this machine's, in
-Blender's spelling: linux-x64, linux-arm64, macos-arm64, macos-x64, windows-x64). Blender's installer extracts with Python's
+Blender's spelling: linux-x64, linux-arm64, macos-arm64, macos-x64, windows-x64); a binary whose
+format is not that platform's (PE for windows-*, ELF for linux-*, Mach-O for macos-*) is
+refused. The Windows zip: `--platform windows-x64 --binary <target dir>/x86_64-pc-windows-gnu/
+release/tessd.exe` (cross-built with mingw), bundled as `bin/tessd.exe`. Blender's installer extracts with Python's
 zipfile, which drops permission bits, so the add-on makes bin/tessd executable before running
 it; the zip still records mode 0755 for tools that honour it.
 
@@ -64,12 +67,21 @@ def binary_name(platform):
     return "bin/tessd.exe" if platform.startswith("windows-") else "bin/tessd"
 
 
+#: The Rust target a platform's binary is cross-built for on another machine (its release
+#: build is then in <target dir>/<triple>/release/).
+CROSS_TARGETS = {"windows-x64": "x86_64-pc-windows-gnu", "macos-arm64": "aarch64-apple-darwin",
+                 "macos-x64": "x86_64-apple-darwin", "linux-x64": "x86_64-unknown-linux-gnu"}
+
+
 def default_binary(platform):
     """The release build of this checkout (cargo's target folder: $CARGO_TARGET_DIR when set,
-    as cargo itself reads it, else the repository's target/)."""
-    target = os.environ.get("CARGO_TARGET_DIR") or os.path.join(REPO, "target")
-    return os.path.join(os.path.abspath(target), "release",
-                        "tessd.exe" if platform.startswith("windows-") else "tessd")
+    as cargo itself reads it, else the repository's target/): ``release/tessd`` for this
+    machine's platform, ``<triple>/release/tessd[.exe]`` for another (a cross build)."""
+    target = os.path.abspath(os.environ.get("CARGO_TARGET_DIR") or os.path.join(REPO, "target"))
+    exe = "tessd.exe" if platform.startswith("windows-") else "tessd"
+    if platform != this_platform() and platform in CROSS_TARGETS:
+        return os.path.join(target, CROSS_TARGETS[platform], "release", exe)
+    return os.path.join(target, "release", exe)
 
 
 def read_manifest():
@@ -116,11 +128,41 @@ VENDOR_INIT = ('"""Third-party code bundled at build time: the tessd client (pyt
                'in the tessd repository)."""\n')
 
 
-def _check_binary(binary):
+#: The executable format each platform family runs, by the file's first bytes: PE (``MZ``) on
+#: Windows, ELF on Linux, Mach-O (64-bit, either byte order, or universal) on macOS.
+FORMATS = {
+    "windows": ("a Windows PE executable", (b"MZ",)),
+    "linux": ("an ELF executable", (b"\x7fELF",)),
+    "macos": ("a Mach-O executable", (b"\xcf\xfa\xed\xfe", b"\xfe\xed\xfa\xcf",
+                                      b"\xca\xfe\xba\xbe")),
+}
+
+
+def binary_format(path):
+    """The platform family (windows, linux, macos) whose executable format ``path`` has, by its
+    first bytes; None for anything else."""
+    with open(path, "rb") as f:
+        head = f.read(4)
+    for family, (_, magics) in FORMATS.items():
+        if any(head.startswith(m) for m in magics):
+            return family
+    return None
+
+
+def _check_binary(binary, platform):
     if not os.path.isfile(binary):
         raise SystemExit("build.py: the tessd binary %s does not exist; build it with "
                          "`cargo build --release -p tessd` or pass --binary PATH" % binary)
-    if not os.access(binary, os.X_OK) and not binary.lower().endswith(".exe"):
+    family = platform.split("-", 1)[0]
+    if family in FORMATS:
+        found = binary_format(binary)
+        if found != family:
+            raise SystemExit("build.py: --platform %s needs %s, but the tessd binary %s is %s "
+                             "(build it for that platform, e.g. `cargo build --release --target "
+                             "x86_64-pc-windows-gnu -p tessd` for windows-x64)"
+                             % (platform, FORMATS[family][0], binary,
+                                FORMATS[found][0] if found else "none of PE, ELF or Mach-O"))
+    if family != "windows" and not os.access(binary, os.X_OK):
         raise SystemExit("build.py: %s is not executable" % binary)
 
 
@@ -128,7 +170,7 @@ def build(out_dir, binary=None, platform=None):
     """Writes tessd-<version>-<platform>.zip into ``out_dir``; returns its path."""
     platform = platform or this_platform()
     binary = binary or default_binary(platform)
-    _check_binary(binary)
+    _check_binary(binary, platform)
     manifest = read_manifest()
     version = manifest_version(manifest)
     os.makedirs(out_dir, exist_ok=True)
@@ -210,8 +252,9 @@ def make_parser():
                     help="output folder (default: dist/ at the repository's root, %s)" % DEFAULT_OUT)
     ap.add_argument("--no-validate", action="store_true")
     ap.add_argument("--blender-ext", help="path of Blender's bl_pkg/cli/blender_ext.py")
-    ap.add_argument("--binary", help="the tessd executable to bundle as bin/tessd (default: "
-                                     "release/tessd in $CARGO_TARGET_DIR or this repository's target/)")
+    ap.add_argument("--binary", help="the tessd executable to bundle as bin/tessd (bin/tessd.exe "
+                                     "for windows-*; default: release/tessd in $CARGO_TARGET_DIR "
+                                     "or this repository's target/)")
     ap.add_argument("--platform", default=this_platform(),
                     help="Blender platform of the binary (default: this machine's, %s)"
                          % this_platform())

@@ -75,13 +75,42 @@ def test_zip_installs_on_this_platform_only(addon_zip, tmp_path):
 
     log = install(addon_zip[0], tmp_path / "here")
     assert (tmp_path / "here" / "tessd" / "bin" / "tessd").is_file(), log
-    foreign = build.build(str(tmp_path / "dist"), binary=str(locate.tessd_bin()),
-                          platform=other)
+    # build.py takes only a binary of the platform's format (PE for windows-*): a stand-in
+    # with a PE header, as the binary's content plays no part in Blender's platform check
+    # (tests/windows builds the real windows-x64 zip from the cross-built tessd.exe).
+    stand_in = tmp_path / "tessd.exe"
+    stand_in.write_bytes(b"MZ" + bytes(62))
+    foreign = build.build(str(tmp_path / "dist"), binary=str(stand_in), platform=other)
     assert foreign.endswith("tessd-0.1.0-%s.zip" % other)
     assert "bin/tessd.exe" in zipfile.ZipFile(foreign).namelist()
     log = install(foreign, tmp_path / "there")
     assert not (tmp_path / "there" / "tessd").exists(), log
     assert "isn't one of (%s)" % other in log, log
+
+
+def test_build_refuses_a_binary_of_another_platform(tmp_path):
+    """The Linux binary never goes into a Windows zip (nor a PE file into a Linux one): the
+    error names the platform, the binary and the format it has."""
+    for plat, binary, has in (("windows-x64", locate.tessd_bin(), "an ELF executable"),
+                              ("macos-arm64", locate.tessd_bin(), "an ELF executable"),
+                              ("linux-x64", REPO / "README.md", "none of PE, ELF")):
+        proc = subprocess.run([sys.executable, str(REPO / "blender_addon" / "build.py"), "--out",
+                               str(tmp_path), "--binary", str(binary), "--platform", plat,
+                               "--no-validate"],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        assert proc.returncode != 0, proc.stdout
+        assert "--platform %s needs" % plat in proc.stdout, proc.stdout
+        assert str(binary) in proc.stdout and has in proc.stdout, proc.stdout
+    assert not list(tmp_path.glob("*.zip"))
+
+
+def test_default_binary_of_a_cross_build(monkeypatch, tmp_path):
+    """Without --binary a foreign platform's zip takes cargo's cross build of it."""
+    build = _build_module()
+    monkeypatch.setenv("CARGO_TARGET_DIR", str(tmp_path))
+    assert build.default_binary("windows-x64") == str(
+        tmp_path / "x86_64-pc-windows-gnu" / "release" / "tessd.exe")
+    assert build.default_binary(_platform()) == str(tmp_path / "release" / "tessd")
 
 
 def test_build_needs_the_binary(tmp_path):
