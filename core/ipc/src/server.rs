@@ -237,7 +237,10 @@ impl Server {
     /// Only when accepting fails persistently; per-client failures never end the server.
     pub fn serve(mut self) -> io::Result<()> {
         log::info!("tessd listening on {}", self.shared.socket.display());
-        self.accept_until_stopped()?;
+        let accepted = self.accept_until_stopped();
+        // A trigger from now on (a signal) has nothing to wake.
+        self.shared.stopping.store(true, Ordering::SeqCst);
+        accepted?;
         // Running requests are cancelled, and each answers `cancelled` at its next checkpoint
         // before its count drops; a request that a connection admitted after the first pass
         // is caught by the next one.
@@ -329,6 +332,15 @@ impl Server {
                 match self.listener.accept() {
                     Ok(stream) => {
                         failures = 0;
+                        // BSD and macOS hand the listener's O_NONBLOCK on to the accepted
+                        // socket (Linux does not); the connection's reader needs it blocking.
+                        #[cfg(not(any(target_os = "linux", target_os = "android")))]
+                        if let Err(e) = interprocess::local_socket::traits::Stream::set_nonblocking(
+                            &stream, false,
+                        ) {
+                            log::warn!("cannot make a connection blocking: {e}");
+                            continue;
+                        }
                         self.spawn_connection(stream);
                     }
                     Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
