@@ -2,8 +2,8 @@
 platform-independent way hosts stop a daemon they started (issue 37, point 5).
 
 - The team's Windows endpoint naming (tessd.socket_path.windows_pipe / pipe_user): the same
-  table as the daemon's Rust resolver (core/ipc/src/socket.rs); every other path-like value is
-  refused with an error that names it.
+  table as the daemon's Rust resolver (core/ipc/src/socket.rs, its pipe_name_tests, whose cases
+  are all here too); every other path-like value is refused with an error that names it.
 - How the daemon is started (tessd.daemon.spawn_options: no console window on Windows) and where
   its log goes (tessd.daemon.log_path).
 - stop_daemon's last resort, the process handle of a daemon this process started: run for real
@@ -40,6 +40,8 @@ PIPES = [
     (None, "J\u00f6rg M\u00fcller", P + "tessd-J_rg_M_ller"),
     (None, "a.b_c-D9", P + "tessd-a.b_c-D9"),
     ("n", "dom$ user@x", P + "tessd-dom__user_x-n"),
+    (None, "Jos\u00e9 Ruiz", P + "tessd-Jos__Ruiz"),
+    (None, "DOM\\ann", P + "tessd-DOM_ann"),
     (None, None, P + "tessd-user"),
     (None, "", P + "tessd-user"),
 ]
@@ -50,6 +52,7 @@ REFUSED = [
     "C:tessd",
     "c:/tmp/tessd.sock",
     "\\\\server\\share\\tessd",
+    "\\\\server\\pipe\\tessd",  # a remote pipe: not the local \\.\pipe\ namespace
     "dir\\tessd",
     "dir/tessd",
     "/tmp/tessd.sock",
