@@ -1,10 +1,14 @@
 //! Socket naming, owner-only binding and stale-socket recovery (docs/protocol.md, "Transport").
 
-use interprocess::local_socket::{
-    ConnectOptions, GenericFilePath, Listener, ListenerOptions, Stream, ToFsName,
-};
+#[cfg(not(windows))]
+use interprocess::local_socket::{ConnectOptions, GenericFilePath, ListenerOptions, ToFsName};
+use interprocess::local_socket::{Listener, Stream};
 use std::io;
 use std::path::{Path, PathBuf};
+
+#[cfg(windows)]
+#[path = "socket_windows.rs"]
+mod windows;
 
 /// The per-user folder for sockets: `$XDG_RUNTIME_DIR` when it is a directory, else
 /// `<tmp>/tessd-<uid>` (created with mode 0700 when `create` is set).
@@ -22,7 +26,13 @@ pub fn default_dir(create: bool) -> io::Result<PathBuf> {
     let base = std::env::var_os("TMPDIR")
         .filter(|t| !t.is_empty())
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/tmp"));
+        .unwrap_or_else(|| {
+            if cfg!(unix) {
+                PathBuf::from("/tmp")
+            } else {
+                std::env::temp_dir()
+            }
+        });
     let dir = base.join(format!("tessd-{}", current_uid()));
     if create {
         private_dir(&dir)?;
@@ -30,25 +40,100 @@ pub fn default_dir(create: bool) -> io::Result<PathBuf> {
     Ok(dir)
 }
 
-/// The default socket path: `<default dir>/tessd.sock`.
+/// The default socket path: `<default dir>/tessd.sock`; on Windows the default pipe
+/// `\\.\pipe\tessd-<user>` (see [`resolve`]).
 ///
 /// # Errors
 /// As [`default_dir`].
 pub fn default_socket(create_dir: bool) -> io::Result<PathBuf> {
+    #[cfg(windows)]
+    {
+        let _ = create_dir;
+        resolve(None, false)
+    }
+    #[cfg(not(windows))]
     Ok(default_dir(create_dir)?.join("tessd.sock"))
 }
 
 /// Resolves `--socket NAME_OR_PATH`: a value with a path separator is a path; a bare name `N`
 /// is `<default dir>/N.sock`; `None` is the default socket.
 ///
+/// On Windows the daemon listens on a named pipe, never on a file: `None` is the pipe
+/// `\\.\pipe\tessd-<user>`, a bare name `N` is `\\.\pipe\tessd-<user>-N`, a value
+/// starting with `\\.\pipe\` is used as it is, and any other path-like value (a drive
+/// letter, a UNC name, a separator) is refused with an error naming it. `<user>` is
+/// `%USERNAME%` with every character outside `[A-Za-z0-9._-]` replaced by `_`.
+///
 /// # Errors
-/// As [`default_dir`].
+/// As [`default_dir`]; on Windows, a path-like value that is not a pipe name.
 pub fn resolve(name_or_path: Option<&str>, create_dir: bool) -> io::Result<PathBuf> {
+    #[cfg(windows)]
+    {
+        let _ = create_dir;
+        pipe_name(
+            name_or_path,
+            &pipe_user(std::env::var_os("USERNAME").as_deref()),
+        )
+        .map(PathBuf::from)
+    }
+    #[cfg(not(windows))]
     match name_or_path {
         None | Some("") => default_socket(create_dir),
         Some(s) if s.contains('/') || s.contains(std::path::MAIN_SEPARATOR) => Ok(PathBuf::from(s)),
         Some(name) => Ok(default_dir(create_dir)?.join(format!("{name}.sock"))),
     }
+}
+
+/// The local named-pipe namespace every Windows endpoint lives in.
+#[cfg(any(windows, test))]
+const PIPE_PREFIX: &str = r"\\.\pipe\";
+
+/// Whether `value` is a local pipe name `\\.\pipe\NAME` (the prefix in any case, a name
+/// after it).
+#[cfg(any(windows, test))]
+fn is_pipe_name(value: &str) -> bool {
+    value.len() > PIPE_PREFIX.len()
+        && value
+            .get(..PIPE_PREFIX.len())
+            .is_some_and(|p| p.eq_ignore_ascii_case(PIPE_PREFIX))
+}
+
+/// The Windows mapping of `--socket` (see [`resolve`]) for the user name `user` (already made
+/// safe by [`pipe_user`]); a pure function, so that its rules are tested on every platform.
+#[cfg(any(windows, test))]
+fn pipe_name(value: Option<&str>, user: &str) -> io::Result<String> {
+    match value {
+        None | Some("") => Ok(format!("{PIPE_PREFIX}tessd-{user}")),
+        Some(v) if is_pipe_name(v) => Ok(v.to_string()),
+        Some(v) if v.contains(['/', '\\', ':']) => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "--socket {v}: on Windows the daemon listens on a named pipe, not a file; give \
+                 a bare name N (the pipe {PIPE_PREFIX}tessd-{user}-N) or a full pipe name \
+                 {PIPE_PREFIX}NAME"
+            ),
+        )),
+        Some(name) => Ok(format!("{PIPE_PREFIX}tessd-{user}-{name}")),
+    }
+}
+
+/// `%USERNAME%` as it goes into a pipe name: every character outside `[A-Za-z0-9._-]` becomes
+/// `_` (one per character, so that `José` is `Jos_`); `user` when it is unset or empty.
+#[cfg(any(windows, test))]
+fn pipe_user(raw: Option<&std::ffi::OsStr>) -> String {
+    let raw = raw.map(|r| r.to_string_lossy()).unwrap_or_default();
+    if raw.is_empty() {
+        return "user".into();
+    }
+    raw.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 #[cfg(unix)]
@@ -57,7 +142,12 @@ fn current_uid() -> u32 {
     unsafe { libc::getuid() }
 }
 
-#[cfg(not(unix))]
+#[cfg(windows)]
+fn current_uid() -> String {
+    pipe_user(std::env::var_os("USERNAME").as_deref())
+}
+
+#[cfg(not(any(unix, windows)))]
 fn current_uid() -> String {
     std::env::var("USERNAME").unwrap_or_else(|_| "user".into())
 }
@@ -113,11 +203,15 @@ fn private_dir(dir: &Path) -> io::Result<()> {
     std::fs::create_dir_all(dir)
 }
 
-/// Connects to the socket at `path`.
+/// Connects to the socket at `path`. On Windows `path` is a pipe name (see [`resolve`]), and a
+/// pipe that another account owns is refused (it could be squatting on the daemon's name).
 ///
 /// # Errors
-/// When nothing listens there.
+/// When nothing listens there; on Windows, also when the pipe is not this user's.
 pub fn connect(path: &Path) -> io::Result<Stream> {
+    #[cfg(windows)]
+    return windows::connect(path);
+    #[cfg(not(windows))]
     ConnectOptions::new()
         .name(path.to_fs_name::<GenericFilePath>()?)
         .connect_sync()
@@ -152,6 +246,11 @@ pub enum BindError {
 /// Binds a listener at `path` with owner-only permissions (mode 0600). A socket file that no
 /// process answers on is stale and is replaced; a live one is never taken over.
 ///
+/// On Windows `path` is a named pipe `\\.\pipe\NAME` (see [`resolve`]), created as its first
+/// instance with a security descriptor that admits only the current user (owner and the one
+/// ACE of the DACL): a name a daemon of this user holds is [`BindError::InUse`], one another
+/// account holds is [`BindError::Unsafe`], and a file path is refused.
+///
 /// Nothing planted at the path is followed or destroyed: a symbolic link at `path` or at its
 /// folder, a file there that is not a socket, or a folder owned by another user (who could
 /// swap the socket) is refused with [`BindError::Unsafe`]. A missing folder is created with
@@ -161,6 +260,15 @@ pub enum BindError {
 /// [`BindError::InUse`] when a daemon answers there; [`BindError::Unsafe`] as above;
 /// [`BindError::Io`] otherwise.
 pub fn bind(path: &Path) -> Result<Listener, BindError> {
+    #[cfg(windows)]
+    return windows::bind(path);
+    #[cfg(not(windows))]
+    bind_file(path)
+}
+
+/// [`bind`] for a socket file (everywhere but Windows).
+#[cfg(not(windows))]
+fn bind_file(path: &Path) -> Result<Listener, BindError> {
     let io_err = |source| BindError::Io {
         path: path.to_path_buf(),
         source,
@@ -169,8 +277,6 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
         path: path.to_path_buf(),
         reason,
     };
-    #[cfg(windows)]
-    owner_only_pipe().map_err(io_err)?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_folder(parent).map_err(io_err)?;
         check_folder(parent).map_err(unsafe_path)?;
@@ -219,20 +325,8 @@ pub fn bind(path: &Path) -> Result<Listener, BindError> {
     })
 }
 
-/// Windows: refused until the daemon's named pipe gets a per-user name and a security
-/// descriptor that admits only this user (issue 37). Windows' default pipe DACL lets other
-/// accounts read, so binding with it would expose every user's meshes; refusing is the safe
-/// default until then. (`interprocess` also maps only `\\.\pipe\` paths to pipes, not the
-/// file paths [`resolve`] returns.)
-#[cfg(windows)]
-fn owner_only_pipe() -> io::Result<()> {
-    Err(io::Error::new(
-        io::ErrorKind::Unsupported,
-        "serving on Windows needs an owner-only named pipe, not implemented yet (tessd issue 37)",
-    ))
-}
-
 /// Creates `dir` and its missing parents with mode 0700 (nothing is changed when it exists).
+#[cfg(not(windows))]
 fn create_folder(dir: &Path) -> io::Result<()> {
     let mut builder = std::fs::DirBuilder::new();
     builder.recursive(true);
@@ -272,7 +366,7 @@ fn check_folder(dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
-#[cfg(not(unix))]
+#[cfg(not(any(unix, windows)))]
 fn check_folder(_dir: &Path) -> Result<(), String> {
     Ok(())
 }
@@ -299,16 +393,19 @@ fn check_socket_file(path: &Path, meta: &std::fs::Metadata) -> Result<(), String
     Ok(())
 }
 
-#[cfg(not(unix))]
+#[cfg(not(any(unix, windows)))]
 fn check_socket_file(_path: &Path, _meta: &std::fs::Metadata) -> Result<(), String> {
     Ok(())
 }
 
 /// An exclusive `flock` on `<socket>.lock`, held while [`bind`] decides whether the socket file
 /// is stale and binds (released on drop). The lock file stays, empty, in the socket's private
-/// folder; on Windows, whose named pipes have no stale files, nothing is locked.
+/// folder; where there is no `flock`, nothing is locked. (Windows' named pipes have no stale
+/// files: the first-instance flag decides there.)
+#[cfg(not(windows))]
 struct StartLock(#[allow(dead_code)] Option<std::fs::File>);
 
+#[cfg(not(windows))]
 impl StartLock {
     fn take(socket: &Path) -> io::Result<StartLock> {
         #[cfg(unix)]
@@ -338,6 +435,55 @@ impl StartLock {
             let _ = socket;
             Ok(StartLock(None))
         }
+    }
+}
+
+#[cfg(test)]
+mod pipe_name_tests {
+    use super::*;
+
+    #[test]
+    fn windows_names_map_to_the_users_pipes() {
+        assert_eq!(pipe_name(None, "ann").unwrap(), r"\\.\pipe\tessd-ann");
+        assert_eq!(pipe_name(Some(""), "ann").unwrap(), r"\\.\pipe\tessd-ann");
+        assert_eq!(
+            pipe_name(Some("w1"), "ann").unwrap(),
+            r"\\.\pipe\tessd-ann-w1"
+        );
+        assert_eq!(
+            pipe_name(Some(r"\\.\pipe\other"), "ann").unwrap(),
+            r"\\.\pipe\other"
+        );
+        assert_eq!(
+            pipe_name(Some(r"\\.\PIPE\Other"), "ann").unwrap(),
+            r"\\.\PIPE\Other"
+        );
+        for bad in [
+            r"C:\x\t.sock",
+            "C:/x/t.sock",
+            "C:t.sock",
+            r"\\server\share\t.sock",
+            r"\\server\pipe\t",
+            r"\\.\pipe\",
+            "sub/t",
+            r"sub\t",
+        ] {
+            let e = pipe_name(Some(bad), "ann").unwrap_err();
+            assert_eq!(e.kind(), io::ErrorKind::InvalidInput, "{bad}");
+            let text = e.to_string();
+            assert!(text.starts_with(&format!("--socket {bad}:")), "{text}");
+            assert!(text.contains(r"\\.\pipe\tessd-ann-N"), "{text}");
+        }
+    }
+
+    #[test]
+    fn user_names_are_made_safe_for_pipe_names() {
+        let u = |s: &str| pipe_user(Some(std::ffi::OsStr::new(s)));
+        assert_eq!(u("Ann.B_c-1"), "Ann.B_c-1");
+        assert_eq!(u("José Ruiz"), "Jos__Ruiz");
+        assert_eq!(u(r"DOM\ann"), "DOM_ann");
+        assert_eq!(u(""), "user");
+        assert_eq!(pipe_user(None), "user");
     }
 }
 

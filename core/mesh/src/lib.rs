@@ -25,6 +25,7 @@ mod block_scan;
 mod error;
 pub mod io;
 mod mesh;
+pub mod process;
 pub mod stats;
 
 pub use attribute::{Attribute, Domain};

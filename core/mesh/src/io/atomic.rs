@@ -19,6 +19,12 @@
 //!   that folder (by any tessd process, the first one it makes there and again when a minute
 //!   has passed) removes it, once no process on this machine has the writer's pid and no one
 //!   holds the file's lock (every writer holds an exclusive `flock` on its temporary file).
+//!
+//! On Windows the same rules hold with Windows' means: the temporary file is created with
+//! `CREATE_NEW` (a name that exists is skipped, never opened), locked with `LockFileEx` while it
+//! is written, moved over the destination by `MoveFileExW(MOVEFILE_REPLACE_EXISTING |
+//! MOVEFILE_WRITE_THROUGH)` while still open and locked, and a writer's liveness is tested by
+//! process handle (`OpenProcess` + `GetExitCodeProcess`, [`crate::process::process_alive`]).
 
 use crate::MeshError;
 use std::collections::HashMap;
@@ -93,8 +99,8 @@ pub struct TempOutput {
 
 impl TempOutput {
     /// Creates a fresh temporary file beside `dest` (mode `0666` less the umask, never through
-    /// a symbolic link, locked with `flock` while it is written), after removing the stale
-    /// temporary files that killed writers left in that folder.
+    /// a symbolic link, locked with `flock`, `LockFileEx` on Windows, while it is written),
+    /// after removing the stale temporary files that killed writers left in that folder.
     ///
     /// # Errors
     /// When `dest` has no file name or the file cannot be created (a missing or read-only
@@ -134,8 +140,9 @@ impl TempOutput {
     }
 
     /// Renames the temporary file over the destination (its contents synced to disk first when
-    /// `sync` is set) and closes `file`. On Unix the file stays open, and so locked, until it
-    /// has its final name, so that no sweeper can take it for a dead writer's in between.
+    /// `sync` is set) and closes `file`. The file stays open, and so locked, until it has its
+    /// final name, so that no sweeper can take it for a dead writer's in between (on Windows
+    /// the move is `MoveFileExW` with write-through).
     ///
     /// # Errors
     /// When syncing or renaming fails; the temporary file is then removed.
@@ -143,15 +150,92 @@ impl TempOutput {
         if sync {
             file.sync_all()?;
         }
-        // Windows cannot rename an open file.
-        #[cfg(not(unix))]
-        drop(file);
-        std::fs::rename(&self.temp, &self.dest)?;
+        replace(&self.temp, &self.dest)?;
         self.armed = false;
-        #[cfg(unix)]
         drop(file);
         Ok(())
     }
+}
+
+/// Renames `temp` over `dest` (replacing it): `rename(2)` on Unix.
+#[cfg(not(windows))]
+fn replace(temp: &Path, dest: &Path) -> std::io::Result<()> {
+    std::fs::rename(temp, dest)
+}
+
+/// Moves `temp` over `dest` with `MoveFileExW(MOVEFILE_REPLACE_EXISTING |
+/// MOVEFILE_WRITE_THROUGH)`: the call returns once the move is on disk (std's `rename` passes
+/// no write-through). The temporary file may stay open: every file std opens shares deletion,
+/// which a move needs. A destination another program holds open without sharing deletion
+/// cannot be replaced (Windows' rule); that is an error naming it.
+#[cfg(windows)]
+fn replace(temp: &Path, dest: &Path) -> std::io::Result<()> {
+    use windows_sys::Win32::Storage::FileSystem::{
+        MOVEFILE_REPLACE_EXISTING, MOVEFILE_WRITE_THROUGH, MoveFileExW,
+    };
+    let (from, to) = (wide_path(temp)?, wide_path(dest)?);
+    // SAFETY: two NUL-terminated wide paths that live across the call.
+    let ok = unsafe {
+        MoveFileExW(
+            from.as_ptr(),
+            to.as_ptr(),
+            MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH,
+        )
+    };
+    if ok == 0 {
+        let e = std::io::Error::last_os_error();
+        return Err(std::io::Error::new(
+            e.kind(),
+            format!(
+                "cannot move {} over {}: {e}",
+                temp.display(),
+                dest.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `path` as a NUL-terminated wide string for the `W` functions; a path of 248 characters or
+/// more gets the `\\?\` prefix (made absolute, `/` turned to `\`, a UNC name as
+/// `\\?\UNC\server\share\...`) so that it is not cut at `MAX_PATH`.
+#[cfg(windows)]
+fn wide_path(path: &Path) -> std::io::Result<Vec<u16>> {
+    use std::os::windows::ffi::OsStrExt;
+    let raw: Vec<u16> = path.as_os_str().encode_wide().collect();
+    let verbatim: Vec<u16> = r"\\?\".encode_utf16().collect();
+    let mut wide = if raw.len() < 248 || raw.starts_with(&verbatim) {
+        raw
+    } else {
+        let abs: Vec<u16> = std::path::absolute(path)?
+            .as_os_str()
+            .encode_wide()
+            .map(|c| {
+                if c == u16::from(b'/') {
+                    u16::from(b'\\')
+                } else {
+                    c
+                }
+            })
+            .collect();
+        let unc: Vec<u16> = r"\\".encode_utf16().collect();
+        let mut out = verbatim;
+        if abs.starts_with(&unc) {
+            out.extend(r"UNC\".encode_utf16());
+            out.extend_from_slice(&abs[2..]);
+        } else {
+            out.extend_from_slice(&abs);
+        }
+        out
+    };
+    if wide.contains(&0) {
+        return Err(std::io::Error::new(
+            ErrorKind::InvalidInput,
+            format!("{} holds a NUL character", path.display()),
+        ));
+    }
+    wide.push(0);
+    Ok(wide)
 }
 
 impl Drop for TempOutput {
@@ -212,9 +296,35 @@ fn lock_exclusive(file: &File) -> bool {
     unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) == 0 }
 }
 
-/// Not yet on Windows (issue 37: `LockFileEx`): nothing is locked, and `false` says so, so
+/// Takes an exclusive `LockFileEx` lock on the whole of `file` without waiting (Windows' locks
+/// are mandatory: other handles cannot read or write the file while it is held; the writer's
+/// own handle can). `false` when another handle holds it.
+#[cfg(windows)]
+fn lock_exclusive(file: &File) -> bool {
+    use std::os::windows::io::AsRawHandle;
+    use windows_sys::Win32::Storage::FileSystem::{
+        LOCKFILE_EXCLUSIVE_LOCK, LOCKFILE_FAIL_IMMEDIATELY, LockFileEx,
+    };
+    use windows_sys::Win32::System::IO::OVERLAPPED;
+    // SAFETY: OVERLAPPED is plain data; all zero is offset 0 with no event.
+    let mut overlapped: OVERLAPPED = unsafe { std::mem::zeroed() };
+    // SAFETY: a handle `file` owns; the range is the whole file (and beyond); FAIL_IMMEDIATELY
+    // never blocks, and the lock goes with the handle when it is closed.
+    unsafe {
+        LockFileEx(
+            file.as_raw_handle(),
+            LOCKFILE_EXCLUSIVE_LOCK | LOCKFILE_FAIL_IMMEDIATELY,
+            0,
+            u32::MAX,
+            u32::MAX,
+            &mut overlapped,
+        ) != 0
+    }
+}
+
+/// Where there is neither `flock` nor `LockFileEx`: nothing is locked, and `false` says so, so
 /// that [`remove_if_unlocked`] there never takes a file for unheld.
-#[cfg(not(unix))]
+#[cfg(not(any(unix, windows)))]
 fn lock_exclusive(_file: &File) -> bool {
     false
 }
@@ -261,7 +371,7 @@ fn sweep_stale_temps(dir: &Path) {
         if !entry.file_type().is_ok_and(|t| t.is_file()) || pid == std::process::id() {
             continue;
         }
-        if process_alive(pid) {
+        if crate::process::process_alive(pid) {
             continue;
         }
         remove_if_unlocked(&entry.path());
@@ -296,47 +406,27 @@ fn remove_if_unlocked(path: &Path) {
     }
 }
 
-/// Not yet on Windows (issue 37): without `LockFileEx` a writer on another machine sharing
-/// the folder cannot be seen, so nothing is removed.
-#[cfg(not(unix))]
-fn remove_if_unlocked(_path: &Path) {}
-
-/// Whether a process with this pid exists on this machine (`kill(pid, 0)`; a zombie counts as
-/// gone on Linux). Elsewhere every process counts as alive, so nothing is swept: Windows'
-/// test by process handle (`OpenProcess` + `GetExitCodeProcess`) is issue 37's, and lands
-/// with its `LockFileEx` lock, without which a sweep there would not be safe.
-fn process_alive(pid: u32) -> bool {
-    #[cfg(unix)]
-    {
-        let Ok(raw) = libc::pid_t::try_from(pid) else {
-            return false;
-        };
-        if raw <= 0 {
-            return false;
-        }
-        // SAFETY: signal 0 performs only the existence and permission checks.
-        let rc = unsafe { libc::kill(raw, 0) };
-        if rc != 0 && std::io::Error::last_os_error().raw_os_error() != Some(libc::EPERM) {
-            return false;
-        }
-        #[cfg(target_os = "linux")]
-        if let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-            // The state is the first field after the command name's last ')'.
-            let state = stat
-                .rsplit_once(')')
-                .and_then(|(_, rest)| rest.split_whitespace().next());
-            if state == Some("Z") {
-                return false;
-            }
-        }
-        true
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = pid;
-        true
+/// Removes `path` when nobody holds a lock on it (opened without following a reparse point;
+/// the removal happens while the lock is held, the file goes when the handle closes).
+#[cfg(windows)]
+fn remove_if_unlocked(path: &Path) {
+    use std::os::windows::fs::OpenOptionsExt;
+    use windows_sys::Win32::Storage::FileSystem::FILE_FLAG_OPEN_REPARSE_POINT;
+    let Ok(f) = OpenOptions::new()
+        .read(true)
+        .custom_flags(FILE_FLAG_OPEN_REPARSE_POINT)
+        .open(path)
+    else {
+        return;
+    };
+    if lock_exclusive(&f) {
+        let _ = std::fs::remove_file(path);
     }
 }
+
+/// Where no lock can be seen, nothing is removed.
+#[cfg(not(any(unix, windows)))]
+fn remove_if_unlocked(_path: &Path) {}
 
 #[cfg(test)]
 mod tests {
@@ -524,5 +614,85 @@ mod tests {
         expected.sort();
         assert_eq!(entries(dir.path()), expected);
         drop(held);
+    }
+
+    /// A process that runs until it is killed: `cmd` waiting on its open stdin.
+    #[cfg(windows)]
+    fn live_child() -> std::process::Child {
+        std::process::Command::new("cmd")
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+    }
+
+    #[cfg(windows)]
+    #[test]
+    fn windows_stale_temps_of_dead_writers_are_swept_live_and_locked_ones_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut gone = std::process::Command::new("cmd")
+            .args(["/C", "exit 0"])
+            .spawn()
+            .unwrap();
+        let dead = gone.id();
+        gone.wait().unwrap();
+        drop(gone);
+        let stale = dir.path().join(format!(".a.usda{TEMP_MARK}{dead}-3"));
+        std::fs::write(&stale, b"half").unwrap();
+        // A dead pid, but the file is locked (LockFileEx): a writer on another machine.
+        let remote = dir.path().join(format!(".b.usda{TEMP_MARK}{dead}-4"));
+        std::fs::write(&remote, b"half").unwrap();
+        let held = File::open(&remote).unwrap();
+        assert!(lock_exclusive(&held));
+        // A second handle cannot take the lock while it is held.
+        assert!(!lock_exclusive(&File::open(&remote).unwrap()));
+        // A live writer: kept.
+        let mut writer = live_child();
+        let live = dir
+            .path()
+            .join(format!(".c.usda{TEMP_MARK}{}-5", writer.id()));
+        std::fs::write(&live, b"half").unwrap();
+        // Someone else's file.
+        let user = dir.path().join(".e.usda.tmp");
+        std::fs::write(&user, b"mine").unwrap();
+
+        write_bytes(&dir.path().join("a.usda"), b"whole").unwrap();
+        let mut expected: Vec<String> = [&remote, &live, &user]
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        expected.push("a.usda".into());
+        expected.sort();
+        assert_eq!(entries(dir.path()), expected);
+        assert_eq!(std::fs::read(dir.path().join("a.usda")).unwrap(), b"whole");
+        drop(held);
+        writer.kill().unwrap();
+        writer.wait().unwrap();
+    }
+
+    #[cfg(windows)]
+    #[test]
+    fn windows_replaces_over_a_long_path_and_forward_slashes() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut deep = dir.path().to_path_buf();
+        while deep.as_os_str().len() < 300 {
+            deep.push("a-rather-long-folder-name");
+        }
+        std::fs::create_dir_all(&deep).unwrap();
+        let path = deep.join("out.ply");
+        std::fs::write(&path, b"old").unwrap();
+        write_bytes(&path, b"new").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new");
+        assert_eq!(entries(&deep), ["out.ply"]);
+        // The same destination spelt with forward slashes.
+        let slashed = PathBuf::from(
+            dir.path()
+                .join("fwd.ply")
+                .display()
+                .to_string()
+                .replace('\\', "/"),
+        );
+        write_bytes(&slashed, b"fwd").unwrap();
+        assert_eq!(std::fs::read(dir.path().join("fwd.ply")).unwrap(), b"fwd");
     }
 }
