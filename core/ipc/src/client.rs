@@ -7,8 +7,10 @@ use crate::frame::{FrameError, Limits, read_frame, write_frame};
 use crate::job::Progress;
 use interprocess::local_socket::Stream;
 use serde_json::{Map, Value, json};
-use std::io::BufReader;
+use std::io::{BufReader, Read};
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// Why a call failed.
 #[derive(Debug, thiserror::Error)]
@@ -32,10 +34,63 @@ pub enum ClientError {
 
 /// A connection to a daemon.
 pub struct Client {
-    reader: BufReader<Stream>,
-    next_id: u64,
+    reader: BufReader<SharedStream>,
+    shared: Arc<Shared>,
     limits: Limits,
     last_elapsed_ms: Option<f64>,
+}
+
+/// What a [`Client`] shares with its [`Canceller`]s: the stream (frames are written whole,
+/// under `write`), the request ids and the request running now (0: none).
+struct Shared {
+    stream: Arc<Stream>,
+    write: Mutex<()>,
+    next_id: AtomicU64,
+    running: AtomicU64,
+}
+
+impl Shared {
+    fn send(&self, op: &str, params: Value, arrays: &[OwnedArray]) -> Result<u64, ClientError> {
+        let id = self.next_id.fetch_add(1, Ordering::SeqCst);
+        let Value::Object(msg) = json!({"id": id, "op": op, "params": params}) else {
+            unreachable!()
+        };
+        let _turn = self.write.lock().unwrap_or_else(|e| e.into_inner());
+        write_frame(&mut &*self.stream, msg, arrays).map_err(FrameError::Io)?;
+        Ok(id)
+    }
+}
+
+/// The read side of the shared stream.
+struct SharedStream(Arc<Stream>);
+
+impl Read for SharedStream {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        (&*self.0).read(buf)
+    }
+}
+
+/// Cancels, from anywhere (another thread, or the progress callback of the call itself), the
+/// request its [`Client`] is waiting on: it sends `cancel` for that request's id on the same
+/// connection (docs/protocol.md, "Cancel"), and the call then ends with a `cancelled` error
+/// at the request's next checkpoint.
+#[derive(Clone)]
+pub struct Canceller(Arc<Shared>);
+
+impl Canceller {
+    /// Asks the daemon to cancel the running request; `false` when none is running (nothing
+    /// is sent). The `cancel` request's own reply is read, and dropped, by the call.
+    ///
+    /// # Errors
+    /// When the frame cannot be written.
+    pub fn cancel(&self) -> Result<bool, ClientError> {
+        let running = self.0.running.load(Ordering::SeqCst);
+        if running == 0 {
+            return Ok(false);
+        }
+        self.0.send("cancel", json!({"id": running}), &[])?;
+        Ok(true)
+    }
 }
 
 impl Client {
@@ -49,12 +104,23 @@ impl Client {
             source,
         })?;
         let limits = Limits::default().with_max_payload(u64::MAX);
+        let stream = Arc::new(stream);
         Ok(Client {
-            reader: BufReader::with_capacity(64 << 10, stream),
-            next_id: 1,
+            reader: BufReader::with_capacity(64 << 10, SharedStream(stream.clone())),
+            shared: Arc::new(Shared {
+                stream,
+                write: Mutex::new(()),
+                next_id: AtomicU64::new(1),
+                running: AtomicU64::new(0),
+            }),
             limits,
             last_elapsed_ms: None,
         })
+    }
+
+    /// A handle that cancels the request this client is waiting on (see [`Canceller`]).
+    pub fn canceller(&self) -> Canceller {
+        Canceller(self.shared.clone())
     }
 
     /// Sends `op` and waits for its final reply, passing progress frames to `on_progress`.
@@ -68,15 +134,26 @@ impl Client {
         arrays: &[OwnedArray],
         mut on_progress: impl FnMut(&Progress),
     ) -> Result<(Value, Arrays), ClientError> {
-        let id = self.next_id;
-        self.next_id += 1;
         self.last_elapsed_ms = None;
-        let Value::Object(msg) = json!({"id": id, "op": op, "params": params}) else {
-            unreachable!()
-        };
-        write_frame(&mut self.reader.get_ref(), msg, arrays).map_err(FrameError::Io)?;
+        let id = self.shared.send(op, params, arrays)?;
+        self.shared.running.store(id, Ordering::SeqCst);
+        let result = self.wait_for(id, &mut on_progress);
+        self.shared.running.store(0, Ordering::SeqCst);
+        result
+    }
+
+    /// Reads frames until request `id`'s final reply; frames of other requests (the replies
+    /// to a [`Canceller`]'s `cancel`) are dropped.
+    fn wait_for(
+        &mut self,
+        id: u64,
+        on_progress: &mut impl FnMut(&Progress),
+    ) -> Result<(Value, Arrays), ClientError> {
         loop {
             let frame = read_frame(&mut self.reader, &self.limits)?;
+            if frame.json.get("id").and_then(Value::as_u64) != Some(id) {
+                continue;
+            }
             let kind = frame.json.get("type").and_then(Value::as_str).unwrap_or("");
             match kind {
                 "progress" => on_progress(&parse_progress(&frame.json)),

@@ -995,26 +995,68 @@ fn shut_down_on_signals(handle: tessd_ipc::server::ShutdownHandle) -> Result<()>
     Ok(())
 }
 
-/// Windows: the C runtime raises SIGINT for the console's Ctrl-C (and SIGTERM only when this
-/// process raises it); signal-hook's iterator is Unix-only, so the signals set a flag that a
-/// thread polls every 100 ms, which is soon enough for a person at a console. Ctrl-Break and
-/// closing the console window (`CTRL_CLOSE_EVENT`, which allows the process about 5 s) are not
-/// caught yet: they need `SetConsoleCtrlHandler`, issue 37.
+/// Windows: the console's Ctrl-C and Ctrl-Break, closing the console window, logging off and
+/// shutting down stop the server as SIGTERM does on Unix (running requests are cancelled and
+/// answered), through `SetConsoleCtrlHandler`. Windows runs the handler on a thread of its own
+/// and, for close, logoff and shutdown, ends the process as soon as the handler returns (it
+/// allows about 5 s), so for those the handler does not return: it waits while the server
+/// shuts down, and the process ends when `serve` returns and `main` exits. A second event
+/// during that shutdown exits at once, as a second signal does on Unix, with 128 + the
+/// matching signal's number: 130 for Ctrl-C, 149 for Ctrl-Break (SIGBREAK), 143 for the
+/// others (SIGTERM).
 #[cfg(windows)]
 fn shut_down_on_signals(handle: tessd_ipc::server::ShutdownHandle) -> Result<()> {
-    use std::sync::Arc;
+    use std::sync::OnceLock;
     use std::sync::atomic::{AtomicBool, Ordering};
-    let raised = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register(sig, raised.clone()).context("installing signal handlers")?;
+    const CTRL_C_EVENT: u32 = 0;
+    const CTRL_BREAK_EVENT: u32 = 1;
+    const CTRL_CLOSE_EVENT: u32 = 2;
+    const CTRL_LOGOFF_EVENT: u32 = 5;
+    const CTRL_SHUTDOWN_EVENT: u32 = 6;
+    #[link(name = "kernel32")]
+    unsafe extern "system" {
+        fn SetConsoleCtrlHandler(
+            handler: Option<unsafe extern "system" fn(u32) -> i32>,
+            add: i32,
+        ) -> i32;
     }
-    std::thread::spawn(move || {
-        while !raised.load(Ordering::SeqCst) {
-            std::thread::sleep(std::time::Duration::from_millis(100));
+    static HANDLE: OnceLock<tessd_ipc::server::ShutdownHandle> = OnceLock::new();
+    static STOPPING: AtomicBool = AtomicBool::new(false);
+    unsafe extern "system" fn on_event(event: u32) -> i32 {
+        let (name, code) = match event {
+            CTRL_C_EVENT => ("Ctrl-C", 130),
+            CTRL_BREAK_EVENT => ("Ctrl-Break", 149),
+            CTRL_CLOSE_EVENT => ("console close", 143),
+            CTRL_LOGOFF_EVENT => ("logoff", 143),
+            CTRL_SHUTDOWN_EVENT => ("shutdown", 143),
+            _ => return 0,
+        };
+        if STOPPING.swap(true, Ordering::SeqCst) {
+            log::warn!("{name} received again during the shutdown: exiting at once");
+            log::logger().flush();
+            std::process::exit(code);
         }
-        log::info!("Ctrl-C received");
-        handle.trigger();
-    });
+        log::info!("{name} received");
+        if let Some(handle) = HANDLE.get() {
+            handle.trigger();
+        }
+        if matches!(
+            event,
+            CTRL_CLOSE_EVENT | CTRL_LOGOFF_EVENT | CTRL_SHUTDOWN_EVENT
+        ) {
+            // Returning would end the process now; `main` ends it once the server is done.
+            loop {
+                std::thread::sleep(std::time::Duration::from_secs(60));
+            }
+        }
+        1
+    }
+    let _ = HANDLE.set(handle);
+    // SAFETY: registers a handler with the signature the console API calls; it only touches
+    // statics and the shutdown handle, which are thread-safe.
+    if unsafe { SetConsoleCtrlHandler(Some(on_event), 1) } == 0 {
+        return Err(std::io::Error::last_os_error()).context("installing the console handler");
+    }
     Ok(())
 }
 

@@ -98,7 +98,7 @@ fn job_file_matches_socket_and_writes_outputs() {
     assert_eq!(lines.len(), 2);
     assert!(dir.path().join("spot.ply").exists());
 
-    let socket = dir.path().join("d.sock");
+    let socket = support::endpoint(dir.path(), "d.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     let (over_socket, _) = c
@@ -137,7 +137,18 @@ fn job_file_matches_socket_and_writes_outputs() {
 #[test]
 fn daemon_lifecycle() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("life.sock");
+    let socket = support::endpoint(dir.path(), "life.sock");
+    // Windows: console events reach only processes attached to a console; a test run without
+    // one (Wine without a terminal, CI) gets its own, which the daemon inherits.
+    #[cfg(windows)]
+    {
+        #[link(name = "kernel32")]
+        unsafe extern "system" {
+            fn AllocConsole() -> i32;
+        }
+        // SAFETY: a plain call; it fails harmlessly when a console is already attached.
+        unsafe { AllocConsole() };
+    }
     let mut daemon = Daemon::start(&socket);
     #[cfg(unix)]
     {
@@ -164,16 +175,44 @@ fn daemon_lifecycle() {
     c.call("debug.sleep", json!({"seconds": 0.01}), &[], |_| {})
         .unwrap();
     assert!(c.last_elapsed_ms().is_some_and(|ms| ms >= 10.0));
-    // SIGTERM: clean exit, socket removed.
+    // SIGTERM (Ctrl-Break on Windows): clean exit, socket removed.
     #[cfg(unix)]
     {
         // SAFETY: kill() with a valid pid and signal number.
         unsafe { libc::kill(daemon.0.id() as i32, libc::SIGTERM) };
     }
-    // Windows cannot send another process SIGTERM (its Ctrl-C and console-close events are
-    // issue 37's); the shutdown request stands in.
-    #[cfg(not(unix))]
-    c.call("shutdown", json!({}), &[], |_| {}).unwrap();
+    // Windows: Ctrl-Break to the daemon's process group, which its console handler takes as
+    // SIGTERM. Wine 8 cannot send a console event to a process group (GenerateConsoleCtrlEvent
+    // fails with or without a console; its handler does run for a Ctrl-C typed on a terminal),
+    // so there the shutdown request stands in.
+    #[cfg(windows)]
+    {
+        #[link(name = "kernel32")]
+        unsafe extern "system" {
+            fn GenerateConsoleCtrlEvent(event: u32, group: u32) -> i32;
+            fn GetModuleHandleA(name: *const u8) -> *mut std::ffi::c_void;
+            fn GetProcAddress(
+                module: *mut std::ffi::c_void,
+                name: *const u8,
+            ) -> *mut std::ffi::c_void;
+        }
+        const CTRL_BREAK_EVENT: u32 = 1;
+        // SAFETY: NUL-terminated names; ntdll is always loaded; Wine's exports `wine_get_version`.
+        let wine = unsafe {
+            !GetProcAddress(
+                GetModuleHandleA(c"ntdll.dll".as_ptr().cast()),
+                c"wine_get_version".as_ptr().cast(),
+            )
+            .is_null()
+        };
+        if wine {
+            c.call("shutdown", json!({}), &[], |_| {}).unwrap();
+        } else {
+            // SAFETY: a plain call; the group is the daemon's own (Daemon::start made it one).
+            let sent = unsafe { GenerateConsoleCtrlEvent(CTRL_BREAK_EVENT, daemon.0.id()) };
+            assert_ne!(sent, 0, "{}", std::io::Error::last_os_error());
+        }
+    }
     assert!(daemon.wait_exit().success());
     assert!(!socket.exists());
     drop(daemon);

@@ -127,7 +127,8 @@ fn every_writing_verb_warns() {
     for i in 0..3 {
         assert!(
             err.contains(&format!(
-                "warning: lv/l_LOD{i}.stl: dropped uvs (STL cannot carry it)\n"
+                "warning: lv{}l_LOD{i}.stl: dropped uvs (STL cannot carry it)\n",
+                std::path::MAIN_SEPARATOR
             )),
             "{err}"
         );
@@ -338,6 +339,10 @@ fn errors_point_to_the_next_step() {
         let err = fails(d, &[verb, &spot, out]);
         println!("{err}");
         assert!(err.contains("the folder"), "{err}");
-        assert!(err.contains("/out/ does not exist"), "{err}");
+        let sep = std::path::MAIN_SEPARATOR;
+        assert!(
+            err.contains(&format!("{sep}out{sep} does not exist")),
+            "{err}"
+        );
     }
 }

@@ -360,7 +360,7 @@ fn lod_writes_variants_usdlod_and_per_level_files() {
 #[test]
 fn socket_returns_the_partition_as_arrays() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("d.sock");
+    let socket = support::endpoint(dir.path(), "d.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     let spot = shared_mesh("spot_triangulated.obj");

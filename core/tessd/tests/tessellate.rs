@@ -208,7 +208,7 @@ fn rel(a: f64, b: f64) -> f64 {
 #[test]
 fn percent_of_the_diagonal_is_scale_free() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("tess.sock");
+    let socket = support::endpoint(dir.path(), "tess.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     for name in [
@@ -299,7 +299,7 @@ fn percent_of_the_diagonal_is_scale_free() {
 #[test]
 fn bad_relative_tolerances_name_the_value() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("bad.sock");
+    let socket = support::endpoint(dir.path(), "bad.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     let part = load("cube.json");

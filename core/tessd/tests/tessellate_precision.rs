@@ -53,7 +53,7 @@ fn origin_of(r: &Value) -> [f64; 3] {
 #[test]
 fn far_parts_come_back_relative_or_in_f64() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("p.sock");
+    let socket = support::endpoint(dir.path(), "p.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     for name in ["Pump_Nut.json", "CrankArm.json"] {
@@ -179,7 +179,7 @@ fn far_parts_come_back_relative_or_in_f64() {
 #[test]
 fn files_carry_the_origin_or_absolute_coordinates() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("f.sock");
+    let socket = support::endpoint(dir.path(), "f.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     let far = translated(&load("Pump_Nut.json"), FAR);
@@ -290,7 +290,7 @@ fn open_edges(a: &Arrays) -> usize {
 #[test]
 fn vertex_tolerances_merge_and_bad_ones_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("v.sock");
+    let socket = support::endpoint(dir.path(), "v.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     let (r, a) = call(&mut c, &loose_cube(None), json!({"tolerance": 0.01})).unwrap();
@@ -339,7 +339,7 @@ fn vertex_tolerances_merge_and_bad_ones_are_refused() {
 #[test]
 fn bad_origin_and_positions_name_the_parameter() {
     let dir = tempfile::tempdir().unwrap();
-    let socket = dir.path().join("b.sock");
+    let socket = support::endpoint(dir.path(), "b.sock");
     let _daemon = Daemon::start(&socket);
     let mut c = Client::connect(&socket).unwrap();
     let cube = load("cube.json");

@@ -19,9 +19,13 @@ pub fn repo_root() -> PathBuf {
 /// The shared test-data folder: `$TESSD_SHARED_DATA`, else `../shared/data` beside the
 /// repository. Not checked: see [`shared`].
 pub fn shared_dir() -> PathBuf {
-    std::env::var_os("TESSD_SHARED_DATA")
+    let dir = std::env::var_os("TESSD_SHARED_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| repo_root().join("../shared/data"))
+        .unwrap_or_else(|| repo_root().join("../shared/data"));
+    // Absolute, so that a child process run in another folder finds it too (under Wine a Unix
+    // path such as /work/shared/data is relative to the current drive: Z: here, C: in a
+    // temporary folder).
+    std::path::absolute(&dir).unwrap_or(dir)
 }
 
 /// `rel` (such as `"mesh/spot_triangulated.obj"`) in the shared test data.

@@ -1,7 +1,7 @@
 //! A tiny Rust client of the tessd daemon (docs/protocol.md): starts `tessd serve` on a
-//! private socket (`$TESSD_BIN`, else `tessd` on `PATH`), sends a wavy 200 × 200 quad grid
-//! as arrays, asks `simplify` for 10 % of its vertices, prints the reply's counts and
-//! `elapsed_ms`, and shuts the daemon down.
+//! private socket, a named pipe on Windows (`$TESSD_BIN`, else `tessd` on `PATH`), sends a
+//! wavy 200 × 200 quad grid as arrays, asks `simplify` for 10 % of its vertices, prints the
+//! reply's counts and `elapsed_ms`, and shuts the daemon down.
 //!
 //! Run: `cargo run --release -p tessd-example-client`
 use serde_json::json;
@@ -56,7 +56,14 @@ fn run(socket: &Path) -> Result<(), Box<dyn Error>> {
 
 fn main() -> Result<(), Box<dyn Error>> {
     let bin = std::env::var("TESSD_BIN").unwrap_or_else(|_| "tessd".into());
-    let socket = std::env::temp_dir().join(format!("tessd-rs-{}.sock", std::process::id()));
+    let name = format!("tessd-rs-{}", std::process::id());
+    // A socket file in the temporary folder; on Windows, where the daemon listens on named
+    // pipes only, the pipe \\.\pipe\tessd-<user>-<name>.
+    let socket = if cfg!(windows) {
+        tessd_ipc::socket::resolve(Some(&name), false)?
+    } else {
+        std::env::temp_dir().join(format!("{name}.sock"))
+    };
     let mut daemon = Command::new(bin)
         .args(["serve", "--socket"])
         .arg(&socket)

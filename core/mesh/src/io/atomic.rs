@@ -120,7 +120,11 @@ impl TempOutput {
         if !dir.exists() {
             return Err(std::io::Error::new(
                 ErrorKind::NotFound,
-                format!("the folder {}/ does not exist", dir.display()),
+                format!(
+                    "the folder {}{} does not exist",
+                    dir.display(),
+                    std::path::MAIN_SEPARATOR
+                ),
             ));
         }
         sweep_stale_temps(dir);

@@ -28,18 +28,38 @@ pub fn run_ok(cmd: &mut Command) -> Output {
     out
 }
 
+/// A fresh daemon endpoint for one test: the socket `name` in `dir`; on Windows, where the
+/// daemon listens on named pipes only, a pipe name no other test or test process uses
+/// (`\\.\pipe\tessd-test-<pid>-<n>-<name>`).
+pub fn endpoint(dir: &Path, name: &str) -> PathBuf {
+    if cfg!(windows) {
+        use std::sync::atomic::{AtomicU32, Ordering};
+        static N: AtomicU32 = AtomicU32::new(0);
+        let n = N.fetch_add(1, Ordering::Relaxed);
+        let _ = dir;
+        format!(r"\\.\pipe\tessd-test-{}-{n}-{name}", std::process::id()).into()
+    } else {
+        dir.join(name)
+    }
+}
+
 /// A `tessd serve` child process, killed on drop.
 pub struct Daemon(pub Child);
 
 impl Daemon {
     /// Starts a daemon on `socket` and waits until it answers.
     pub fn start(socket: &Path) -> Daemon {
-        let child = tessd()
-            .arg("serve")
-            .arg("--socket")
-            .arg(socket)
-            .spawn()
-            .unwrap();
+        let mut cmd = tessd();
+        cmd.arg("serve").arg("--socket").arg(socket);
+        // Windows: a process group of its own, so that a test can send it Ctrl-Break
+        // (GenerateConsoleCtrlEvent) without reaching itself.
+        #[cfg(windows)]
+        {
+            use std::os::windows::process::CommandExt;
+            const CREATE_NEW_PROCESS_GROUP: u32 = 0x0000_0200;
+            cmd.creation_flags(CREATE_NEW_PROCESS_GROUP);
+        }
+        let child = cmd.spawn().unwrap();
         let t = Instant::now();
         while tessd_ipc::socket::connect(socket).is_err() {
             assert!(
