@@ -113,7 +113,12 @@ pub fn run(out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let out = out.canonicalize()?;
     let socket_dir = tempdir_for_socket()?;
-    let socket = socket_dir.join("demo.sock");
+    // Windows: the daemon listens on named pipes only; a pipe name of this process's own.
+    let socket = if cfg!(windows) {
+        tessd_ipc::socket::resolve(Some(&format!("demo-{}", std::process::id())), false)?
+    } else {
+        socket_dir.join("demo.sock")
+    };
     say!("tessd demo: starting a daemon on {}", socket.display());
     let daemon = Daemon::start(&socket)?;
     let mut client = Client::connect(&daemon.socket)?;
