@@ -93,6 +93,20 @@ else
   # PySide2) for the workbench's tests (tests/freecad_plugin/run.sh).
   FREECAD_APT_PACKAGES=(libfreecad-python3-0.20 freecad-python3 python3-pytest python3-numpy)
   apt_install "${FREECAD_APT_PACKAGES[@]}"
+  # Windows (issue 37): mingw links the x86_64-pc-windows-gnu cross build (g++ for
+  # meshoptimizer's C++), Wine 8 runs its tests (scripts/windows/test.sh), under Xvfb, as
+  # Wine's Vulkan needs an X display; the macOS targets are type-checked only (.ci/run).
+  WINDOWS_APT_PACKAGES=(gcc-mingw-w64-x86-64 g++-mingw-w64-x86-64 wine64 xvfb xauth)
+  apt_install "${WINDOWS_APT_PACKAGES[@]}"
+  RUST_TARGETS=(x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-apple-darwin)
+  missing_targets=()
+  for t in "${RUST_TARGETS[@]}"; do
+    rustup target list --installed | grep -qx "$t" || missing_targets+=("$t")
+  done
+  if [ ${#missing_targets[@]} -gt 0 ]; then
+    echo "setup: adding the Rust targets ${missing_targets[*]}"
+    rustup target add "${missing_targets[@]}"
+  fi
   fuzz_tools
 fi
 

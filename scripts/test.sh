@@ -13,6 +13,8 @@ export TESSD_BIN="${CARGO_TARGET_DIR:-$PWD/target}/release/tessd"
 export TESSD_SHARED_DATA="${TESSD_SHARED_DATA:-$PWD/../shared/data}"
 step "cargo test"
 cargo test --workspace --release
+step "windows (x86_64-pc-windows-gnu cross build, its Rust tests under Wine, tests/windows)"
+bash scripts/windows/test.sh
 # 20 s a target here: the kept corpora replay first, then ~15 s of new inputs each; the long
 # runs (30 min a target) are docs/reliability.md's and bench/results/fuzz.md's.
 FUZZ_SECONDS=${FUZZ_SECONDS:-20}
@@ -21,7 +23,7 @@ bash scripts/fuzz.sh "$FUZZ_SECONDS"
 step "pytest (daemon, USD, demo, simplification)"
 .venv/bin/python -m pytest tests -q -p no:cacheprovider --ignore=tests/compare --ignore=tests/brep \
   --ignore=tests/brep_build123d --ignore=tests/brep_freecad --ignore=tests/render_reference \
-  --ignore=tests/freecad_plugin --ignore=tests/batch
+  --ignore=tests/freecad_plugin --ignore=tests/batch --ignore=tests/windows
 step "soak (32 clients, every op, valid and invalid inputs, cancels; 60 s here, 10 min in docs/reliability.md)"
 bash scripts/soak.sh 60
 step "pytest (cross-checks against peer tools)"
