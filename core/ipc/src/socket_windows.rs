@@ -438,4 +438,32 @@ mod tests {
             assert!(e.to_string().contains(bad), "{e}");
         }
     }
+
+    #[test]
+    fn a_pipe_another_account_owns_is_neither_served_nor_used() {
+        // A squatter's pipe: owned by another SID (the Administrators group, an owner this
+        // token may set under Wine), open to Everyone.
+        let path = fresh_pipe("squat");
+        let sddl = widestring::U16CString::from_str("O:BAD:(A;;FA;;;WD)").unwrap();
+        let squatter = ListenerOptions::new()
+            .name(path.as_path().to_fs_name::<GenericFilePath>().unwrap())
+            .security_descriptor(SecurityDescriptor::deserialize(&sddl).unwrap())
+            .create_sync()
+            .unwrap();
+        // Accepts whatever comes, for as long as the test process lives (not joined: how many
+        // connections reach an accept depends on when the clients close).
+        std::thread::spawn(move || while squatter.accept().is_ok() {});
+        match super::super::bind(&path) {
+            Err(BindError::Unsafe { reason, .. }) => {
+                assert!(reason.contains("belongs to another account"), "{reason}")
+            }
+            Err(e) => panic!("expected a refusal, got {e}"),
+            Ok(_) => panic!("served a squatted pipe {}", path.display()),
+        }
+        let e = connect(&path)
+            .err()
+            .expect("a client used the squatter's pipe");
+        assert_eq!(e.kind(), io::ErrorKind::PermissionDenied, "{e}");
+        assert!(e.to_string().contains("another account"), "{e}");
+    }
 }
