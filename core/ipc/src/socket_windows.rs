@@ -460,9 +460,7 @@ mod tests {
             Err(e) => panic!("expected a refusal, got {e}"),
             Ok(_) => panic!("served a squatted pipe {}", path.display()),
         }
-        let e = connect(&path)
-            .err()
-            .expect("a client used the squatter's pipe");
+        let e = connect(&path).expect_err("a client used the squatter's pipe");
         assert_eq!(e.kind(), io::ErrorKind::PermissionDenied, "{e}");
         assert!(e.to_string().contains("another account"), "{e}");
     }
