@@ -73,7 +73,9 @@ fn a_client_session_then_a_kill_mid_write_leaves_no_partial_file() {
     let (simplified, _) = c
         .call(
             "simplify",
-            json!({"input": spot, "method": "complexity", "target_vertices": "50%", "output": half}),
+            json!({
+                "input": spot, "method": "complexity", "target_vertices": "50%", "output": half
+            }),
             &[],
             |_| {},
         )

@@ -531,6 +531,7 @@ mod tests {
         assert_eq!(entries(dir.path()), [name]);
     }
 
+    // windows: compiled out — creating a symbolic link needs a privilege on Windows
     #[cfg(unix)]
     #[test]
     fn a_symlink_at_the_destination_is_replaced_not_written_through() {
@@ -545,6 +546,7 @@ mod tests {
         assert_eq!(std::fs::read(&victim).unwrap(), b"victim");
     }
 
+    // windows: compiled out — creating a symbolic link needs a privilege on Windows
     #[cfg(unix)]
     #[test]
     fn files_and_symlinks_planted_at_temp_names_are_skipped_not_followed() {
@@ -569,6 +571,7 @@ mod tests {
         assert!(!dir.path().join("dangling").exists());
     }
 
+    // windows: compiled out — the umask, read from /proc; Windows files have no mode bits
     #[cfg(target_os = "linux")]
     #[test]
     fn outputs_get_the_umask_mode() {
@@ -587,6 +590,8 @@ mod tests {
         assert_eq!(mode, 0o666 & !mask);
     }
 
+    // windows: compiled out — /proc, init's pid 1 and symbolic links; its Windows form is
+    // windows_stale_temps_of_dead_writers_are_swept_live_and_locked_ones_kept.
     #[cfg(target_os = "linux")]
     #[test]
     fn stale_temps_of_dead_writers_are_swept_live_and_locked_ones_kept() {
