@@ -410,17 +410,8 @@ impl StartLock {
     fn take(socket: &Path) -> io::Result<StartLock> {
         #[cfg(unix)]
         {
-            use std::os::unix::fs::OpenOptionsExt;
             use std::os::unix::io::AsRawFd;
-            let mut name = socket.as_os_str().to_owned();
-            name.push(".lock");
-            let file = std::fs::OpenOptions::new()
-                .create(true)
-                .truncate(false)
-                .write(true)
-                .mode(0o600)
-                .custom_flags(libc::O_NOFOLLOW)
-                .open(PathBuf::from(name))?;
+            let file = open_start_lock(socket)?;
             // SAFETY: flock on a descriptor this function owns; it blocks until the lock is ours.
             while unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } != 0 {
                 let e = io::Error::last_os_error();
@@ -436,6 +427,23 @@ impl StartLock {
             Ok(StartLock(None))
         }
     }
+}
+
+/// Opens (creating it, mode 0600) `<socket>.lock`, the file whose `flock` orders the daemons
+/// binding one socket path ([`bind`]) and the removal of a socket on exit
+/// (`socket_watch`); a symbolic link there is refused (`ELOOP`), never followed.
+#[cfg(unix)]
+pub(crate) fn open_start_lock(socket: &Path) -> io::Result<std::fs::File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let mut name = socket.as_os_str().to_owned();
+    name.push(".lock");
+    std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .mode(0o600)
+        .custom_flags(libc::O_NOFOLLOW)
+        .open(PathBuf::from(name))
 }
 
 #[cfg(test)]

@@ -155,18 +155,8 @@ impl SocketWatch {
 /// cannot be opened (its folder is gone, then so is the socket) or stays locked.
 #[cfg(unix)]
 fn start_lock(socket: &Path) -> Option<std::fs::File> {
-    use std::os::unix::fs::OpenOptionsExt;
     use std::os::unix::io::AsRawFd;
-    let mut name = socket.as_os_str().to_owned();
-    name.push(".lock");
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .mode(0o600)
-        .custom_flags(libc::O_NOFOLLOW)
-        .open(PathBuf::from(name))
-        .ok()?;
+    let file = crate::socket::open_start_lock(socket).ok()?;
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(1);
     loop {
         // SAFETY: flock on a descriptor this function owns; LOCK_NB never blocks.
