@@ -71,10 +71,20 @@ echo "== Windows (x86_64-pc-windows-gnu under Wine) summary"
 echo "windows: test binaries: $binaries (+ $doctests doc-test runs)"
 echo "windows: tests run: $((passed + failed)), passed: $passed, failed: $failed," \
   "ignored: $ignored"
-# Each item compiled out on Windows carries the marker on the line above its cfg.
-out=$(grep -rn --include='*.rs' 'windows: compiled out' core bench examples || true)
+# Each item compiled out on Windows carries the marker in the comment above its cfg; the reason
+# is the rest of that comment, continuation lines included.
+out=$(grep -rl --include='*.rs' 'windows: compiled out' core bench examples | sort |
+  xargs -r awk '
+    function flush() { if (at != "") print "  " at ": " reason; at = "" }
+    /windows: compiled out/ {
+      flush(); at = FILENAME ":" FNR; reason = $0
+      sub(/.*windows: compiled out *(—|-)* */, "", reason); next }
+    at != "" && /^[ \t]*\/\// { line = $0; sub(/^[ \t]*\/\/+ */, "", line)
+      reason = reason " " line; next }
+    { flush() }
+    END { flush() }')
 echo "windows: compiled out on Windows: $(printf '%s' "$out" | grep -c . || true)"
-[ -z "$out" ] || printf '%s\n' "$out" | sed -E 's/^([^:]+:[0-9]+):.*windows: compiled out *[—-]* */  \1: /'
+[ -z "$out" ] || printf '%s\n' "$out"
 if [ "$status" -ne 0 ] || [ "$failed" -ne 0 ]; then
   echo "windows: FAILED: cargo test under Wine exited $status" >&2
   grep -E '^test .* FAILED$|^error: ' "$LOG" | sed 's/^/  /' >&2 || true
