@@ -8,6 +8,8 @@
 # Exits non-zero on any failure.
 #
 # Extra arguments go to both cargo commands (e.g. `--exclude tessd-ipc` while measuring).
+# WINDOWS_DROP_BUILD=1 deletes the Windows build (<target dir>/x86_64-pc-windows-gnu) and the
+# Wine prefix (~0.7 GB: Wine 8 copies its DLLs into it) afterwards, as CI does for its disk.
 #
 # Wine's fidelity for the GPU tests: Wine 8 implements Vulkan (winevulkan over the host's
 # libvulkan: lavapipe here) only through its X11 driver, so the run has an X display: Xvfb
@@ -55,8 +57,12 @@ fi
 
 # Let this prefix's wineserver (and the Wine desktop on this X display) end before xvfb-run
 # stops the display; other users of the prefix are left alone (-w waits, it kills nothing).
-WINEPREFIX=${TESSD_WINEPREFIX:-$TARGET_DIR/wine-prefix} timeout 60 \
+prefix=${TESSD_WINEPREFIX:-$TARGET_DIR/wine-prefix}
+WINEPREFIX=$prefix timeout 60 \
   "$(command -v wineserver || echo /usr/lib/wine/wineserver)" -w 2>/dev/null || true
+if [ "${WINDOWS_DROP_BUILD:-0}" = 1 ]; then
+  rm -rf "${TARGET_DIR:?}/$TRIPLE" "$prefix"
+fi
 
 # The counts, from libtest's summaries ("test result: ok. 5 passed; 0 failed; 2 ignored; ...").
 binaries=$(grep -cE '^ +Running ' "$LOG" || true)
