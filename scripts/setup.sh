@@ -95,8 +95,10 @@ else
   apt_install "${FREECAD_APT_PACKAGES[@]}"
   # Windows (issue 37): mingw links the x86_64-pc-windows-gnu cross build (g++ for
   # meshoptimizer's C++), Wine 8 runs its tests (scripts/windows/test.sh), under Xvfb, as
-  # Wine's Vulkan needs an X display; the macOS targets are type-checked only (.ci/run).
-  WINDOWS_APT_PACKAGES=(gcc-mingw-w64-x86-64 g++-mingw-w64-x86-64 wine64 xvfb xauth)
+  # Wine's Vulkan needs an X display; libvkd3d1 gives Wine's d3d12 an adapter that refuses its
+  # device, which the GPU tests pass over to Vulkan; the macOS targets are type-checked only
+  # (.ci/run).
+  WINDOWS_APT_PACKAGES=(gcc-mingw-w64-x86-64 g++-mingw-w64-x86-64 wine64 libvkd3d1 xvfb xauth)
   apt_install "${WINDOWS_APT_PACKAGES[@]}"
   RUST_TARGETS=(x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-apple-darwin)
   missing_targets=()

@@ -20,13 +20,17 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// Opens a device labelled `label` on the best adapter of this build's backends, preferring a real GPU but accepting a fallback (CPU) adapter. Limits are
-    /// wgpu's defaults except buffer sizes and the 2D texture size, raised to the adapter's so
-    /// large meshes and large images fit.
+    /// Opens a device labelled `label` on the best adapter of this build's backends: a
+    /// discrete GPU, then an integrated one, a virtual one, any other, and last a CPU (fallback)
+    /// adapter. An adapter that lists but refuses a device is passed over for the next one (under
+    /// Wine, DX12 through vkd3d lists a GPU whose device cannot be opened, while Vulkan over
+    /// lavapipe works). Limits are wgpu's defaults except buffer sizes and the 2D texture size,
+    /// raised to the adapter's so large meshes and large images fit.
     ///
     /// # Errors
     /// [`GpuError::NoAdapter`] when there is no adapter at all (the message says which packages
-    /// give the software one), [`GpuError::DeviceRequest`] when the adapter refuses the device.
+    /// give the software one), [`GpuError::DeviceRequest`] (the best adapter's) when every
+    /// adapter refuses the device.
     pub fn open(label: &str) -> Result<Self, GpuError> {
         pollster::block_on(Self::open_async(label))
     }
@@ -37,15 +41,36 @@ impl GpuContext {
     /// As [`open`](Self::open).
     pub async fn open_async(label: &str) -> Result<Self, GpuError> {
         let instance = headless_instance()?;
-        let adapter = instance
-            .request_adapter(&wgpu::RequestAdapterOptions {
-                power_preference: wgpu::PowerPreference::HighPerformance,
-                force_fallback_adapter: false,
-                compatible_surface: None,
-                apply_limit_buckets: false,
-            })
-            .await
-            .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let mut adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
+        if adapters.is_empty() {
+            // wgpu's own request says why there is none.
+            let adapter = instance
+                .request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::HighPerformance,
+                    force_fallback_adapter: false,
+                    compatible_surface: None,
+                    apply_limit_buckets: false,
+                })
+                .await
+                .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+            adapters.push(adapter);
+        }
+        // Stable: among adapters of one kind, wgpu's order (the backends' order) stands.
+        adapters.sort_by_key(|a| preference(a.get_info().device_type));
+        let mut first_error = None;
+        for adapter in adapters {
+            match Self::open_on(adapter, label).await {
+                Ok(context) => return Ok(context),
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+        Err(first_error.expect("at least one adapter was tried"))
+    }
+
+    /// Opens the device on `adapter`.
+    async fn open_on(adapter: wgpu::Adapter, label: &str) -> Result<Self, GpuError> {
         let adapter_info = adapter.get_info();
         let adapter_limits = adapter.limits();
         let required_limits = wgpu::Limits {
@@ -85,6 +110,17 @@ impl GpuContext {
     /// `llvmpipe ... (Vulkan, Cpu; driver llvmpipe ...)`), for logs and test output.
     pub fn describe(&self) -> String {
         describe(&self.adapter_info)
+    }
+}
+
+/// The order in which [`GpuContext::open`] tries adapters: real GPUs first, the CPU last.
+fn preference(kind: wgpu::DeviceType) -> u8 {
+    match kind {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
     }
 }
 
