@@ -41,6 +41,21 @@ t0=$SECONDS
 cargo test --release --target "$TRIPLE" --workspace --no-run --quiet "$@"
 echo "windows: build $((SECONDS - t0)) s"
 
+# One wineserver for the whole run (-p: persistent), so that no test binary starts while the
+# previous one's server is exiting (Wine ends its server 3 s after its last program).
+# The prefix is made first (wine-run.sh waits for wineboot's server to end, which a persistent
+# one never does), and its server has ended (-p refuses to start beside a running one).
+export TESSD_WINEPREFIX=${TESSD_WINEPREFIX:-$TARGET_DIR/wine-prefix}
+prefix=$TESSD_WINEPREFIX
+WINESERVER=$(command -v wineserver || echo /usr/lib/wine/wineserver)
+bash scripts/windows/wine-run.sh cmd /c exit 0
+WINEPREFIX=$prefix "$WINESERVER" -w
+WINEPREFIX=$prefix "$WINESERVER" -p
+# Wine's own services (services.exe, winedevice.exe, ...) start with the first program and live
+# as long as the server: started here, they hold /dev/null, not the pipe to tee below (which
+# would then never end).
+bash scripts/windows/wine-run.sh cmd /c exit 0 >/dev/null 2>&1 </dev/null
+
 t1=$SECONDS
 status=0
 cargo test --release --target "$TRIPLE" --workspace --no-fail-fast "$@" 2>&1 | tee "$LOG" ||
@@ -56,11 +71,10 @@ if [ -d tests/windows ]; then
   echo "windows: pytest tests/windows $((SECONDS - t2)) s"
 fi
 
-# Let this prefix's wineserver (and the Wine desktop on this X display) end before xvfb-run
-# stops the display; other users of the prefix are left alone (-w waits, it kills nothing).
-prefix=${TESSD_WINEPREFIX:-$TARGET_DIR/wine-prefix}
-WINEPREFIX=$prefix timeout 60 \
-  "$(command -v wineserver || echo /usr/lib/wine/wineserver)" -w 2>/dev/null || true
+# End this prefix's persistent wineserver (and the Wine desktop on this X display) before
+# xvfb-run stops the display.
+WINEPREFIX=$prefix timeout 60 "$WINESERVER" -k 2>/dev/null || true
+WINEPREFIX=$prefix timeout 60 "$WINESERVER" -w 2>/dev/null || true
 if [ "${WINDOWS_DROP_BUILD:-0}" = 1 ]; then
   rm -rf "${TARGET_DIR:?}/$TRIPLE" "$prefix"
 fi

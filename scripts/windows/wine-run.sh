@@ -72,4 +72,17 @@ if [ ! -f "$shim_dll" ] || [ "$(cat "$shim_stamp" 2>/dev/null)" != "$want" ]; th
     fi
   ) 9>"$prefix/.tessd-setup.lock"
 fi
-exec "$WINE" "$@"
+# A program that ends on "wine client error" lost its wineserver (Wine's own failure, seen once
+# in ~80 binaries when a run started while the previous run's server was exiting), not a test's:
+# it runs again, once, and says so. Any other status is the program's.
+err=$(mktemp)
+trap 'rm -f "$err"' EXIT
+status=0
+"$WINE" "$@" 2> >(tee "$err" >&2) || status=$?
+wait
+if [ "$status" -ne 0 ] && grep -q '^wine client error' "$err"; then
+  echo "wine-run: Wine lost its wineserver (not the program's failure); running $exe again" >&2
+  status=0
+  "$WINE" "$@" || status=$?
+fi
+exit "$status"
