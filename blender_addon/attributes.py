@@ -25,12 +25,15 @@ import numpy as np
 VERTEX_GROUP = "vertex_group:"
 SHAPE_KEY = "shape_key:"
 
-#: Blender data type -> (components, the `foreach_get` key).
+#: Blender data type -> (components, the `foreach_get` key, the numpy dtype Blender copies
+#: without converting element by element: see convert.read).
 TYPES = {
-    'FLOAT': (1, "value"), 'INT': (1, "value"), 'INT8': (1, "value"),
-    'BOOLEAN': (1, "value"), 'FLOAT2': (2, "vector"), 'INT32_2D': (2, "value"),
-    'INT16_2D': (2, "value"), 'FLOAT_VECTOR': (3, "vector"), 'FLOAT_COLOR': (4, "color"),
-    'BYTE_COLOR': (4, "color"), 'QUATERNION': (4, "value"), 'FLOAT4X4': (16, "value"),
+    'FLOAT': (1, "value", np.float32), 'INT': (1, "value", np.int32),
+    'INT8': (1, "value", np.int8), 'BOOLEAN': (1, "value", np.bool_),
+    'FLOAT2': (2, "vector", np.float32), 'INT32_2D': (2, "value", np.int32),
+    'INT16_2D': (2, "value", np.int16), 'FLOAT_VECTOR': (3, "vector", np.float32),
+    'FLOAT_COLOR': (4, "color", np.float32), 'BYTE_COLOR': (4, "color", np.float32),
+    'QUATERNION': (4, "value", np.float32), 'FLOAT4X4': (16, "value", np.float32),
 }
 INTEGER_TYPES = {'INT', 'INT8', 'INT32_2D', 'INT16_2D'}
 DOMAINS = {'POINT': "point", 'CORNER': "corner", 'FACE': "face"}
@@ -60,19 +63,20 @@ class Sent:
         self.missing = set()
 
 
-def _read(attr, n, order=None):
-    comps, key = TYPES[attr.data_type]
-    buf = np.empty(n * comps, dtype=np.float32)
+def _read(attr, n):
+    comps, key, dtype = TYPES[attr.data_type]
+    buf = np.empty(n * comps, dtype=dtype)
     attr.data.foreach_get(key, buf)
-    values = buf.reshape(n, comps) if comps > 1 else buf
-    return values if order is None else values[order]
+    values = buf.astype(np.float32, copy=False)
+    return values.reshape(n, comps) if comps > 1 else values
 
 
-def collect(mesh, obj, arrays, corner_order, sent, skip=()):
+def collect(mesh, obj, arrays, sent, skip=()):
     """Adds the generic attributes, vertex groups, shape keys and sharp edges of `mesh`
-    to `arrays` and records them in `sent` (a :class:`Sent`). `corner_order` reorders
-    corner values into face order (None: already so); `skip` names attributes already sent
-    another way (the UV map sent as `uvs`)."""
+    to `arrays` and records them in `sent` (a :class:`Sent`). `skip` names attributes
+    already sent another way (the UV map sent as `uvs`). Corner values are in face order
+    as Blender stores them (convert.corner_vertices). A `sharp_face` with no face set is not
+    sent: a result without it is smooth everywhere, the same shading."""
     sizes = {"POINT": len(mesh.vertices), "CORNER": len(mesh.loops), "FACE": len(mesh.polygons)}
     for attr in mesh.attributes:
         name = attr.name
@@ -82,8 +86,10 @@ def collect(mesh, obj, arrays, corner_order, sent, skip=()):
             sent.dropped.append("%s (%s %s attribute)" % (name, attr.domain.lower(),
                                                           attr.data_type.lower()))
             continue
-        order = corner_order if attr.domain == 'CORNER' else None
-        arrays["%s:%s" % (DOMAINS[attr.domain], name)] = _read(attr, sizes[attr.domain], order)
+        values = _read(attr, sizes[attr.domain])
+        if name == "sharp_face" and attr.domain == 'FACE' and not values.any():
+            continue
+        arrays["%s:%s" % (DOMAINS[attr.domain], name)] = values
         sent.generic.append((name, attr.domain, attr.data_type))
     uv = mesh.uv_layers
     sent.active_uv = uv.active.name if uv.active is not None else None
@@ -93,19 +99,24 @@ def collect(mesh, obj, arrays, corner_order, sent, skip=()):
     sent.default_color = colors.default_color_name or None
     sharp = mesh.attributes.get("sharp_edge")
     if sharp is not None and sharp.domain == 'EDGE' and len(mesh.edges):
-        flags = np.zeros(len(mesh.edges), dtype=bool)
+        flags = np.empty(len(mesh.edges), dtype=bool)
         sharp.data.foreach_get("value", flags)
         if flags.any():
-            arrays["sharp_edges"] = edge_vertices(mesh)[flags].astype(np.uint32)
+            arrays["sharp_edges"] = edge_vertices(mesh)[flags]
     if obj is not None:
         _collect_groups(mesh, obj, arrays, sent)
     return sent
 
 
 def edge_vertices(mesh):
-    verts = np.empty(len(mesh.edges) * 2, dtype=np.int64)
-    mesh.edges.foreach_get("vertices", verts)
-    return verts.reshape(-1, 2)
+    """The two vertices of every edge, [E, 2] u32."""
+    verts = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    attr = mesh.attributes.get(".edge_verts")
+    if attr is not None:
+        attr.data.foreach_get("value", verts)
+    else:
+        mesh.edges.foreach_get("vertices", verts)
+    return verts.view(np.uint32).reshape(-1, 2)
 
 
 def _collect_groups(mesh, obj, arrays, sent):
@@ -125,6 +136,14 @@ def _collect_groups(mesh, obj, arrays, sent):
         sent.groups_normalized = bool(weighted.any() and np.allclose(sums[weighted], 1.0, atol=1e-3))
 
 
+def _key_positions(block, n):
+    """A shape key's positions, f32 [n * 3]: its `points` (Blender 4.1+) copy in one go, its
+    `data` element by element."""
+    co = np.empty(n * 3, dtype=np.float32)
+    (block.points if hasattr(block, "points") else block.data).foreach_get("co", co)
+    return co
+
+
 def collect_shape_keys(mesh, arrays, sent):
     """Each shape key but the reference as `shape_key:<name>`: its offset from the reference
     key (the positions sent)."""
@@ -133,14 +152,11 @@ def collect_shape_keys(mesh, arrays, sent):
         return
     n = len(mesh.vertices)
     ref = keys.reference_key
-    base = np.empty(n * 3, dtype=np.float32)
-    ref.data.foreach_get("co", base)
+    base = _key_positions(ref, n)
     for block in keys.key_blocks:
         if block == ref:
             continue
-        co = np.empty(n * 3, dtype=np.float32)
-        block.data.foreach_get("co", co)
-        arrays["point:" + SHAPE_KEY + block.name] = (co - base).reshape(-1, 3)
+        arrays["point:" + SHAPE_KEY + block.name] = (_key_positions(block, n) - base).reshape(-1, 3)
     sent.keys = [dict(name=b.name, value=b.value, mute=b.mute, slider_min=b.slider_min,
                       slider_max=b.slider_max, vertex_group=b.vertex_group,
                       relative_key=b.relative_key.name, interpolation=b.interpolation,
@@ -160,14 +176,16 @@ def apply_generic(mesh, arrays, prefix, sent):
     sizes = {"POINT": len(mesh.vertices), "CORNER": len(mesh.loops), "FACE": len(mesh.polygons)}
     for name, domain, data_type in sent.generic:
         values = _values(arrays, "%s:%s" % (DOMAINS[domain], name), prefix)
-        comps, key = TYPES[data_type]
+        comps, key, dtype = TYPES[data_type]
         if values is None or values.size != sizes[domain] * comps:
             missing.append(name)
             continue
+        # Written in the attribute's own dtype, so Blender copies it in one go.
         if data_type == 'BOOLEAN':
             values = values > 0.5
         elif data_type in INTEGER_TYPES:
-            values = np.rint(values).astype(np.int32)
+            info = np.iinfo(dtype)
+            values = np.clip(np.rint(values), info.min, info.max).astype(dtype)
         elif data_type == 'BYTE_COLOR':
             values = np.clip(values, 0.0, 1.0)
         if data_type == 'FLOAT2' and domain == 'CORNER':
@@ -197,7 +215,7 @@ def set_edge_flags(mesh, pairs, name="sharp_edge"):
 
 def edge_values(mesh, pairs, values):
     """Per edge of `mesh`, the value given for its vertex pair (0 for edges not given)."""
-    verts = edge_vertices(mesh)
+    verts = edge_vertices(mesh).astype(np.int64)
     n_v = max(len(mesh.vertices), 1)
     keys = verts.min(axis=1) * n_v + verts.max(axis=1)
     order = np.argsort(keys)
@@ -239,7 +257,7 @@ def apply_object_data(obj, arrays, prefix, sent):
                 group.add(nz[inverse == k].tolist(), float(value), 'REPLACE')
     if sent.keys:
         pos = np.empty(n * 3, dtype=np.float32)
-        mesh.vertices.foreach_get("co", pos)
+        mesh.attributes["position"].data.foreach_get("vector", pos)
         blocks = {}
         for key in sent.keys:
             block = obj.shape_key_add(name=key["name"], from_mix=False)
@@ -250,7 +268,8 @@ def apply_object_data(obj, arrays, prefix, sent):
             if off is None or off.size != n * 3:
                 missing.append("shape key " + key["name"])
                 continue
-            block.data.foreach_set("co", pos + off.reshape(-1))
+            (block.points if hasattr(block, "points") else block.data).foreach_set(
+                "co", pos + off.reshape(-1))
         for key in sent.keys:
             block = blocks[key["name"]]
             for prop in ("value", "mute", "slider_min", "slider_max", "vertex_group",

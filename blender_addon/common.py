@@ -117,9 +117,12 @@ def arrays_of(context, obj, evaluated, **kw):
         # layers even read as empty), and a Replace would be overwritten on leaving it.
         raise UserError("%s is in Edit Mode: leave Edit Mode first" % obj.name)
     keys = has_shape_keys(obj)
-    if keys and evaluated and not has_modifiers(obj):
+    # Without modifiers the evaluated mesh is the object's own (its shape keys mixed in, and
+    # those are sent as keys): read the object's mesh directly, without evaluating the
+    # depsgraph or copying the mesh by `to_mesh`.
+    if evaluated and not has_modifiers(obj):
         evaluated = False
-    depsgraph = context.evaluated_depsgraph_get()
+    depsgraph = context.evaluated_depsgraph_get() if evaluated else None
     try:
         with convert.source_mesh(obj, depsgraph, evaluated) as mesh:
             arrays, params, sent = convert.mesh_to_arrays(mesh, obj, shape_keys=keys and not evaluated,
@@ -203,10 +206,9 @@ def unit_results(created, unit, mesh, suffix, replace):
 
 def mesh_counts(mesh):
     """(vertices, faces, triangles) of a Blender mesh, as the viewport's Statistics overlay
-    counts them: faces are polygons (a quad is one face), triangles what they split into."""
-    sizes = np.empty(len(mesh.polygons), dtype=np.int64)
-    mesh.polygons.foreach_get("loop_total", sizes)
-    return len(mesh.vertices), len(mesh.polygons), int((sizes - 2).sum())
+    counts them: faces are polygons (a quad is one face), triangles what they split into
+    (a face of n corners: n - 2)."""
+    return len(mesh.vertices), len(mesh.polygons), len(mesh.loops) - 2 * len(mesh.polygons)
 
 
 def faces_text(faces, triangles):

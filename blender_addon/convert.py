@@ -1,12 +1,15 @@
 """Blender meshes <-> the protocol's mesh arrays (docs/protocol.md, "Mesh arrays").
 
-Everything goes through `foreach_get` / `foreach_set` and numpy, never a Python loop over
-vertices, faces or corners (vertex group weights are the one exception: Blender has no bulk
-access to them), so a million-triangle mesh converts in a fraction of a second.
+Everything goes through `foreach_get` / `foreach_set` of the mesh's attributes into numpy
+arrays of the attribute's own dtype (:func:`read`, :func:`write`: one copy, no per-element
+conversion), never a Python loop over vertices, faces or corners (vertex group weights are the
+one exception: Blender has no bulk access to them), so a million-triangle mesh converts in a
+few milliseconds.
 
 Mapping:
 - positions: vertex `co` (object space; the object's transform stays on the object);
-- faces: corner vertex indices in face order (`face_indices`) and `loop_total` (`face_sizes`);
+- faces: corner vertex indices in face order (`face_indices`), [F, 3] when every face is a
+  triangle, else 1-D with the corner counts (`face_sizes`);
 - UVs: the active UV map as `uvs`, one UV per corner; the other UV maps, colour attributes
   and every other point / corner / face attribute, vertex groups, shape keys and sharp edges
   as the protocol's attribute arrays (attributes.py);
@@ -42,26 +45,80 @@ def source_mesh(obj, depsgraph, evaluated):
         obj_eval.to_mesh_clear()
 
 
+def read(mesh, name, key, dtype, rows, comps=1, fallback=None):
+    """The attribute `name` of `mesh` read by `foreach_get(key)` straight into a new numpy
+    array of `dtype` and shape [rows] or [rows, comps], or None when the mesh lacks it.
+
+    `dtype` must be the attribute's own type (f32 for floats, i32 / i8 / i16 for integers,
+    bool): Blender then copies the whole array in one go (about 1 ms for a million vertices);
+    another dtype converts element by element through Python's RNA layer (about 100 ms).
+    `fallback` (a collection and its key, e.g. ``(mesh.loops, "vertex_index")``) is read the
+    same way when the attribute is not exposed (an internal attribute of another version)."""
+    out = np.empty(rows * comps, dtype=dtype)
+    attr = mesh.attributes.get(name)
+    if attr is not None:
+        attr.data.foreach_get(key, out)
+    elif fallback is not None:
+        fallback[0].foreach_get(fallback[1], out)
+    else:
+        return None
+    return out.reshape(rows, comps) if comps > 1 else out
+
+
+def write(mesh, name, key, values, fallback=None):
+    """Writes `values` (of the attribute's own dtype, see :func:`read`) into the existing
+    attribute `name` of `mesh`, or into `fallback` (a collection and its key) when the
+    attribute is not exposed."""
+    values = np.ascontiguousarray(values).reshape(-1)
+    attr = mesh.attributes.get(name)
+    if attr is not None:
+        attr.data.foreach_set(key, values)
+    else:
+        fallback[0].foreach_set(fallback[1], values)
+
+
 def positions_of(mesh):
-    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.vertices.foreach_get("co", co)
-    return co.reshape(-1, 3)
+    return read(mesh, "position", "vector", np.float32, len(mesh.vertices), 3,
+                fallback=(mesh.vertices, "co"))
 
 
-def _corner_order(mesh):
-    """Corner indices in face order (Blender 4+ stores them so already; checked, not assumed)."""
-    n_f = len(mesh.polygons)
-    sizes = np.empty(n_f, dtype=np.int32)
+def corner_vertices(mesh):
+    """The vertex of every face corner, in face order (u32). Since Blender 4.0 a mesh stores
+    its faces as offsets into the corner arrays, so the corners are in face order by
+    construction (a face's corners are offsets[f]..offsets[f + 1])."""
+    out = read(mesh, ".corner_vert", "value", np.int32, len(mesh.loops),
+               fallback=(mesh.loops, "vertex_index"))
+    return out.view(np.uint32)
+
+
+def face_sizes_of(mesh):
+    """The corner count of every face (u32), or None when every face is a triangle: a face
+    has at least 3 corners, so 3 × faces corners means only triangles (nothing to read)."""
+    n_f, n_l = len(mesh.polygons), len(mesh.loops)
+    if n_l == 3 * n_f:
+        return None
     starts = np.empty(n_f, dtype=np.int32)
-    mesh.polygons.foreach_get("loop_total", sizes)
     mesh.polygons.foreach_get("loop_start", starts)
-    offsets = np.zeros(n_f, dtype=np.int64)
+    sizes = np.empty(n_f, dtype=np.uint32)
     if n_f:
-        np.cumsum(sizes[:-1], out=offsets[1:])
-    if np.array_equal(starts, offsets):
-        return sizes, None
-    order = np.repeat(starts - offsets, sizes) + np.arange(int(sizes.sum()))
-    return sizes, order
+        np.subtract(starts[1:], starts[:-1], out=sizes[:-1], casting="unsafe")
+        sizes[-1] = n_l - starts[-1]
+    return sizes
+
+
+def face_count(arrays, prefix=""):
+    """Faces of protocol arrays: 1-D `face_indices` with `face_sizes`, or [F, n]."""
+    sizes = arrays.get(prefix + "face_sizes")
+    return len(sizes) if sizes is not None else len(arrays[prefix + "face_indices"])
+
+
+def triangle_count(arrays):
+    """Triangles of protocol arrays once every polygon is split into a fan."""
+    sizes = arrays.get("face_sizes")
+    if sizes is not None:
+        return int((sizes.astype(np.int64) - 2).sum())
+    fi = arrays["face_indices"]
+    return len(fi) * (fi.shape[1] - 2)
 
 
 def group_names_of(obj):
@@ -89,54 +146,53 @@ def mesh_to_arrays(mesh, obj=None, *, normals=False, uvs=True, creases=True, att
     mesh, not an evaluated one)."""
     if len(mesh.polygons) == 0:
         raise ValueError("it has no faces")
-    sizes, order = _corner_order(mesh)
-    n_l = len(mesh.loops)
-    corner_verts = np.empty(n_l, dtype=np.uint32)
-    mesh.loops.foreach_get("vertex_index", corner_verts)
-    if order is not None:
-        corner_verts = corner_verts[order]
-    arrays = {
-        "positions": positions_of(mesh),
-        "face_indices": corner_verts,
-        "face_sizes": sizes.astype(np.uint32),
-    }
+    # Each array is read once, straight into its final dtype (convert.read); what the mesh
+    # does not have is not sent. A mesh of triangles sends `face_indices` [F, 3] and no
+    # `face_sizes`.
+    n_l, n_f = len(mesh.loops), len(mesh.polygons)
+    corner_verts = corner_vertices(mesh)
+    sizes = face_sizes_of(mesh)
+    arrays = {"positions": positions_of(mesh)}
+    if sizes is None:
+        arrays["face_indices"] = corner_verts.reshape(n_f, 3)
+    else:
+        arrays["face_indices"] = corner_verts
+        arrays["face_sizes"] = sizes
     params = {}
     sent = attrs.Sent()
-    if uvs and mesh.uv_layers.active is not None:
+    layer = mesh.uv_layers.active if uvs else None
+    if layer is not None:
         # The active UV map travels as `uvs` (USD writes it as `st`); the others as
         # generic corner attributes.
-        uv = np.empty(n_l * 2, dtype=np.float32)
-        mesh.uv_layers.active.data.foreach_get("uv", uv)
-        uv = uv.reshape(-1, 2)
-        arrays["uvs"] = uv if order is None else uv[order]
-        sent.uv_name = mesh.uv_layers.active.name
+        arrays["uvs"] = read(mesh, layer.name, "vector", np.float32, n_l, 2,
+                             fallback=(layer.data, "uv"))
+        sent.uv_name = layer.name
     if normals:
         nrm = np.empty(n_l * 3, dtype=np.float32)
         mesh.corner_normals.foreach_get("vector", nrm)
-        nrm = nrm.reshape(-1, 3)
-        arrays["normals"] = nrm if order is None else nrm[order]
+        arrays["normals"] = nrm.reshape(-1, 3)
     elif mesh.has_custom_normals:
         sent.dropped.append("custom normals (Blender's normals are used; choose Normals: "
                             "Custom to carry them)")
-    if creases:
+    if creases and len(mesh.edges):
         attr = mesh.attributes.get("crease_edge")
-        if attr is not None and attr.domain == 'EDGE' and len(mesh.edges):
-            values = np.empty(len(mesh.edges), dtype=np.float32)
-            attr.data.foreach_get("value", values)
-            keep = values > 0.0
-            if keep.any():
-                c = np.minimum(values[keep], np.float32(1.0))
-                arrays["crease_edges"] = attrs.edge_vertices(mesh)[keep].astype(np.uint32)
-                arrays["crease_values"] = (c * c * np.float32(SHARPNESS_INFINITE)).astype(np.float32)
+        values = (read(mesh, "crease_edge", "value", np.float32, len(mesh.edges))
+                  if attr is not None and attr.domain == 'EDGE' else None)
+        keep = values > 0.0 if values is not None else None
+        if keep is not None and keep.any():
+            c = np.minimum(values[keep], np.float32(1.0))
+            arrays["crease_edges"] = attrs.edge_vertices(mesh)[keep]
+            arrays["crease_values"] = c * c * np.float32(SHARPNESS_INFINITE)
     if attributes:
-        attrs.collect(mesh, obj, arrays, order, sent, skip={sent.uv_name} if sent.uv_name else ())
+        attrs.collect(mesh, obj, arrays, sent, skip={sent.uv_name} if sent.uv_name else ())
         if shape_keys:
             attrs.collect_shape_keys(mesh, arrays, sent)
     if obj is not None and len(obj.material_slots) > 0:
-        mat = np.empty(len(mesh.polygons), dtype=np.int32)
-        mesh.polygons.foreach_get("material_index", mat)
+        # No `material_index` attribute: every face uses the first slot.
+        mat = read(mesh, "material_index", "value", np.int32, n_f)
         last = len(obj.material_slots) - 1
-        arrays["face_groups"] = np.clip(mat, 0, last).astype(np.uint32)
+        arrays["face_groups"] = (np.zeros(n_f, dtype=np.uint32) if mat is None
+                                 else np.clip(mat, 0, last).view(np.uint32))
         params["group_names"] = group_names_of(obj)
     return arrays, params, sent
 
@@ -189,38 +245,48 @@ def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix="", 
     lacks are added to `sent.missing`. `shading_mode`: 'BLENDER' (Blender's normals from the
     carried sharp faces and edges) or 'CUSTOM' (the reply's `normals` as custom normals);
     either way no corner normal is left facing away from its face (shading.py)."""
+    # Each array is written once in the attribute's own dtype (convert.write), then one
+    # `mesh.update(calc_edges=True)` builds the edges.
     pos = np.ascontiguousarray(_get(arrays, "positions", prefix), dtype=np.float32).reshape(-1, 3)
-    fi = np.ascontiguousarray(_get(arrays, "face_indices", prefix), dtype=np.int32).reshape(-1)
+    fi = np.asarray(_get(arrays, "face_indices", prefix))
     fs = _get(arrays, "face_sizes", prefix)
-    fs = np.ascontiguousarray(fs, dtype=np.int32) if fs is not None else None
     if fs is None:  # [F, n] faces
-        n = np.asarray(_get(arrays, "face_indices", prefix)).shape[-1]
-        fs = np.full(len(fi) // n, n, dtype=np.int32)
+        n = fi.shape[-1]
+        n_f = fi.size // n
+        starts = np.arange(0, n * n_f, n, dtype=np.int32)
+    else:
+        n_f = len(fs)
+        starts = np.zeros(n_f, dtype=np.int32)
+        if n_f:
+            np.cumsum(np.asarray(fs[:-1], dtype=np.int32), out=starts[1:])
+    fi = np.ascontiguousarray(fi.reshape(-1), dtype=np.int32)
     mesh = bpy.data.meshes.new(name)
     mesh.vertices.add(len(pos))
-    mesh.vertices.foreach_set("co", pos.reshape(-1))
+    write(mesh, "position", "vector", pos, fallback=(mesh.vertices, "co"))
     mesh.loops.add(len(fi))
-    mesh.loops.foreach_set("vertex_index", fi)
-    mesh.polygons.add(len(fs))
-    starts = np.zeros(len(fs), dtype=np.int32)
-    if len(fs):
-        np.cumsum(fs[:-1], out=starts[1:])
+    write(mesh, ".corner_vert", "value", fi, fallback=(mesh.loops, "vertex_index"))
+    mesh.polygons.add(n_f)
+    # Faces are offsets into the corners (Blender 4+): a face's size is the distance to the
+    # next face's start, so the starts alone define them.
     mesh.polygons.foreach_set("loop_start", starts)
-    mesh.polygons.foreach_set("loop_total", fs)
     mesh.update(calc_edges=True)
 
     for mat in materials:
         mesh.materials.append(mat)
     groups = _get(arrays, "face_groups", prefix)
-    if groups is not None and len(materials):
+    if groups is not None and len(materials) > 1:
         idx = np.clip(np.asarray(groups, dtype=np.int32), 0, len(materials) - 1)
-        mesh.polygons.foreach_set("material_index", np.ascontiguousarray(idx))
+        if idx.any():
+            attr = mesh.attributes.get("material_index") or mesh.attributes.new(
+                "material_index", 'INT', 'FACE')
+            attr.data.foreach_set("value", np.ascontiguousarray(idx))
 
     uvs = _per_corner(_get(arrays, "uvs", prefix), _get(arrays, "uv_indices", prefix))
     uv_name = sent.uv_name if sent is not None and sent.uv_name else uv_name
     if uvs is not None and len(uvs) == len(fi):
-        layer = mesh.uv_layers.new(name=uv_name)
-        layer.data.foreach_set("uv", np.ascontiguousarray(uvs, dtype=np.float32).reshape(-1))
+        layer = mesh.uv_layers.new(name=uv_name, do_init=False)
+        write(mesh, layer.name, "vector", np.asarray(uvs, dtype=np.float32),
+              fallback=(layer.data, "uv"))
     elif sent is not None and sent.uv_name:
         sent.missing.add("UV map " + sent.uv_name)
     if sent is not None:
@@ -238,7 +304,7 @@ def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix="", 
     if shading_mode == 'CUSTOM' and normals is not None and len(normals) == len(fi):
         shading.set_custom_normals(mesh, normals)
     else:
-        shading.flatten_inverted(mesh)
+        shading.flatten_inverted(mesh, starts)
     return mesh
 
 

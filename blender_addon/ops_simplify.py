@@ -87,9 +87,9 @@ def target_vertices(op, arrays):
     as it is (the daemon resolves it); counts are checked here, one object at a time."""
     if op.target_mode == 'VERTICES' and op.target_is_percent:
         return "%g%%" % op.target
-    fi = arrays["face_indices"]
+    fi = arrays["face_indices"].reshape(-1)
     n = int(np.count_nonzero(np.bincount(fi, minlength=len(arrays["positions"]))))
-    triangles = int((arrays["face_sizes"].astype(np.int64) - 2).sum())
+    triangles = convert.triangle_count(arrays)
     if op.target_mode == 'VERTICES':
         want, what, have = max(1, int(round(op.target))), "vertices", n
     elif op.target_mode == 'FACES':
@@ -209,7 +209,7 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
         # The report counts faces as Blender shows them (polygons), not the triangles the
         # daemon splits them into.
         return [Request("simplify", params, arrays, label=unit.label, sent=sent, scale=scale,
-                        input_polygons=len(arrays["face_sizes"]))]
+                        input_polygons=convert.face_count(arrays))]
 
     def apply_task(self, context, task, created):
         req = task.requests[0]

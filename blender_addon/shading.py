@@ -21,15 +21,24 @@ import numpy as np
 LIMIT_COS = 0.0
 
 
-def corner_faces(mesh):
-    sizes = np.empty(len(mesh.polygons), dtype=np.int32)
-    mesh.polygons.foreach_get("loop_total", sizes)
-    return np.repeat(np.arange(len(sizes)), sizes)
+def corner_faces(mesh, starts=None):
+    """The face of every corner. `starts` (the faces' first corners, as the mesh was built
+    from) saves reading them back; without it they are read."""
+    n_f, n_l = len(mesh.polygons), len(mesh.loops)
+    if n_l == 3 * n_f:  # triangles only (a face has at least 3 corners)
+        return np.arange(n_l, dtype=np.int64) // 3
+    if starts is None:
+        starts = np.empty(n_f, dtype=np.int32)
+        mesh.polygons.foreach_get("loop_start", starts)
+    sizes = np.diff(np.asarray(starts, dtype=np.int64), append=n_l)
+    return np.repeat(np.arange(n_f), sizes)
 
 
 def face_normals(mesh):
+    """Blender's face normals, f32 [F, 3] (`polygon_normals` copies them in one go;
+    `polygons`' `normal` would go element by element)."""
     n = np.empty(len(mesh.polygons) * 3, dtype=np.float32)
-    mesh.polygons.foreach_get("normal", n)
+    mesh.polygon_normals.foreach_get("vector", n)
     return n.reshape(-1, 3)
 
 
@@ -39,27 +48,30 @@ def corner_normals(mesh):
     return n.reshape(-1, 3)
 
 
-def inverted_corners(mesh):
-    """Boolean per corner: its normal is more than 90° from its face's normal."""
+def inverted_corners(mesh, faces=None):
+    """Boolean per corner: its normal is more than 90° from its face's normal (`faces`: the
+    face of every corner, :func:`corner_faces`)."""
     if not len(mesh.loops):
         return np.zeros(0, dtype=bool)
-    faces = corner_faces(mesh)
+    if faces is None:
+        faces = corner_faces(mesh)
     dots = np.einsum("ij,ij->i", corner_normals(mesh), face_normals(mesh)[faces])
     return dots < LIMIT_COS
 
 
-def flatten_inverted(mesh, max_rounds=64):
+def flatten_inverted(mesh, starts=None, max_rounds=64):
     """Makes flat every face with an inverted corner until none is left; returns how many
     faces were made flat. Flat faces get their own normal at every corner, and Blender's
-    smooth fans stop at them, so each round can only improve the faces around."""
+    smooth fans stop at them, so each round can only improve the faces around. `starts`:
+    see :func:`corner_faces`."""
     flat = np.zeros(len(mesh.polygons), dtype=bool)
     attr = mesh.attributes.get("sharp_face")
     if attr is not None and attr.domain == 'FACE':
         attr.data.foreach_get("value", flat)
     made = 0
-    faces = corner_faces(mesh)
+    faces = corner_faces(mesh, starts)
     for _ in range(max_rounds):
-        bad = inverted_corners(mesh)
+        bad = inverted_corners(mesh, faces)
         if not bad.any():
             break
         new = np.zeros(len(flat), dtype=bool)
