@@ -202,10 +202,18 @@ def _get(arrays, name, prefix):
 
 
 def _per_corner(values, indices):
+    """One row of `values` per corner: `values[indices]` (as they are without indices)."""
     if values is None:
         return None
     values = np.asarray(values)
-    return values if indices is None else values[np.asarray(indices, dtype=np.int64)]
+    if indices is None:
+        return values
+    indices = np.asarray(indices)
+    if values.ndim == 2 and values.shape[1] == 2 and values.dtype == np.float32:
+        # A UV pair is 8 bytes: gathered as one u64 per corner, several times faster than rows.
+        pairs = np.ascontiguousarray(values).view(np.uint64).reshape(-1)
+        return np.take(pairs, indices).view(np.float32).reshape(-1, 2)
+    return np.take(values, indices, axis=0)
 
 
 def drop_loose(arrays, frames=None):

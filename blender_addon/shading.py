@@ -68,6 +68,8 @@ def flatten_inverted(mesh, starts=None, max_rounds=64):
     attr = mesh.attributes.get("sharp_face")
     if attr is not None and attr.domain == 'FACE':
         attr.data.foreach_get("value", flat)
+    if flat.all():  # a flat face's corners have its own normal: nothing can be inverted
+        return 0
     made = 0
     faces = corner_faces(mesh, starts)
     for _ in range(max_rounds):
