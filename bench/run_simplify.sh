@@ -11,17 +11,43 @@
 #   bash bench/run_simplify.sh --no-shared --sizes 0.1 --scaling-sizes "" --fractions 0.1   # smoke
 #
 # Writes bench/results/simplify_raw.jsonl (one line per mesh, method, target; `"record": "e2e"`
-# lines for the daemon), simplify_inputs.json (the inputs), simplify.md, simplify_summary.json
+# lines for the daemon), simplify_inputs.json (the inputs), simplify_stages.json,
+# simplify_headline.json (+ .md), simplify.md, simplify_summary.json
 # and the plots simplify_error_vs_size.png, simplify_time_vs_input.png (another folder with
 # BENCH_RESULTS=DIR). Outputs and generated inputs go to $BENCH_WORK (default
 # /tmp/tessd-bench-simplify; the 50 M torus needs ~1.3 GB there and ~10 GB of RAM). Needs the
 # bench venv (.venv-bench, see bench/requirements-bench.txt) for MeshLab, numpy and matplotlib.
-# About 30 min on 2 cores (extrapolated; about 20 without the 50 M torus).
+#
+# Issue 33's stage times and headline (after the harness): `bench-simplify stages` times each
+# library stage of every tessd mode (one thread, tori of $SIMPLIFY_STAGES_SIZES M triangles,
+# default "1,4", at 10 %) into simplify_stages.json, and `headline.py` the issue's table (a
+# $SIMPLIFY_HEADLINE_TRIANGLES-triangle torus, default 4e6: tessd through the daemon vs
+# meshoptimizer in process) into simplify_headline.json (+ .md); an empty value skips either.
+# The report shows them beside the committed "before" (simplify_stages_before.*,
+# simplify_headline_before.*: the library at 65769d72, before issue 33).
+#
+#   bash bench/run_simplify.sh --quick [more options]   # ~5 min: shared meshes, 0.1 M and 1 M tori at
+#                                                        # 10 %, no 50 M torus, stages and headline on 1 M
+#
+# About 30 min on 2 cores (extrapolated; about 20 without the 50 M torus), plus a few minutes
+# for the stage times and the headline.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY="${BENCH_PYTHON:-$PWD/.venv-bench/bin/python}"
 WORK="${BENCH_WORK:-/tmp/tessd-bench-simplify}"
 RESULTS="${BENCH_RESULTS:-bench/results}"
+QUICK=()
+STAGES_SIZES="${SIMPLIFY_STAGES_SIZES-1,4}"
+HEADLINE_TRIANGLES="${SIMPLIFY_HEADLINE_TRIANGLES-4e6}"
+HEADLINE_REPEAT=5
+if [[ "${1:-}" == "--quick" ]]; then
+    shift
+    QUICK=(--sizes 0.1,1 --scaling-sizes "" --fractions 0.1)
+    export SIMPLIFY_BENCH_50M=0
+    STAGES_SIZES="${SIMPLIFY_STAGES_SIZES-1}"
+    HEADLINE_TRIANGLES="${SIMPLIFY_HEADLINE_TRIANGLES-1e6}"
+    HEADLINE_REPEAT=3
+fi
 export SIMPLIFY_BENCH_50M="${SIMPLIFY_BENCH_50M:-1}"
 start=$(date +%s)
 cargo build --release -q -p tessd -p tessd-bench-simplify
@@ -29,9 +55,20 @@ mkdir -p "$RESULTS" "$WORK"
 rm -f "$RESULTS/simplify_raw.jsonl"
 rm -rf "$WORK/outputs"
 FILES=(--jsonl "$RESULTS/simplify_raw.jsonl" --manifest "$RESULTS/simplify_inputs.json")
-target/release/bench-simplify run --work "$WORK" "${FILES[@]}" "$@"
+target/release/bench-simplify run --work "$WORK" "${FILES[@]}" "${QUICK[@]}" "$@"
 "$PY" bench/simplify/meshlab.py run --harness target/release/bench-simplify --work "$WORK" "${FILES[@]}"
 "$PY" bench/simplify/e2e_daemon.py run --harness target/release/bench-simplify \
     --tessd target/release/tessd --work "$WORK" "${FILES[@]}"
+rm -f "$RESULTS/simplify_stages.json" "$RESULTS/simplify_headline.json" "$RESULTS/simplify_headline.md"
+if [[ -n "$STAGES_SIZES" ]]; then
+    target/release/bench-simplify stages --sizes "$STAGES_SIZES" --fraction 0.1 --repeat 3 \
+        --label "after: $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- core || echo ' + changes')" \
+        --out "$RESULTS/simplify_stages.json"
+fi
+if [[ -n "$HEADLINE_TRIANGLES" ]]; then
+    "$PY" bench/simplify/headline.py run --tessd target/release/tessd --harness target/release/bench-simplify \
+        --work "$WORK" --triangles "$HEADLINE_TRIANGLES" --repeat "$HEADLINE_REPEAT" --label after \
+        --out "$RESULTS/simplify_headline.json"
+fi
 "$PY" bench/simplify/report.py --wall-s "$(( $(date +%s) - start ))" "${FILES[@]}" --out "$RESULTS"
 echo "simplify benchmark: $(( $(date +%s) - start )) s"

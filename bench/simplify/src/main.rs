@@ -12,6 +12,8 @@
 //! bench-simplify compare OUTPUT INPUT --samples N
 //! bench-simplify gen TRIANGLES OUT.ply
 //! bench-simplify arrays INPUT DIR
+//! bench-simplify stages --out FILE.json [--sizes 1,4] [--fraction 0.1] [--repeat 3]
+//! bench-simplify peer METHOD INPUT TARGET_VERTICES [--repeat 5] [--budget 40]
 //! ```
 //!
 //! `run` is the harness: for every input (the shared meshes of `$TESSD_SHARED_DATA/mesh`
@@ -37,22 +39,35 @@
 //! `arrays` writes a mesh as fan-triangulated raw arrays, `DIR/positions.f32` ([V, 3] f32) and
 //! `DIR/faces.u32` ([T, 3] u32), and prints their shapes as JSON (for `e2e_daemon.py`, which
 //! sends them to the daemon).
+//!
+//! `stages` times each library stage of every tessd mode (the spans between the progress
+//! callbacks, one thread; see `stages.rs`); `peer` times one method matched to an output
+//! vertex count in this process, for `headline.py` (see `peer.rs`).
 
+mod cli;
 mod generate;
+mod inputs;
 mod mem;
 mod methods;
+mod params;
+mod peer;
 mod search;
+mod stages;
+mod timing;
 
+use cli::{list, opt, options, parse};
+use inputs::{Stats, cpu_model, read, stats};
 use methods::{Input, Method, Triangles};
 use serde_json::{Value, json};
 use std::fs::OpenOptions;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use tessd_compare::{CompareOptions, Comparison, SurfaceIndex, bbox_diagonal};
 use tessd_mesh::Mesh;
-use tessd_mesh::io::{ReadOptions, read_path, write_path};
+use tessd_mesh::io::write_path;
+use timing::median;
 
 fn main() -> ExitCode {
     // The daemon's allocation policy, so that the library's figures are the daemon's.
@@ -64,6 +79,8 @@ fn main() -> ExitCode {
         Some("compare") => compare_cmd(&args[1..]),
         Some("gen") => gen_cmd(&args[1..]),
         Some("arrays") => arrays_cmd(&args[1..]),
+        Some("stages") => stages::stages_cmd(&args[1..]),
+        Some("peer") => peer::peer_cmd(&args[1..]),
         _ => Err(USAGE.to_string()),
     };
     match result {
@@ -77,67 +94,8 @@ fn main() -> ExitCode {
 
 const USAGE: &str = "usage: bench-simplify run [options] | one METHOD INPUT PARAM --out OUT.ply \
                      [--repeat N] [--budget S] | compare OUTPUT INPUT --samples N | gen TRIANGLES OUT.ply | \
-                     arrays INPUT DIR";
-
-/// Options that take no value.
-const FLAGS: [&str; 2] = ["no-shared", "big"];
-
-/// Splits `--key value` options from positional arguments.
-/// Positional arguments and `--key value` pairs.
-type Parsed = (Vec<String>, Vec<(String, String)>);
-
-fn options(args: &[String]) -> Result<Parsed, String> {
-    let (mut pos, mut opts) = (Vec::new(), Vec::new());
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        if let Some(k) = a.strip_prefix("--") {
-            if FLAGS.contains(&k) {
-                opts.push((k.to_string(), String::new()));
-                continue;
-            }
-            let v = it.next().ok_or_else(|| format!("--{k} needs a value"))?;
-            opts.push((k.to_string(), v.clone()));
-        } else {
-            pos.push(a.clone());
-        }
-    }
-    Ok((pos, opts))
-}
-
-fn opt<'a>(opts: &'a [(String, String)], key: &str) -> Option<&'a str> {
-    opts.iter()
-        .rev()
-        .find(|(k, _)| k == key)
-        .map(|(_, v)| v.as_str())
-}
-
-fn parse<T: std::str::FromStr>(s: &str, what: &str) -> Result<T, String> {
-    s.parse().map_err(|_| format!("bad {what}: {s}"))
-}
-
-fn list<T: std::str::FromStr>(s: &str, what: &str) -> Result<Vec<T>, String> {
-    s.split(',')
-        .filter(|x| !x.is_empty())
-        .map(|x| parse(x, what))
-        .collect()
-}
-
-fn read(path: &Path) -> Result<Mesh, String> {
-    read_path(path, &ReadOptions::default()).map_err(|e| format!("{}: {e}", path.display()))
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
-}
+                     arrays INPUT DIR | stages --out FILE.json [--sizes 1,4] [--fraction 0.1] \
+                     [--repeat 3] | peer METHOD INPUT TARGET_VERTICES [--repeat N] [--budget S]";
 
 // ---------------------------------------------------------------------------------------
 // Child: one timed method run with peak memory.
@@ -340,58 +298,6 @@ struct Config {
     scaling_threads: Vec<String>,
     /// Inputs below this many triangles get no thread-scaling runs.
     scaling_threads_min_triangles: u64,
-}
-
-/// Figures of an input mesh.
-struct Stats {
-    vertices: u64,
-    triangles: u64,
-    input_bytes: u64,
-    size: f64,
-    diagonal: f64,
-    area: f64,
-}
-
-fn stats(m: &Mesh) -> Stats {
-    let (lo, hi) = m.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
-    let d: Vec<f64> = (0..3).map(|k| f64::from(hi[k] - lo[k])).collect();
-    let mut area = 0.0;
-    for f in m.faces() {
-        let p = |i: u32| m.positions[i as usize].map(f64::from);
-        let o = p(f[0]);
-        for k in 1..f.len() - 1 {
-            let (a, b) = (p(f[k]), p(f[k + 1]));
-            let u = [a[0] - o[0], a[1] - o[1], a[2] - o[2]];
-            let v = [b[0] - o[0], b[1] - o[1], b[2] - o[2]];
-            let c = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            area += 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-        }
-    }
-    let triangles = m.triangle_count() as u64;
-    Stats {
-        vertices: methods::referenced(&m.face_indices, m.positions.len()),
-        triangles,
-        input_bytes: 12 * m.positions.len() as u64 + 12 * triangles,
-        size: d.iter().copied().fold(0.0, f64::max),
-        diagonal: d.iter().map(|x| x * x).sum::<f64>().sqrt(),
-        area,
-    }
-}
-
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines().find_map(|l| {
-                l.strip_prefix("model name")
-                    .map(|r| r.trim_start_matches([' ', '\t', ':']).to_string())
-            })
-        })
-        .unwrap_or_default()
 }
 
 fn run(args: &[String]) -> Result<(), String> {
@@ -674,54 +580,9 @@ fn bench_one(
 ) -> Result<Value, (Value, String)> {
     // 1. The parameter (untimed).
     let t_search = Instant::now();
-    let found = match method {
-        Method::Complexity(_) => search::Found {
-            param: target as f64,
-            count: 0,
-            evals: 0,
-            hit: true,
-        },
-        _ => {
-            let (p0, slope, range, integer) = match method {
-                Method::Grid(_) => (
-                    (1.5 * st.area / target as f64).sqrt(),
-                    -2.0,
-                    (st.size * 1e-6, st.size * 2.0),
-                    false,
-                ),
-                Method::Quality(_) => (
-                    0.4 * (st.area / target as f64).sqrt(),
-                    -2.0,
-                    (st.size * 1e-7, st.size),
-                    false,
-                ),
-                _ => {
-                    let r = st.triangles as f64 / st.vertices as f64;
-                    (
-                        3.0 * r * target as f64,
-                        1.0,
-                        (3.0, 3.0 * st.triangles as f64),
-                        true,
-                    )
-                }
-            };
-            // 2 minutes, more on inputs above 10 M triangles (a few evaluations of many seconds).
-            let deadline = Duration::from_secs_f64(120.0 * (st.triangles as f64 / 1e7).max(1.0));
-            let mut evals_time = Vec::new();
-            let r = search::find(target, p0, slope, range, integer, 40, |p| {
-                if t_search.elapsed() > deadline {
-                    return Err("search deadline".into());
-                }
-                let t = Instant::now();
-                let o = methods::run(method, input, p)?;
-                evals_time.push(t.elapsed().as_secs_f64());
-                Ok(o.counts(input).0)
-            });
-            match r {
-                Ok(f) => f,
-                Err(e) => return Err((rec, format!("search: {e}"))),
-            }
-        }
+    let found = match params::find_param(method, input, st, target) {
+        Ok(f) => f,
+        Err(e) => return Err((rec, format!("search: {e}"))),
     };
     let search_s = t_search.elapsed().as_secs_f64();
     rec["param"] = json!(found.param);

@@ -138,6 +138,19 @@ pub enum Output {
 /// # Errors
 /// tessd's error, as text, or a method/input mismatch.
 pub fn run(method: Method, input: &Input, param: f64) -> Result<Output, String> {
+    run_observed(method, input, param, &mut |_, _| true)
+}
+
+/// [`run`], with tessd's `progress(fraction, stage)` callback (meshoptimizer has none).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_observed(
+    method: Method,
+    input: &Input,
+    param: f64,
+    progress: &mut dyn FnMut(f64, &str) -> bool,
+) -> Result<Output, String> {
     match (method, input) {
         (Method::Sloppy | Method::Qem, Input::Triangles(t)) => {
             let adapter = VertexDataAdapter::new(bytemuck::cast_slice(&t.positions), 12, 0)
@@ -171,7 +184,7 @@ pub fn run(method: Method, input: &Input, param: f64) -> Result<Output, String> 
                 Rep::Quadric => Representative::Quadric,
             };
             let options = SimplifyOptions::new(m).with_representative(rep);
-            simplify(mesh, &options, &mut |_, _| true)
+            simplify(mesh, &options, progress)
                 .map(|s| Output::Tessd(Box::new(s)))
                 .map_err(|e| e.to_string())
         }
