@@ -2,50 +2,38 @@
 //!
 //! Both goals start from one cell, the bounding box of the object (section 3), and split a cell
 //! in two across the largest side of the *points' inner bounding box* (section 5, figure 6), so
-//! empty cells are never split and the cuts follow the points:
+//! empty cells are never split and the cuts follow the points (`kd.rs`):
 //!
 //! - **quality goal** (section 3): a cell whose largest vertex displacement to its
 //!   representative exceeds the tolerance is split, recursively, until none does. Every vertex
 //!   then lies within the tolerance of its representative. Beyond the paper, named cells can be
 //!   split further ([`Adaptive::split_clusters`]) until the surfaces, not only the vertices, are
 //!   within the tolerance (`coverage.rs`).
-//! - **complexity goal** (section 4): the cell with the largest displacement is split, one at a
-//!   time (a priority queue), until the number of cells reaches the target.
+//! - **complexity goal** (section 4): the cell with the largest key is split, in rounds (a
+//!   priority queue, `split_queue.rs`), until the number of cells reaches the target.
 //!
-//! The vertices of a cell are a range of one index array that each split partitions in place
-//! (like a k-d tree build), so the whole partition costs one `u32` per vertex.
+//! The vertices of a cell are a range of one array of 16-byte points that each split
+//! partitions in place (a k-d tree build). The split pass gathers the halves' boxes only; the
+//! box often decides without looking at the points again (issue 33, design point 3): the
+//! representative lies in the box, so a box whose diagonal is within the tolerance moves no
+//! vertex farther, and one whose half largest side exceeds it moves some vertex farther. Only
+//! the cells in between get the exact pass (weights read by vertex index, the representative,
+//! the largest displacement). The complexity goal's children enter its queue with the box's
+//! bound as their key; the exact key is computed only when a cell could be among the next to
+//! split, so the leaves that are never split are never measured (design point 5).
 
 use crate::blocks;
 use crate::feature_priority::{PackedNormal, plane_distance2, priority};
+use crate::kd::{Bounds, Cut, Point, disjoint_slices, split_points};
 use crate::options::Representative;
 use crate::partition::{Cell, Partition, UNUSED};
+use crate::split_queue::{ByError, SplitQueue};
 use rayon::prelude::*;
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 
 /// Cells with more vertices than this are refined in parallel (quality goal) and evaluated
 /// by blocks on every core.
 const PARALLEL_CELL: usize = 1 << 15;
-
-/// The slices `ranges` (increasing, disjoint) of `order`, each mutable on its own: the cells
-/// of a partition own disjoint ranges of the vertex order, so they can be refined or split in
-/// parallel.
-fn disjoint_slices<T>(
-    order: &mut [T],
-    ranges: impl Iterator<Item = std::ops::Range<usize>>,
-) -> Vec<&mut [T]> {
-    let (mut rest, mut consumed) = (order, 0usize);
-    ranges
-        .map(|r| {
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(r.start - consumed);
-            let (mine, tail) = tail.split_at_mut(r.end - r.start);
-            rest = tail;
-            consumed = r.end;
-            mine
-        })
-        .collect()
-}
 
 /// Rounds with fewer points than this are split on one core (see `Adaptive::split_round`).
 const PARALLEL_ROUND: usize = 1 << 14;
@@ -53,38 +41,22 @@ const PARALLEL_ROUND: usize = 1 << 14;
 /// Cells of a round split together (see `Adaptive::approach`).
 const ROUND_CHUNK: usize = 4096;
 
-/// A split's two children and its cut, or `None` when the cell's vertices coincide.
-type Halves = Option<(Node, Node, Cut)>;
-
 /// The complexity goal's rounds (see `Adaptive::approach`): a round splits every cell whose
 /// key is at least this share of the largest.
 const ROUND_SHARE: f64 = 0.9;
 
-/// A cell's vertices summarised: largest displacement to the representative (or, with vertex
-/// normals, the complexity goal's split priority), and where the cell would be split (the
-/// middle of the largest side of its inner box: the box itself is not kept, 12 bytes a cell
-/// instead of 28).
-#[derive(Clone, Copy, Debug)]
-struct Eval {
-    /// The largest squared displacement, as measured (in f32): the displacement is its root in
-    /// f64 ([`Eval::err`]), which orders exactly as it does, and it takes half the room. For
-    /// the complexity goal with vertex normals, the square of the cell's
-    /// `feature_priority::priority` instead: zero exactly when the displacement is.
-    err2: f32,
-    /// The coordinate of the cut along `axis`.
-    at: f32,
-    /// The axis of the inner box's largest side, or [`NO_CUT`] when the vertices coincide.
-    axis: u8,
-}
+/// The margin by which half a box's largest side must exceed the tolerance for the cell to
+/// split without its exact pass: the displacement is measured in f32, a few ulps below the
+/// exact distance at worst.
+const SURE_SPLIT: f64 = 1.0 - 1.0 / (1u64 << 20) as f64;
 
-/// [`Eval::axis`] of a cell whose vertices coincide.
-const NO_CUT: u8 = u8::MAX;
+/// The margin of the complexity goal's bound key over the box's diagonal: the key
+/// (`feature_priority::priority`) is the plane distance (at most the displacement, up to the
+/// rounding of f32) plus a share of the displacement.
+const BOUND_MARGIN: f64 = (1.0 + feature_priority_share()) * (1.0 + 1e-4);
 
-impl Eval {
-    /// The largest displacement.
-    fn err(&self) -> f64 {
-        f64::from(self.err2).sqrt()
-    }
+const fn feature_priority_share() -> f64 {
+    crate::feature_priority::DISPLACEMENT_SHARE as f64
 }
 
 /// A quality partition that can still be refined: the vertices in leaf order and the leaves.
@@ -96,8 +68,7 @@ pub(crate) struct Refinable {
 
 /// The leaves of a partition in the order of their ranges, which follow one another and cover
 /// the whole index array: leaf `i` (cluster `i`) holds `order[start[i]..start[i + 1]]`. Four
-/// bytes a leaf, plus its cell when the cells are kept; a leaf's evaluation is not kept, since
-/// only the few leaves that coverage splits again need it (it is recomputed for them).
+/// bytes a leaf, plus its cell when the cells are kept.
 #[derive(Default)]
 pub(crate) struct Leaves {
     /// Where each leaf starts, and the end of the last one.
@@ -128,20 +99,72 @@ impl Leaves {
     }
 }
 
-/// A cell during refinement: its range of the index array and its evaluation (its box
-/// travels beside it, and only when the cells are kept is it stored).
+/// A cell of the complexity goal: its range of the point array, its key and its cut (20
+/// bytes; its box is not kept).
 #[derive(Clone, Copy, Debug)]
 struct Node {
     start: u32,
     end: u32,
-    eval: Eval,
+    /// The square of the cell's key, as measured (in f32: the key is its root in f64, which
+    /// orders exactly as it does) when it is ≥ 0; minus the square of an upper bound of the
+    /// key when the cell has not been measured (see [`Node::bounded`]).
+    key2: f32,
+    /// The coordinate of the cut along `axis`.
+    at: f32,
+    /// The axis of the box's largest side, or [`NO_CUT`] when the vertices coincide.
+    axis: u8,
 }
+
+/// [`Node::axis`] of a cell whose vertices coincide.
+const NO_CUT: u8 = u8::MAX;
 
 impl Node {
     fn range(&self) -> std::ops::Range<usize> {
         self.start as usize..self.end as usize
     }
+
+    /// A cell of `b` not measured yet: its key bounded by the box's diagonal. A cell whose
+    /// vertices coincide has the key 0 (it cannot be split), measured.
+    fn bounded(start: usize, end: usize, b: &Bounds) -> Node {
+        let (key2, cut) = match b.cut() {
+            Some(cut) => {
+                let bound = f64::from(b.diagonal2()).sqrt() * BOUND_MARGIN;
+                // Kept above zero, so an unmeasured cell is always told apart.
+                let b2 = ((bound * bound) as f32 * (1.0 + 1e-6)).max(f32::MIN_POSITIVE);
+                (-b2, Some(cut))
+            }
+            None => (0.0, None),
+        };
+        Node {
+            start: start as u32,
+            end: end as u32,
+            key2,
+            at: cut.map_or(0.0, |c| c.at),
+            axis: cut.map_or(NO_CUT, |c| c.axis as u8),
+        }
+    }
+
+    /// Whether the key is measured.
+    fn exact(&self) -> bool {
+        self.key2 >= 0.0
+    }
+
+    /// The key, or its bound.
+    fn key(&self) -> f64 {
+        f64::from(self.key2.abs()).sqrt()
+    }
+
+    fn cut(&self) -> Option<Cut> {
+        (self.axis != NO_CUT).then_some(Cut {
+            axis: usize::from(self.axis),
+            at: self.at,
+        })
+    }
 }
+
+/// A split's two children (both non-empty) and its cut, or `None` when the cell's vertices
+/// coincide.
+type Halves = Option<(Node, Node, Cut)>;
 
 /// The inputs shared by every step.
 #[derive(Clone)]
@@ -151,9 +174,9 @@ pub(crate) struct Adaptive<'a> {
     heaviest: bool,
     keep_cells: bool,
     cancel: Option<&'a AtomicBool>,
-    /// Whether cells are keyed by the complexity goal's surface-error priority (the points
-    /// then carry their normals) instead of their displacement.
-    surface_priority: bool,
+    /// The complexity goal's vertex normals: cells are then keyed by the surface-error
+    /// priority (`feature_priority.rs`) instead of their displacement.
+    normals: Option<&'a [PackedNormal]>,
 }
 
 /// Why refinement stopped early.
@@ -161,6 +184,53 @@ pub(crate) struct Adaptive<'a> {
 pub(crate) enum Stop {
     /// Cancelled from outside.
     Cancelled,
+}
+
+/// Running sums of the exact pass: weighted position sum, heaviest vertex.
+#[derive(Clone, Copy, Debug)]
+struct Sums {
+    sum: [f64; 3],
+    wsum: f64,
+    best: (f32, u32),
+}
+
+impl Sums {
+    const EMPTY: Sums = Sums {
+        sum: [0.0; 3],
+        wsum: 0.0,
+        best: (f32::NEG_INFINITY, u32::MAX),
+    };
+
+    /// The sums of `points`, in order, their weights read by index.
+    fn of(points: &[Point], weights: &[f32]) -> Sums {
+        let mut s = Sums::EMPTY;
+        for q in points {
+            let w = weights[q.id as usize];
+            for k in 0..3 {
+                s.sum[k] += f64::from(w) * f64::from(q.p[k]);
+            }
+            s.wsum += f64::from(w);
+            s.take_best(w, q.id);
+        }
+        s
+    }
+
+    /// Ties go to the lowest vertex index, so results do not depend on order.
+    #[inline]
+    fn take_best(&mut self, w: f32, id: u32) {
+        if w > self.best.0 || (w == self.best.0 && id < self.best.1) {
+            self.best = (w, id);
+        }
+    }
+
+    fn merge(mut self, o: &Sums) -> Sums {
+        for k in 0..3 {
+            self.sum[k] += o.sum[k];
+        }
+        self.wsum += o.wsum;
+        self.take_best(o.best.0, o.best.1);
+        self
+    }
 }
 
 impl<'a> Adaptive<'a> {
@@ -181,7 +251,7 @@ impl<'a> Adaptive<'a> {
             heaviest: rep == Representative::Heaviest,
             keep_cells,
             cancel,
-            surface_priority: false,
+            normals: None,
         }
     }
 
@@ -189,19 +259,14 @@ impl<'a> Adaptive<'a> {
         self.cancel.is_some_and(|c| c.load(AtomicOrdering::Relaxed))
     }
 
-    /// The referenced vertices, grouped by class (one root cell per class), and the root cells.
-    /// Vertices are copied with their weights so that every later pass reads memory in order.
-    /// `normals` (one per vertex) go into the points and are freed.
+    /// The referenced vertices, grouped by class (one root cell per class), and the root cells
+    /// with their boxes.
     ///
     /// A stable two-way split by class, on every core: each block of vertices counts its
     /// referenced vertices of either class, which fixes where it writes them (class 0 first,
     /// blocks in order), so the order is that of the vertices within each class whatever the
     /// thread count.
-    fn roots(
-        &self,
-        classes: Option<&[u8]>,
-        normals: Option<Vec<PackedNormal>>,
-    ) -> (Vec<Point>, Vec<Node>) {
+    fn roots(&self, classes: Option<&[u8]>) -> (Vec<Point>, Vec<(usize, usize, Bounds)>) {
         let n = self.positions.len();
         let class = |v: usize| classes.map_or(0, |c| usize::from(c[v] != 0));
         let counts: Vec<[usize; 2]> = blocks::map(n, |r| {
@@ -213,7 +278,7 @@ impl<'a> Adaptive<'a> {
         let split = counts.iter().map(|c| c[0]).sum::<usize>();
         let total = split + counts.iter().map(|c| c[1]).sum::<usize>();
         let mut order: Vec<Point> = Vec::with_capacity(total);
-        {
+        let boxes: Vec<[Bounds; 2]> = {
             // Each block's two destination slices, cut from the front of either class's part.
             let (mut zero, mut one) = order.spare_capacity_mut()[..total].split_at_mut(split);
             let mut jobs = Vec::with_capacity(counts.len());
@@ -224,69 +289,62 @@ impl<'a> Adaptive<'a> {
                 one = rest;
                 jobs.push([a, b]);
             }
-            let normal = |v: usize| normals.as_ref().map_or(PackedNormal::NONE, |n| n[v]);
-            blocks::ranges(n).zip(jobs).for_each(|(r, out)| {
-                let mut at = [0; 2];
-                for v in r.filter(|&v| self.weights[v] > 0.0) {
-                    let k = class(v);
-                    out[k][at[k]].write(Point {
-                        p: self.positions[v],
-                        w: self.weights[v],
-                        id: v as u32,
-                        n: normal(v),
-                    });
-                    at[k] += 1;
-                }
-            });
-        }
+            blocks::ranges(n)
+                .zip(jobs)
+                .map(|(r, out)| {
+                    let mut at = [0; 2];
+                    let mut b = [Bounds::EMPTY; 2];
+                    for v in r.filter(|&v| self.weights[v] > 0.0) {
+                        let k = class(v);
+                        let p = self.positions[v];
+                        out[k][at[k]].write(Point { p, id: v as u32 });
+                        b[k].add(&p);
+                        at[k] += 1;
+                    }
+                    b
+                })
+                .collect()
+        };
         // SAFETY: the blocks' slices tile `0..total` and each block wrote every place of its
         // slices (its counts are the number of points it wrote).
         unsafe { order.set_len(total) };
-        drop(normals);
-        let roots = [(0, split), (split, total)]
+        let mut b = [Bounds::EMPTY; 2];
+        for part in &boxes {
+            b[0].merge(&part[0]);
+            b[1].merge(&part[1]);
+        }
+        let roots = [(0, split, b[0]), (split, total, b[1])]
             .into_iter()
-            .filter(|(s, e)| e > s)
-            .map(|(start, end)| self.node(&order, start, end))
+            .filter(|(s, e, _)| e > s)
             .collect();
         (order, roots)
     }
 
-    /// The node of the vertices `order[start..end]` (non-empty).
-    fn node(&self, order: &[Point], start: usize, end: usize) -> Node {
-        Node {
-            start: start as u32,
-            end: end as u32,
-            eval: self.evaluate(&order[start..end]),
+    /// The representative of a non-empty set of vertices. A large set (the first levels of a
+    /// split) is summed by blocks on every core, the block sums added in block order, so the
+    /// result does not depend on the thread count.
+    fn representative(&self, verts: &[Point]) -> [f32; 3] {
+        let s = if verts.len() > PARALLEL_CELL {
+            blocks::map(verts.len(), |r| Sums::of(&verts[r], self.weights))
+                .iter()
+                .fold(Sums::EMPTY, Sums::merge)
+        } else {
+            Sums::of(verts, self.weights)
+        };
+        if self.heaviest {
+            self.positions[s.best.1 as usize]
+        } else {
+            s.sum.map(|x| (x / s.wsum) as f32)
         }
     }
 
-    /// Representative, largest displacement and inner box of a non-empty set of vertices.
-    /// A large set (the first levels of a split) is summed by blocks on every core, the block
-    /// sums added in block order, so the result does not depend on the thread count.
-    fn evaluate(&self, verts: &[Point]) -> Eval {
-        let acc = if verts.len() > PARALLEL_CELL {
-            blocks::map(verts.len(), |r| Acc::of(&verts[r]))
-                .iter()
-                .fold(Acc::default(), |mut all, part| {
-                    all.merge(part);
-                    all
-                })
-        } else {
-            Acc::of(verts)
-        };
-        self.finish_eval(&acc, verts)
-    }
-
-    /// Completes an evaluation from a cell's accumulated sums: one more pass over its vertices
-    /// (by blocks on every core for a large cell: a maximum does not depend on the order) for
-    /// the largest displacement (in f32: the rounding is far below any tolerance, see the
-    /// margin in `Prepared::run`).
-    fn finish_eval(&self, acc: &Acc, verts: &[Point]) -> Eval {
-        let rep: [f32; 3] = if self.heaviest {
-            self.positions[acc.best.1 as usize]
-        } else {
-            acc.sum.map(|s| (s / acc.wsum) as f32)
-        };
+    /// The exact pass: the square of the cell's key — its largest displacement (in f32: the
+    /// rounding is far below any tolerance, see the margin in `Prepared::run`), or with the
+    /// normals the square of `feature_priority::priority` (zero exactly when the displacement
+    /// is). A large cell is measured by blocks on every core (a maximum does not depend on
+    /// the order).
+    fn key2(&self, verts: &[Point]) -> f32 {
+        let rep = self.representative(verts);
         let (err2, surface2) = if verts.len() > PARALLEL_CELL {
             blocks::map(verts.len(), |r| self.extremes(rep, &verts[r]))
                 .into_iter()
@@ -294,39 +352,27 @@ impl<'a> Adaptive<'a> {
         } else {
             self.extremes(rep, verts)
         };
-        let err2 = if self.surface_priority {
+        if self.normals.is_some() {
             priority(surface2.sqrt(), err2.sqrt()).powi(2)
         } else {
             err2
-        };
-        let (lo, hi) = (acc.lo, acc.hi);
-        let axis = (0..3)
-            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
-            .expect("three axes");
-        Eval {
-            err2,
-            at: 0.5 * (lo[axis] + hi[axis]),
-            axis: if hi[axis] > lo[axis] {
-                axis as u8
-            } else {
-                NO_CUT
-            },
         }
     }
 
-    /// The largest squared displacement of `verts` from `rep`, and (with the surface priority)
-    /// the largest squared distance from `rep` to their tangent planes.
+    /// The largest squared displacement of `verts` from `rep`, and (with the normals) the
+    /// largest squared distance from `rep` to their tangent planes.
     fn extremes(&self, rep: [f32; 3], verts: &[Point]) -> (f32, f32) {
         let delta = |p: [f32; 3]| {
             let d = [rep[0] - p[0], rep[1] - p[1], rep[2] - p[2]];
             (d, d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
         };
         let (mut err2, mut surface2) = (0f32, 0f32);
-        if self.surface_priority {
+        if let Some(normals) = self.normals {
             for q in verts {
                 let (d, dd) = delta(q.p);
                 err2 = err2.max(dd);
-                surface2 = surface2.max(plane_distance2(d, dd, q.n.direction()));
+                let n = normals[q.id as usize].direction();
+                surface2 = surface2.max(plane_distance2(d, dd, n));
             }
         } else {
             for q in verts {
@@ -334,47 +380,6 @@ impl<'a> Adaptive<'a> {
             }
         }
         (err2, surface2)
-    }
-
-    /// Splits `node` across the largest side of its inner box: partitions its vertices in place
-    /// and returns the two children (both non-empty) and the cut (axis, coordinate), or `None`
-    /// when its vertices coincide. The partition pass also accumulates both children's sums, so
-    /// each child costs one more pass.
-    fn split(&self, order: &mut [Point], node: &Node) -> Halves {
-        let Eval { at, axis, .. } = node.eval;
-        if axis == NO_CUT {
-            return None;
-        }
-        let (axis, mut at) = (usize::from(axis), at);
-        let verts = &mut order[node.range()];
-        let (mut left_acc, mut right_acc) = (Acc::default(), Acc::default());
-        let mut mid = partition_in_place(verts, |q| q.p[axis] < at, &mut left_acc, &mut right_acc);
-        if mid == 0 || mid == verts.len() {
-            // The midpoint rounded onto an end of the box: split at the median instead.
-            mid = verts.len() / 2;
-            verts.select_nth_unstable_by(mid, |a, b| a.p[axis].total_cmp(&b.p[axis]));
-            at = verts[mid].p[axis];
-            (left_acc, right_acc) = (Acc::of(&verts[..mid]), Acc::of(&verts[mid..]));
-        }
-        let (left, right) = verts.split_at(mid);
-        let (le, re) = (
-            self.finish_eval(&left_acc, left),
-            self.finish_eval(&right_acc, right),
-        );
-        let mid = node.start + mid as u32;
-        Some((
-            Node {
-                start: node.start,
-                end: mid,
-                eval: le,
-            },
-            Node {
-                start: mid,
-                end: node.end,
-                eval: re,
-            },
-            Cut { axis, at },
-        ))
     }
 
     /// Quality goal: refines until every vertex is within `tolerance` of its cell's
@@ -386,8 +391,15 @@ impl<'a> Adaptive<'a> {
         bounds: &Cell,
         tolerance: f64,
     ) -> Result<Refinable, Stop> {
-        let (mut order, roots) = self.roots(classes, None);
-        let roots: Vec<(Node, Cell)> = roots.into_iter().map(|n| (n, *bounds)).collect();
+        let (mut order, roots) = self.roots(classes);
+        let roots: Vec<Half> = roots
+            .into_iter()
+            .map(|(s, e, b)| Half {
+                range: s..e,
+                b,
+                cell: *bounds,
+            })
+            .collect();
         let mut leaves = self.refine_all(&mut order, &roots, tolerance)?;
         leaves.start.push(order.len() as u32);
         Ok(Refinable {
@@ -416,14 +428,26 @@ impl<'a> Adaptive<'a> {
         for &c in clusters {
             let c = c as usize;
             let (start, end) = (r.leaves.start[c] as usize, r.leaves.start[c + 1] as usize);
-            // A leaf keeps no evaluation: its box (a minimum and maximum, the same whatever the
-            // order of its vertices) is measured again.
-            let leaf = self.node(&r.order, start, end);
+            // A leaf keeps no box: it is measured again (a minimum and maximum, the same
+            // whatever the order of its vertices).
+            let verts = &mut r.order[start..end];
             let cell = r.leaves.cells.get(c).copied().unwrap_or(ANY_CELL);
-            if let Some((left, right, cut)) = self.split(&mut r.order, &leaf) {
+            if let Some(cut) = Bounds::of(verts).cut() {
+                let (mid, lb, rb, cut) = split_points(verts, cut);
                 split[c] = true;
                 let (lcell, rcell) = cut.cells(&cell);
-                halves.extend([(left, lcell), (right, rcell)]);
+                halves.extend([
+                    Half {
+                        range: start..start + mid,
+                        b: lb,
+                        cell: lcell,
+                    },
+                    Half {
+                        range: start + mid..end,
+                        b: rb,
+                        cell: rcell,
+                    },
+                ]);
             }
         }
         let count = halves.len() / 2;
@@ -464,119 +488,107 @@ impl<'a> Adaptive<'a> {
         Ok(count)
     }
 
-    /// Refines each of `cells` (disjoint ranges of `order`, sorted by start, with their boxes)
-    /// until every resulting cell's displacement is at most `tolerance`; returns the leaves
-    /// sorted by start (without the end).
+    /// Refines each of `cells` (disjoint ranges of `order`, sorted by start) until every
+    /// resulting cell's displacement is at most `tolerance`; returns the leaves sorted by
+    /// start (without the end).
     ///
     /// Refining is *tentative-safe*: splitting a cell only permutes its own range and always
     /// yields the same children, so the input cells stay valid whatever is done with the result.
     fn refine_all(
         &self,
         order: &mut [Point],
-        cells: &[(Node, Cell)],
+        cells: &[Half],
         tolerance: f64,
     ) -> Result<Leaves, Stop> {
-        let slices = disjoint_slices(order, cells.iter().map(|(c, _)| c.range()));
-        let jobs: Vec<(Node, Cell, &mut [Point])> = cells
-            .iter()
-            .zip(slices)
-            .map(|((c, cell), slice)| (*c, *cell, slice))
-            .collect();
+        let slices = disjoint_slices(order, cells.iter().map(|h| h.range.clone()));
+        let jobs: Vec<(&Half, &mut [Point])> = cells.iter().zip(slices).collect();
+        let refine_one = |(h, slice): (&Half, &mut [Point])| {
+            let mut out = Leaves::default();
+            self.refine(slice, &h.b, h.cell, tolerance, &mut out)
+                .map(|()| out)
+        };
         let parts: Vec<Result<Leaves, Stop>> = if jobs.len() > 1 {
             jobs.into_par_iter()
                 .with_min_len(64)
-                .map(|(c, cell, slice)| self.refine_one(slice, c, cell, tolerance))
+                .map(refine_one)
                 .collect()
         } else {
-            jobs.into_iter()
-                .map(|(c, cell, slice)| self.refine_one(slice, c, cell, tolerance))
-                .collect()
+            jobs.into_iter().map(refine_one).collect()
         };
         let mut out = Leaves::default();
-        for (p, (c, _)) in parts.into_iter().zip(cells) {
-            out.append(p?, c.start as usize);
+        for (p, h) in parts.into_iter().zip(cells) {
+            out.append(p?, h.range.start);
         }
         Ok(out)
     }
 
-    /// Refines one cell whose vertices are exactly `slice`; its leaves are numbered from the
-    /// cell's start.
-    fn refine_one(
-        &self,
-        slice: &mut [Point],
-        node: Node,
-        cell: Cell,
-        tolerance: f64,
-    ) -> Result<Leaves, Stop> {
-        let mut out = Leaves::default();
-        let local = Node {
-            start: 0,
-            end: node.end - node.start,
-            ..node
-        };
-        self.refine(slice, local, cell, tolerance, &mut out)?;
-        Ok(out)
-    }
-
-    /// Depth-first refinement of one cell. `order` holds exactly the cell's vertices and
-    /// `node` is numbered locally (`node.start == 0`); leaves are appended to `out` in order,
-    /// numbered locally too.
+    /// Depth-first refinement of one cell whose vertices are exactly `order`, with their box
+    /// `b`; leaves are appended to `out` in order, numbered from the cell's start.
+    ///
+    /// The box decides most cells without a pass over their vertices: the representative (a
+    /// weighted mean or a vertex) lies in the box, so no vertex moves farther than its
+    /// diagonal (computed as the displacements are, each rounding monotone, so this holds to
+    /// the bit), and some vertex moves at least half its largest side. Only between the two
+    /// is the displacement measured: the same decisions, so the same cuts, as measuring
+    /// every cell.
     fn refine(
         &self,
         order: &mut [Point],
-        node: Node,
+        b: &Bounds,
         cell: Cell,
         tolerance: f64,
         out: &mut Leaves,
     ) -> Result<(), Stop> {
-        if node.eval.err() <= tolerance {
+        let Some(cut) = b.cut() else {
+            // The vertices coincide: nothing moves.
+            out.push(0, &cell, self.keep_cells);
+            return Ok(());
+        };
+        let within = f64::from(b.diagonal2()).sqrt() <= tolerance
+            || (b.half_largest_side() * SURE_SPLIT <= tolerance
+                && f64::from(self.key2(order)).sqrt() <= tolerance);
+        if within {
             out.push(0, &cell, self.keep_cells);
             return Ok(());
         }
         if self.cancelled() {
             return Err(Stop::Cancelled);
         }
-        let Some((l, r, cut)) = self.split(order, &node) else {
-            out.push(0, &cell, self.keep_cells);
-            return Ok(());
-        };
+        let parallel = order.len() > PARALLEL_CELL;
+        let (mid, lb, rb, cut) = split_points(order, cut);
         let (lcell, rcell) = cut.cells(&cell);
-        let mid = l.end;
-        let (lo, hi) = order.split_at_mut(mid as usize);
-        let r_local = Node {
-            start: 0,
-            end: r.end - mid,
-            ..r
-        };
-        if (node.end - node.start) as usize > PARALLEL_CELL {
+        let (lo, hi) = order.split_at_mut(mid);
+        if parallel {
             let (mut left, mut right) = (Leaves::default(), Leaves::default());
             let (a, b) = rayon::join(
-                || self.refine(lo, l, lcell, tolerance, &mut left),
-                || self.refine(hi, r_local, rcell, tolerance, &mut right),
+                || self.refine(lo, &lb, lcell, tolerance, &mut left),
+                || self.refine(hi, &rb, rcell, tolerance, &mut right),
             );
             a?;
             b?;
             out.append(left, 0);
-            out.append(right, mid as usize);
+            out.append(right, mid);
         } else {
             let from = out.start.len();
-            self.refine(lo, l, lcell, tolerance, out)?;
+            self.refine(lo, &lb, lcell, tolerance, out)?;
             let middle = out.start.len();
-            self.refine(hi, r_local, rcell, tolerance, out)?;
-            out.start[middle..].iter_mut().for_each(|s| *s += mid);
+            self.refine(hi, &rb, rcell, tolerance, out)?;
+            out.start[middle..]
+                .iter_mut()
+                .for_each(|s| *s += mid as u32);
             debug_assert!(out.start[from..].is_sorted());
         }
         Ok(())
     }
 
-    /// Complexity goal (section 4): splits, one at a time, the cell with the largest
-    /// displacement until there are `target` cells. `more` then counts the output vertices
-    /// after elimination (cells whose faces all collapse are lost) and asks for that many
-    /// further splits; it is given the partition and its leaves (over [`Adaptive::order`]).
-    /// Stops early when no cell can be split (all remaining cells hold coincident vertices).
+    /// Complexity goal (section 4): splits the cell with the largest key until there are
+    /// `target` cells. `more` then counts the output vertices after elimination (cells whose
+    /// faces all collapse are lost) and asks for that many further splits; it is given the
+    /// partition and its leaves. Stops early when no cell can be split (all remaining cells
+    /// hold coincident vertices).
     ///
-    /// With `normals` (one per vertex, `feature_priority::vertex_normals`), cells are split by
-    /// their surface-error estimate (`feature_priority.rs`) instead of their displacement.
+    /// The key is the largest displacement, or with `normals` (one per vertex,
+    /// `feature_priority::vertex_normals`) the surface-error estimate (`feature_priority.rs`).
     pub(crate) fn complexity(
         &self,
         classes: Option<&[u8]>,
@@ -586,14 +598,26 @@ impl<'a> Adaptive<'a> {
         mut more: impl FnMut(&Partition, LeafView) -> u64,
     ) -> Result<Partition, Stop> {
         let keyed = Adaptive {
-            surface_priority: normals.is_some(),
-            ..self.clone()
+            positions: self.positions,
+            weights: self.weights,
+            heaviest: self.heaviest,
+            keep_cells: self.keep_cells,
+            cancel: self.cancel,
+            normals: normals.as_deref(),
         };
         let this = &keyed;
         // The leaves live in an arena (`live`, a split cell hands its slot to its left child;
         // `cells` beside it when they are kept); `by_start` lists them in the order of their
-        // ranges.
-        let (mut order, mut live) = this.roots(classes, normals);
+        // ranges. The roots are measured.
+        let (mut order, roots) = this.roots(classes);
+        let mut live: Vec<Node> = roots
+            .iter()
+            .map(|&(s, e, b)| {
+                let mut n = Node::bounded(s, e, &b);
+                n.key2 = this.key2(&order[s..e]);
+                n
+            })
+            .collect();
         let mut cells = if this.keep_cells {
             vec![*bounds; live.len()]
         } else {
@@ -616,9 +640,12 @@ impl<'a> Adaptive<'a> {
             let view = LeafView {
                 order: &order,
                 start: &by_start,
+                weights: this.weights,
             };
             let extra = more(&partition, view) as usize;
-            if extra == 0 || live.iter().all(|n| n.eval.err() <= 0.0) {
+            // An unmeasured cell can be split (its vertices do not coincide); a measured
+            // one with the key 0 cannot.
+            if extra == 0 || live.iter().all(|n| n.key2 == 0.0) {
                 return Ok(partition);
             }
             // Ask for half the shortfall at a time: a split can revive clusters whose faces had
@@ -627,9 +654,44 @@ impl<'a> Adaptive<'a> {
         }
     }
 
+    /// Measures the cells `batch` (arena indices) of `live`, on every core when they are
+    /// many, and queues them again with their keys (or keeps those that cannot be split).
+    fn measure(
+        &self,
+        order: &[Point],
+        live: &mut [Node],
+        batch: &[u32],
+        queue: &mut SplitQueue,
+        kept: &mut Vec<u32>,
+    ) {
+        let points: usize = batch.iter().map(|&i| live[i as usize].range().len()).sum();
+        let key = |&i: &u32| {
+            let n = live[i as usize];
+            if n.exact() {
+                n.key2
+            } else {
+                self.key2(&order[n.range()])
+            }
+        };
+        let keys: Vec<f32> = if batch.len() > 1 && points >= PARALLEL_ROUND {
+            batch.par_iter().with_min_len(64).map(key).collect()
+        } else {
+            batch.iter().map(key).collect()
+        };
+        for (&i, k2) in batch.iter().zip(keys) {
+            let n = &mut live[i as usize];
+            n.key2 = k2;
+            if n.key() > 0.0 {
+                queue.push(ByError(n.key(), i));
+            } else {
+                kept.push(i);
+            }
+        }
+    }
+
     /// Greedy splitting up to `goal` cells. A [`SplitQueue`] holds the cells that can still be
-    /// split (displacement above zero) by arena index; returns every leaf's arena index in the
-    /// order of its range.
+    /// split (key above zero, or not measured yet) by arena index; returns every leaf's arena
+    /// index in the order of its range.
     ///
     /// The cells are split in rounds, so that every core has work: a round takes the cell
     /// with the largest key and every queued cell whose key is at least [`ROUND_SHARE`] of it
@@ -637,6 +699,10 @@ impl<'a> Adaptive<'a> {
     /// the one-at-a-time order of section 4 except where a child's key reaches into the round
     /// (children mostly move less than their parent); the rounds depend on the keys alone, not
     /// on the thread count.
+    ///
+    /// Children are queued with their boxes' bound (at least their key); a cell is measured
+    /// when its bound reaches the top or the round's floor, so every round is made of
+    /// measured keys: the same rounds as measuring every child.
     fn approach(
         &self,
         order: &mut [Point],
@@ -644,37 +710,78 @@ impl<'a> Adaptive<'a> {
         cells: &mut Vec<Cell>,
         goal: usize,
     ) -> Result<Vec<u32>, Stop> {
-        let top = live.iter().map(|n| n.eval.err()).fold(0.0, f64::max);
+        let top = live.iter().map(Node::key).fold(0.0, f64::max);
         let mut queue = SplitQueue::new(top);
         let mut kept: Vec<u32> = Vec::with_capacity(goal + 1);
         live.reserve_exact(goal.saturating_sub(live.len()));
         for (i, n) in live.iter().enumerate() {
-            if n.eval.err() > 0.0 {
-                queue.push(ByError(n.eval.err(), i as u32));
+            if n.key() > 0.0 {
+                queue.push(ByError(n.key(), i as u32));
             } else {
                 kept.push(i as u32);
             }
         }
-        let mut round: Vec<u32> = Vec::new();
+        let mut round: Vec<ByError> = Vec::new();
+        let mut batch: Vec<u32> = Vec::new();
+        let mut measured: Vec<ByError> = Vec::new();
         while kept.len() + queue.len() < goal {
             if self.cancelled() {
                 return Err(Stop::Cancelled);
             }
-            // Each split adds one cell: the round is at most the shortfall.
-            let room = goal - kept.len() - queue.len();
-            round.clear();
-            let Some(ByError(largest, first)) = queue.pop() else {
+            // The largest measured key: bounds above it are measured first, with every bound
+            // near them (they will mostly be needed for this round).
+            let largest = loop {
+                let Some(first) = queue.pop() else {
+                    break None;
+                };
+                if live[first.1 as usize].exact() {
+                    break Some(first);
+                }
+                batch.clear();
+                measured.clear();
+                batch.push(first.1);
+                while let Some(k) = queue.pop_at_least(first.0 * ROUND_SHARE) {
+                    if live[k.1 as usize].exact() {
+                        measured.push(k);
+                    } else {
+                        batch.push(k.1);
+                    }
+                }
+                measured.iter().for_each(|&k| queue.push(k));
+                self.measure(order, live, &batch, &mut queue, &mut kept);
+            };
+            let Some(first) = largest else {
                 break;
             };
+            // Each split adds one cell: the round is at most the shortfall (`first` is out of
+            // the queue).
+            let room = goal - kept.len() - queue.len() - 1;
+            let floor = first.0 * ROUND_SHARE;
+            round.clear();
             round.push(first);
-            while round.len() < room
-                && let Some(ByError(_, i)) = queue.pop_at_least(largest * ROUND_SHARE)
-            {
-                round.push(i);
+            loop {
+                batch.clear();
+                while let Some(k) = queue.pop_at_least(floor) {
+                    if live[k.1 as usize].exact() {
+                        round.push(k);
+                    } else {
+                        batch.push(k.1);
+                    }
+                }
+                if batch.is_empty() {
+                    break;
+                }
+                self.measure(order, live, &batch, &mut queue, &mut kept);
             }
+            // The round in key order, as a queue of measured keys pops it; what the goal
+            // leaves out goes back.
+            round[1..].sort_unstable_by(|a, b| b.cmp(a));
+            let room = room.min(round.len());
+            round.drain(room..).for_each(|k| queue.push(k));
+            let ids: Vec<u32> = round.iter().map(|k| k.1).collect();
             // A few thousand cells at a time: enough for every core, and the round's
             // bookkeeping stays small next to the points.
-            for chunk in round.chunks(ROUND_CHUNK) {
+            for chunk in ids.chunks(ROUND_CHUNK) {
                 let split = self.split_round(order, live, chunk);
                 for (&i, halves) in chunk.iter().zip(split) {
                     match halves {
@@ -687,8 +794,8 @@ impl<'a> Adaptive<'a> {
                                 cells.push(rcell);
                             }
                             for (child, slot) in [(l, i), (r, live.len() as u32 - 1)] {
-                                if child.eval.err() > 0.0 {
-                                    queue.push(ByError(child.eval.err(), slot));
+                                if child.key() > 0.0 {
+                                    queue.push(ByError(child.key(), slot));
                                 } else {
                                     kept.push(slot);
                                 }
@@ -704,6 +811,20 @@ impl<'a> Adaptive<'a> {
         Ok(kept)
     }
 
+    /// Splits the cell `node` of `order` (its range in `order`'s terms) and returns its
+    /// children, unmeasured.
+    fn split(order: &mut [Point], node: &Node) -> Halves {
+        let cut = node.cut()?;
+        let verts = &mut order[node.range()];
+        let (mid, lb, rb, cut) = split_points(verts, cut);
+        let (s, m, e) = (
+            node.start as usize,
+            node.start as usize + mid,
+            node.end as usize,
+        );
+        Some((Node::bounded(s, m, &lb), Node::bounded(m, e, &rb), cut))
+    }
+
     /// Splits the cells `round` (arena indices) of `live`, in parallel when there are several:
     /// their vertex ranges are disjoint, so each split gets its own slice of `order`. The
     /// halves come back in the order of `round`, with their ranges in `order`'s terms.
@@ -714,7 +835,7 @@ impl<'a> Adaptive<'a> {
             // result), without the bookkeeping.
             return round
                 .iter()
-                .map(|&i| self.split(order, &live[i as usize]))
+                .map(|&i| Self::split(order, &live[i as usize]))
                 .collect();
         }
         let mut by_start: Vec<usize> = (0..round.len()).collect();
@@ -743,7 +864,7 @@ impl<'a> Adaptive<'a> {
                     end: n.end + base,
                     ..n
                 };
-                let split = self.split(slice, &local);
+                let split = Self::split(slice, &local);
                 (k, split.map(|(l, r, cut)| (shift(l), shift(r), cut)))
             })
             .collect();
@@ -767,12 +888,21 @@ impl<'a> Adaptive<'a> {
     }
 }
 
+/// A cell to refine (quality goal): its range of the point array, its points' box and its
+/// cell.
+struct Half {
+    range: std::ops::Range<usize>,
+    b: Bounds,
+    cell: Cell,
+}
+
 impl Refinable {
     /// The leaves over the vertex order.
-    pub(crate) fn view(&self) -> LeafView<'_> {
+    pub(crate) fn view<'a>(&'a self, weights: &'a [f32]) -> LeafView<'a> {
         LeafView {
             order: &self.order,
             start: &self.leaves.start,
+            weights,
         }
     }
 }
@@ -786,29 +916,34 @@ pub(crate) struct LeafView<'a> {
     pub order: &'a [Point],
     /// Where each leaf starts, and the end.
     pub start: &'a [u32],
+    /// Every vertex's weight, by index.
+    pub weights: &'a [f32],
 }
 
-impl LeafView<'_> {
+impl<'a> LeafView<'a> {
     /// The vertices of cluster `c`.
-    pub(crate) fn points(&self, c: usize) -> &[Point] {
-        &self.order[self.start[c] as usize..self.start[c + 1] as usize]
+    pub(crate) fn points(&self, c: usize) -> LeafPoints<'a> {
+        LeafPoints {
+            points: &self.order[self.start[c] as usize..self.start[c + 1] as usize],
+            weights: self.weights,
+        }
     }
 }
 
-/// Where a split cut its cell.
-#[derive(Clone, Copy, Debug)]
-struct Cut {
-    axis: usize,
-    at: f32,
+/// The vertices of one cluster, with the weights their indices read (the points carry none).
+#[derive(Clone, Copy)]
+pub(crate) struct LeafPoints<'a> {
+    /// The vertices.
+    pub points: &'a [Point],
+    /// Every vertex's weight, by index.
+    pub weights: &'a [f32],
 }
 
-impl Cut {
-    /// The two halves of `cell`.
-    fn cells(&self, cell: &Cell) -> (Cell, Cell) {
-        let (mut l, mut r) = (*cell, *cell);
-        l.max[self.axis] = self.at;
-        r.min[self.axis] = self.at;
-        (l, r)
+impl std::ops::Deref for LeafPoints<'_> {
+    type Target = [Point];
+
+    fn deref(&self) -> &[Point] {
+        self.points
     }
 }
 
@@ -817,213 +952,6 @@ const ANY_CELL: Cell = Cell {
     min: [0.0; 3],
     max: [0.0; 3],
 };
-
-/// A max-priority queue of split candidates that pops in exactly the order of a binary heap
-/// but keeps that heap small: keys are binned by their float bits (8 mantissa bits, so a bin
-/// spans 0.4 % of a binade) and only the highest non-empty bin is heapified when it is needed.
-/// With millions of cells, a plain heap's sifting misses the cache at every level; here most
-/// pushes are appends to a bin.
-struct SplitQueue {
-    bins: Vec<Vec<ByError>>,
-    /// Index of the lowest bin whose keys live in `heap`; every key in `bins` is below it.
-    current: usize,
-    heap: BinaryHeap<ByError>,
-    /// Bin of the largest error seen at creation; bins are counted down from it.
-    base: i64,
-    len: usize,
-}
-
-impl SplitQueue {
-    const BINS: usize = 1 << 16;
-
-    fn new(largest: f64) -> SplitQueue {
-        let base = (largest.to_bits() >> 44) as i64 + 1;
-        SplitQueue {
-            bins: vec![Vec::new(); Self::BINS],
-            current: Self::BINS,
-            heap: BinaryHeap::new(),
-            base,
-            len: 0,
-        }
-    }
-
-    /// The bin of a key: monotone in the key (non-negative floats order like their bits).
-    fn bin(&self, err: f64) -> usize {
-        let b = (err.to_bits() >> 44) as i64 - (self.base - Self::BINS as i64);
-        b.clamp(0, Self::BINS as i64 - 1) as usize
-    }
-
-    fn push(&mut self, k: ByError) {
-        let b = self.bin(k.0);
-        if b >= self.current {
-            self.heap.push(k);
-        } else {
-            self.bins[b].push(k);
-        }
-        self.len += 1;
-    }
-
-    fn pop(&mut self) -> Option<ByError> {
-        self.refill()?;
-        let k = self.heap.pop()?;
-        self.len -= 1;
-        Some(k)
-    }
-
-    /// Removes and returns the cell with the largest key if that key is at least `floor`.
-    fn pop_at_least(&mut self, floor: f64) -> Option<ByError> {
-        self.refill()?;
-        if self.heap.peek()?.0 < floor {
-            return None;
-        }
-        self.pop()
-    }
-
-    /// Moves the highest non-empty bin into the heap when the heap is empty; `None` when the
-    /// queue is empty.
-    fn refill(&mut self) -> Option<()> {
-        if self.heap.is_empty() {
-            let b = (0..self.current)
-                .rev()
-                .find(|&b| !self.bins[b].is_empty())?;
-            self.current = b;
-            self.heap = BinaryHeap::from(std::mem::take(&mut self.bins[b]));
-        }
-        Some(())
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    fn drain(self) -> impl Iterator<Item = ByError> {
-        self.heap.into_iter().chain(self.bins.into_iter().flatten())
-    }
-}
-
-/// Heap key: a node's largest displacement and its arena index. Largest error first; ties go
-/// to the older node, so the order is deterministic.
-#[derive(Clone, Copy, Debug)]
-struct ByError(f64, u32);
-
-impl PartialEq for ByError {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for ByError {}
-impl PartialOrd for ByError {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for ByError {
-    fn cmp(&self, o: &Self) -> Ordering {
-        self.0.total_cmp(&o.0).then(o.1.cmp(&self.1))
-    }
-}
-
-/// A referenced vertex as the partition handles it: position, weight and vertex index.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Point {
-    /// Position.
-    pub p: [f32; 3],
-    /// Weight.
-    pub w: f32,
-    /// Vertex index.
-    pub id: u32,
-    /// Its normal, for the complexity goal's surface priority (none otherwise).
-    pub n: PackedNormal,
-}
-
-/// Running sums of a cell: inner box, weighted position sum, heaviest vertex.
-#[derive(Clone, Copy, Debug)]
-struct Acc {
-    lo: [f32; 3],
-    hi: [f32; 3],
-    sum: [f64; 3],
-    wsum: f64,
-    best: (f32, u32),
-}
-
-impl Default for Acc {
-    fn default() -> Self {
-        Acc {
-            lo: [f32::INFINITY; 3],
-            hi: [f32::NEG_INFINITY; 3],
-            sum: [0.0; 3],
-            wsum: 0.0,
-            best: (f32::NEG_INFINITY, u32::MAX),
-        }
-    }
-}
-
-impl Acc {
-    #[inline]
-    fn add(&mut self, q: &Point) {
-        for k in 0..3 {
-            self.lo[k] = self.lo[k].min(q.p[k]);
-            self.hi[k] = self.hi[k].max(q.p[k]);
-            self.sum[k] += f64::from(q.w) * f64::from(q.p[k]);
-        }
-        self.wsum += f64::from(q.w);
-        // Ties go to the lowest vertex index, so results do not depend on order.
-        if q.w > self.best.0 || (q.w == self.best.0 && q.id < self.best.1) {
-            self.best = (q.w, q.id);
-        }
-    }
-
-    /// The sums of `points`, added in order.
-    fn of(points: &[Point]) -> Acc {
-        let mut acc = Acc::default();
-        points.iter().for_each(|q| acc.add(q));
-        acc
-    }
-
-    /// Adds the sums of `other` (taken over other vertices).
-    fn merge(&mut self, other: &Acc) {
-        for k in 0..3 {
-            self.lo[k] = self.lo[k].min(other.lo[k]);
-            self.hi[k] = self.hi[k].max(other.hi[k]);
-            self.sum[k] += other.sum[k];
-        }
-        self.wsum += other.wsum;
-        let (w, id) = other.best;
-        if w > self.best.0 || (w == self.best.0 && id < self.best.1) {
-            self.best = other.best;
-        }
-    }
-}
-
-/// Moves the elements satisfying `pred` to the front (Hoare's two-pointer scheme: each element
-/// is visited once) and adds each to the accumulator of the side it ends on; returns how many
-/// satisfy `pred`.
-fn partition_in_place(
-    v: &mut [Point],
-    pred: impl Fn(&Point) -> bool,
-    left: &mut Acc,
-    right: &mut Acc,
-) -> usize {
-    let (mut i, mut j) = (0, v.len());
-    loop {
-        while i < j && pred(&v[i]) {
-            left.add(&v[i]);
-            i += 1;
-        }
-        while i < j && !pred(&v[j - 1]) {
-            right.add(&v[j - 1]);
-            j -= 1;
-        }
-        if i >= j {
-            return i;
-        }
-        v.swap(i, j - 1);
-        left.add(&v[i]);
-        right.add(&v[j - 1]);
-        i += 1;
-        j -= 1;
-    }
-}
 
 #[cfg(test)]
 mod tests {
@@ -1139,20 +1067,45 @@ mod tests {
     }
 
     #[test]
-    fn hoare_partition_accumulates_each_point_once() {
-        let mut v: Vec<Point> = (0..10)
-            .map(|i| Point {
-                p: [(9 - i) as f32, 0.0, 0.0],
-                w: 1.0,
-                id: i,
-                n: PackedNormal::NONE,
+    fn lazy_keys_bound_the_measured_ones() {
+        // Random points in a box: every child's bound is at least its measured key.
+        let n = 4000;
+        let mut x = 12345u64;
+        let mut rnd = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let p: Vec<[f32; 3]> = (0..n).map(|_| [rnd(), rnd() * 0.5, rnd() * 0.1]).collect();
+        let w: Vec<f32> = (0..n).map(|_| 0.5 + rnd()).collect();
+        let normals: Vec<PackedNormal> = (0..n)
+            .map(|i| {
+                if i % 7 == 0 {
+                    PackedNormal::NONE
+                } else {
+                    PackedNormal::pack([rnd() - 0.5, rnd() - 0.5, 1.0])
+                }
             })
             .collect();
-        let (mut l, mut r) = (Acc::default(), Acc::default());
-        let mid = partition_in_place(&mut v, |q| q.p[0] < 4.0, &mut l, &mut r);
-        assert_eq!(mid, 4);
-        assert!(v[..4].iter().all(|q| q.p[0] < 4.0) && v[4..].iter().all(|q| q.p[0] >= 4.0));
-        assert_eq!((l.wsum, r.wsum), (4.0, 6.0));
-        assert_eq!((l.sum[0], r.sum[0]), (6.0, 39.0));
+        for normals in [None, Some(&normals[..])] {
+            let a = Adaptive {
+                normals,
+                ..Adaptive::new(&p, &w, Representative::Barycenter, false, None)
+            };
+            let (mut order, roots) = a.roots(None);
+            let (s, e, b) = roots[0];
+            let mut stack = vec![Node::bounded(s, e, &b)];
+            let mut checked = 0;
+            while let Some(node) = stack.pop() {
+                let key = f64::from(a.key2(&order[node.range()])).sqrt();
+                assert!(key <= node.key(), "{key} > {}", node.key());
+                checked += 1;
+                if let Some((l, r, _)) = Adaptive::split(&mut order, &node) {
+                    stack.extend([l, r]);
+                }
+            }
+            assert!(checked > n);
+        }
     }
 }

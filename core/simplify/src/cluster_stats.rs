@@ -9,7 +9,7 @@
 //! adaptive partitions ([`of_points`]), the vertex lists of `Partition::members` for the grid
 //! ([`of_members`]) — so no statistics are held for every cluster at once.
 
-use crate::adaptive_partition::Point;
+use crate::adaptive_partition::LeafPoints;
 use crate::blocks;
 
 /// The statistics of one cluster (one cache line).
@@ -81,7 +81,7 @@ impl Stats {
 /// them: each block's partial in index order, the partials added in block order. So an adaptive partition, which holds each cluster's vertices as a range of its
 /// vertex order, places representatives without a statistics array for all its clusters, and
 /// they are the same bits as if it had one.
-pub(crate) fn of_points(points: &[Point], scratch: &mut Vec<u64>) -> Stats {
+pub(crate) fn of_points(points: LeafPoints<'_>, scratch: &mut Vec<u64>) -> Stats {
     // Sorted as (vertex index, place in `points`) pairs: eight bytes a vertex to move.
     scratch.clear();
     scratch.extend(
@@ -93,7 +93,7 @@ pub(crate) fn of_points(points: &[Point], scratch: &mut Vec<u64>) -> Stats {
     scratch.sort_unstable();
     let verts = scratch.iter().map(|&k| {
         let q = &points[k as u32 as usize];
-        (q.id, q.p, q.w)
+        (q.id, q.p, points.weights[q.id as usize])
     });
     in_blocks(verts, false)
 }

@@ -62,6 +62,7 @@ mod error;
 mod feature_priority;
 pub mod features;
 mod grid_partition;
+mod kd;
 pub mod lod;
 mod options;
 mod partition;
@@ -69,6 +70,7 @@ pub mod partition_boxes;
 pub mod polygon_twist;
 mod quadric;
 mod representative;
+mod split_queue;
 mod surface_bound;
 pub mod triangulate;
 pub mod weights;
@@ -380,7 +382,7 @@ impl<'a> Prepared<'a> {
             let reps = placed.take().unwrap_or_else(|| {
                 let source = match (&members, &refinable) {
                     (Some(m), _) => Members(m, &work.positions, weights),
-                    (None, Some(r)) => Leaves(r.view()),
+                    (None, Some(r)) => Leaves(r.view(weights)),
                     (None, None) => unreachable!("the complexity goal places its clusters"),
                 };
                 let (cluster_of, n) = (&partition.cluster_of, partition.clusters);
