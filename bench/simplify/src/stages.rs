@@ -29,6 +29,16 @@ use crate::timing::{StageClock, median};
 /// The stages of one timed call.
 type Stages = Vec<(String, f64, u32)>;
 
+/// One method's parameter and its timed calls on one input.
+struct Timed {
+    method: Method,
+    param: f64,
+    evals: u32,
+    stages: Vec<Stages>,
+    totals: Vec<f64>,
+    out_vertices: u64,
+}
+
 /// The `stages` subcommand.
 pub fn stages_cmd(args: &[String]) -> Result<(), String> {
     if std::env::var("RAYON_NUM_THREADS").ok().as_deref() != Some("1") {
@@ -75,13 +85,28 @@ pub fn stages_cmd(args: &[String]) -> Result<(), String> {
             "== stages {name}: {} vertices, {} triangles, target {target}",
             st.vertices, st.triangles
         );
-        let mut runs: Vec<(Method, f64, u32, Vec<Stages>, Vec<f64>, u64)> = Vec::new();
+        let mut runs: Vec<Timed> = Vec::new();
         for &method in chosen.iter().filter(|m| !m.is_meshopt()) {
             let found = find_param(method, &input, &st, target)?;
-            runs.push((method, found.param, found.evals, Vec::new(), Vec::new(), 0));
+            runs.push(Timed {
+                method,
+                param: found.param,
+                evals: found.evals,
+                stages: Vec::new(),
+                totals: Vec::new(),
+                out_vertices: 0,
+            });
         }
         for _ in 0..repeat.max(1) {
-            for (method, param, _, stages, totals, out_vertices) in &mut runs {
+            for Timed {
+                method,
+                param,
+                stages,
+                totals,
+                out_vertices,
+                ..
+            } in &mut runs
+            {
                 let mut clock = Some(StageClock::start());
                 let o = methods::run_observed(*method, &input, *param, &mut |_, stage| {
                     clock.as_mut().expect("clock running").mark(stage);
@@ -94,7 +119,15 @@ pub fn stages_cmd(args: &[String]) -> Result<(), String> {
                 totals.push(total);
             }
         }
-        for (method, param, evals, stages, totals, out_vertices) in runs {
+        for Timed {
+            method,
+            param,
+            evals,
+            stages,
+            totals,
+            out_vertices,
+        } in runs
+        {
             let mut names: Vec<String> = Vec::new();
             for s in stages.iter().flatten() {
                 if !names.contains(&s.0) {
