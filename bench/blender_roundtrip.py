@@ -1,16 +1,23 @@
 """Round trip of the add-on's Simplify on a ~1.3 M-triangle object, from the operator call to
-the new object, split into Blender export, transfer, daemon work and Blender import.
+the new object, split into Blender export (read), transfer, daemon work and Blender import
+(build); with `--before REV`, the add-on of git revision REV against the working tree's.
 
-    .venv/bin/python bench/blender_roundtrip.py [--subdivisions 9] [--target 10] [--repeats 5]
+    .venv/bin/python bench/blender_roundtrip.py [--subdivisions 9] [--target 10] [--repeats 6]
+                                                [--before REV [--before-daemon PATH]] [--rounds 3]
                                                 [--out bench/results/blender_roundtrip.md]
 
 Real Blender (the PyPI `bpy` module in .venv), the extension built and installed as the tests
-do (tests/blender_addon/addon_env.py), a real daemon (target/release/tessd or $TESSD_BIN).
-Every number comes from the one real `bpy.ops.tessd.simplify(...)` call, instrumented from the
-outside (nothing in the add-on is changed):
+do (tests/blender_addon/addon_env.py), a real daemon (target/release/tessd or $TESSD_BIN; the
+before runs use `--before-daemon` when given, else the same one). Each add-on runs in a fresh
+Python of its own (two versions of one extension cannot be installed in one Blender), for
+`--rounds` rounds that alternate before / after, so both see the same load; each process makes
+one uncounted call first (module imports, first allocations), then `repeats / rounds` counted
+ones. Every number comes from the one real `bpy.ops.tessd.simplify(...)` call, instrumented
+from the outside (nothing in the add-on is changed):
 
-- export: the conversion of the object, `common.arrays_of` (evaluated mesh -> protocol arrays,
-  `foreach_get` + numpy; of which `convert.mesh_to_arrays` alone), run from the job's tick;
+- export: the conversion of the object, `common.arrays_of` (object -> protocol arrays; of which
+  `convert.mesh_to_arrays` alone, the rest being the depsgraph and `to_mesh` where the add-on
+  evaluates the object), run from the job's tick;
 - request round trip: the add-on job's submit -> reply (`jobs.Job.timings`), which includes
   sending the input arrays and receiving the reply's arrays;
 - daemon work: the daemon's own time of that request (`elapsed_ms` of its `ok` frame, the
@@ -30,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import os
 import platform
 import shutil
@@ -41,10 +49,24 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(REPO / "tests" / "blender_addon"), str(REPO / "tests"),
-                str(REPO / "tests" / "daemon"), str(REPO / "python")]
-_USER = tempfile.mkdtemp(prefix="tessd-blender-user-")
-os.environ.setdefault("BLENDER_USER_RESOURCES", _USER)
+TEST_PATHS = [str(REPO / "tests" / "blender_addon"), str(REPO / "tests"),
+              str(REPO / "tests" / "daemon"), str(REPO / "python")]
+
+#: The steps of one call, in report order: (key, label, what).
+STEPS = [
+    ("total", "**whole operator**", "`bpy.ops.tessd.simplify(...)` call to the new object"),
+    ("export", "read (Blender export)", "`common.arrays_of` (from the job's tick): object → arrays"),
+    ("mesh_to_arrays", "  of which `mesh_to_arrays`", "the `foreach_get` reads alone (the rest: "
+     "depsgraph and `to_mesh` where the object is evaluated)"),
+    ("transfer", "transfer (both directions)", "request round trip − daemon work"),
+    ("daemon", "daemon work", "`elapsed_ms` of the daemon's `ok` frame (`Job.elapsed_ms`)"),
+    ("import", "build (Blender import)", "the operator's `apply_task`: arrays → mesh with "
+     "`foreach_set`, object creation"),
+    ("mesh_from_arrays", "  of which `mesh_from_arrays`", "the `foreach_set` writes and "
+     "`mesh.update`"),
+    ("remainder", "remainder", "connect, the complexity target from the arrays, operator "
+     "dispatch, undo push"),
+]
 
 
 def nbytes(arrays):
@@ -122,139 +144,242 @@ def machine():
     return "%s%d cores, %s" % ((model + ", ") if model else "", os.cpu_count() or 0, platform.system())
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--subdivisions", type=int, default=9,
-                    help="ico sphere subdivisions (9: 1 310 720 triangles)")
-    ap.add_argument("--target", type=float, default=10.0, help="complexity goal, %% of vertices")
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--out", default=str(REPO / "bench" / "results" / "blender_roundtrip.md"),
-                    help="markdown report ('' for none)")
-    args = ap.parse_args()
-
+def scenario(zip_path, socket, subdivisions, target, repeats):
+    """In this (fresh) Python: installs the extension `zip_path` against the daemon at
+    `socket`, makes one uncounted call, then `repeats` measured ones; prints `RESULT <json>`
+    with the rows and what was sent."""
+    sys.path[:0] = TEST_PATHS
     import bpy
 
-    import locate
     from addon_env import ADDON, install_addon, uninstall_addon
-    from daemon_util import DaemonProcess, short_tmpdir
 
-    dist = Path(tempfile.mkdtemp(prefix="tessd-dist-"))
-    subprocess.run([sys.executable, str(REPO / "blender_addon" / "build.py"), "--out", str(dist),
-                    "--no-validate"], check=True, stdout=subprocess.DEVNULL)
+    install_addon(zip_path, Path(tempfile.mkdtemp(prefix="tessd-repo-")), socket)
+    tessd = sys.modules[ADDON + ".client"].tessd
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=subdivisions)
+    obj = bpy.context.object
+    info = {"vertices": len(obj.data.vertices), "triangles": len(obj.data.polygons),
+            "blender": bpy.app.version_string, "numpy": __import__("numpy").__version__}
+    probe = Probe(ADDON)
     rows = []
-    with short_tmpdir() as d:
-        proc = DaemonProcess(str(locate.tessd_bin()), os.path.join(d, "t.sock")).start()
-        try:
-            install_addon(next(dist.glob("tessd-*.zip")), dist / "repo", proc.socket)
-            tessd = sys.modules[ADDON + ".client"].tessd
-            bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=args.subdivisions)
-            obj = bpy.context.object
-            n_tris, n_verts = len(obj.data.polygons), len(obj.data.vertices)
-            probe = Probe(ADDON)
-            try:
-                for rep in range(args.repeats):
-                    for o in list(bpy.context.selected_objects):
-                        o.select_set(False)
-                    obj.select_set(True)
-                    bpy.context.view_layer.objects.active = obj
-                    probe.reset()
-                    t0 = time.perf_counter()
-                    r = bpy.ops.tessd.simplify(method='COMPLEXITY', target=args.target,
-                                               target_is_percent=True)
-                    total = time.perf_counter() - t0
-                    assert r == {'FINISHED'}, r
-                    (label, round_trip), = probe.job.timings
-                    daemon = probe.client_jobs[-1].elapsed_ms / 1e3
-                    result = bpy.data.objects[obj.name + "_simplified"]
-                    out_tris = len(result.data.polygons)
-                    with tessd.Client(proc.socket) as c:
-                        t1 = time.perf_counter()
-                        c.call("debug.echo", {}, probe.inputs[0])
-                        c.call("debug.echo", {}, probe.outputs[0])
-                        echo = time.perf_counter() - t1
-                    sent_names = sorted(probe.inputs[0])
-                    row = {"total": total, "export": probe.t["export"],
-                           "mesh_to_arrays": probe.t["mesh_to_arrays"], "round_trip": round_trip,
-                           "daemon": daemon, "transfer": round_trip - daemon,
-                           "import": probe.t["import"], "mesh_from_arrays": probe.t["mesh_from_arrays"],
-                           "echo": echo, "sent": probe.sent, "received": probe.received,
-                           "out_tris": out_tris}
-                    row["remainder"] = total - row["export"] - round_trip - row["import"]
-                    rows.append(row)
-                    print("repeat %d: %s" % (rep + 1, "  ".join(
-                        "%s %.3f" % (k, v) for k, v in row.items() if isinstance(v, float))))
-                    mesh = result.data
-                    bpy.data.objects.remove(result)
-                    bpy.data.meshes.remove(mesh)
-                    bpy.context.view_layer.update()
-                    probe.inputs, probe.outputs = [], []
-            finally:
-                probe.close()
-            uninstall_addon()
-        finally:
-            proc.stop()
-    shutil.rmtree(dist, ignore_errors=True)
-    shutil.rmtree(_USER, ignore_errors=True)
+    try:
+        for rep in range(repeats + 1):
+            for o in list(bpy.context.selected_objects):
+                o.select_set(False)
+            obj.select_set(True)
+            bpy.context.view_layer.objects.active = obj
+            probe.reset()
+            t0 = time.perf_counter()
+            r = bpy.ops.tessd.simplify(method='COMPLEXITY', target=target, target_is_percent=True)
+            total = time.perf_counter() - t0
+            assert r == {'FINISHED'}, r
+            (label, round_trip), = probe.job.timings
+            daemon = probe.client_jobs[-1].elapsed_ms / 1e3
+            result = bpy.data.objects[obj.name + "_simplified"]
+            out_tris = len(result.data.polygons)
+            with tessd.Client(socket) as c:
+                t1 = time.perf_counter()
+                c.call("debug.echo", {}, probe.inputs[0])
+                c.call("debug.echo", {}, probe.outputs[0])
+                echo = time.perf_counter() - t1
+            row = {"total": total, "export": probe.t["export"],
+                   "mesh_to_arrays": probe.t["mesh_to_arrays"], "round_trip": round_trip,
+                   "daemon": daemon, "transfer": round_trip - daemon,
+                   "import": probe.t["import"], "mesh_from_arrays": probe.t["mesh_from_arrays"],
+                   "echo": echo, "sent": probe.sent, "received": probe.received,
+                   "out_tris": out_tris}
+            row["remainder"] = total - row["export"] - round_trip - row["import"]
+            info["sent_names"] = sorted(probe.inputs[0])
+            if rep > 0:
+                rows.append(row)
+            print("%s %d: %s" % ("repeat" if rep else "warm-up", rep, "  ".join(
+                "%s %.3f" % (k, v) for k, v in row.items() if isinstance(v, float))),
+                file=sys.stderr)
+            mesh = result.data
+            bpy.data.objects.remove(result)
+            bpy.data.meshes.remove(mesh)
+            bpy.context.view_layer.update()
+            probe.inputs, probe.outputs = [], []
+    finally:
+        probe.close()
+    uninstall_addon()
+    print("RESULT " + json.dumps({"rows": rows, "info": info}))
 
-    med = {k: statistics.median(r[k] for r in rows) for k in rows[0]}
-    lo = {k: min(r[k] for r in rows) for k in rows[0]}
-    hi = {k: max(r[k] for r in rows) for k in rows[0]}
+
+def run_scenario(zip_path, socket, args, repeats):
+    """:func:`scenario` in a fresh Python with a throw-away Blender profile."""
+    user = tempfile.mkdtemp(prefix="tessd-blender-user-")
+    env = dict(os.environ, BLENDER_USER_RESOURCES=user)
+    try:
+        proc = subprocess.run(
+            [sys.executable, __file__, "--scenario", str(zip_path), socket,
+             str(args.subdivisions), str(args.target), str(repeats)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    finally:
+        shutil.rmtree(user, ignore_errors=True)
+    sys.stderr.write("".join(l + "\n" for l in proc.stderr.splitlines()
+                             if l.startswith(("repeat", "warm-up"))))
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("RESULT ")]
+    if not lines:
+        raise SystemExit("the scenario failed for %s:\n%s\n%s" % (zip_path, proc.stdout[-3000:],
+                                                                 proc.stderr[-3000:]))
+    return json.loads(lines[-1][len("RESULT "):])
+
+
+def build_zip(tree, out, binary):
+    """The extension zip of the add-on in `tree` (the working tree or an archived revision,
+    which has no target folder of its own: `binary` is bundled)."""
+    subprocess.run([sys.executable, str(tree / "blender_addon" / "build.py"), "--out", str(out),
+                    "--no-validate", "--binary", binary], check=True, stdout=subprocess.DEVNULL)
+    return next(Path(out).glob("tessd-*.zip"))
+
+
+def stats(rows):
+    keys = rows[0].keys()
+    return ({k: statistics.median(r[k] for r in rows) for k in keys},
+            {k: min(r[k] for r in rows) for k in keys}, {k: max(r[k] for r in rows) for k in keys})
+
+
+def fmt_ms(med, lo, hi, key):
+    return "%.0f (%.0f–%.0f)" % (1e3 * med[key], 1e3 * lo[key], 1e3 * hi[key])
+
+
+def load_average():
+    try:
+        return "%.2f / %.2f / %.2f" % os.getloadavg()
+    except OSError:
+        return "?"
+
+
+def report(args, results, load_before, load_after):
+    after = results["after"]
+    info = after["info"]
+    med, lo, hi = stats(after["rows"])
     mib = 2 ** 20
-
-    def line(name, key, what):
-        share = 100.0 * med[key] / med["total"]
-        return "| %s | %.0f | %.0f–%.0f | %.0f %% | %s |" % (
-            name, 1e3 * med[key], 1e3 * lo[key], 1e3 * hi[key], share, what)
-
     cmd = ".venv/bin/python bench/blender_roundtrip.py" + "".join(
-        " --%s %s" % (k, v) for k, v in (("subdivisions", args.subdivisions), ("target", "%g" % args.target),
-                                        ("repeats", args.repeats)))
-    report = "\n".join([
+        " --%s %s" % (k, v) for k, v in (("subdivisions", args.subdivisions),
+                                        ("target", "%g" % args.target), ("repeats", args.repeats),
+                                        ("rounds", args.rounds)))
+    if args.before:
+        cmd += " --before %s" % args.before
+        if args.before_daemon:
+            cmd += " --before-daemon %s" % args.before_daemon
+    thousands = lambda n: format(int(n), ",").replace(",", " ")
+    lines = [
         "# Blender round trip: Simplify from the operator call to the new object",
         "",
         "Machine: %s: **shared and noisy** (other jobs ran beside it; read the split, not "
-        "the last digit); Blender %s (PyPI `bpy`), numpy %s; %s." % (
-            machine(), bpy.app.version_string, __import__("numpy").__version__,
-            datetime.date.today().isoformat()),
-        "Command: `%s` (daemon: `target/release/tessd serve`)." % cmd,
+        "the last digit; load average 1 / 5 / 15 min: %s before, %s after); Blender %s (PyPI "
+        "`bpy`), numpy %s; %s." % (machine(), load_before, load_after, info["blender"],
+                                   info["numpy"], datetime.date.today().isoformat()),
+        "Command: `%s` (daemon: `%s serve`%s)." % (
+            cmd, args.daemon_label,
+            "; before: `%s serve`" % args.before_daemon if args.before_daemon else ""),
         "",
         "Input: ico sphere, %s vertices, %s triangles, through `bpy.ops.tessd.simplify(method="
         "'COMPLEXITY', target=%g, target_is_percent=True)` (barycentre representatives; the "
         "evaluated mesh; Blender's normals, so no corner normals are sent) → %s triangles. "
         "Arrays sent: %.1f MiB (%s); received: %.1f MiB." % (
-            format(n_verts, ",").replace(",", " "), format(n_tris, ",").replace(",", " "),
-            args.target, format(int(med["out_tris"]), ",").replace(",", " "),
-            med["sent"] / mib, ", ".join("`%s`" % n for n in sent_names), med["received"] / mib),
+            thousands(info["vertices"]), thousands(info["triangles"]), args.target,
+            thousands(med["out_tris"]), med["sent"] / mib,
+            ", ".join("`%s`" % n for n in info["sent_names"]), med["received"] / mib),
         "",
-        "Median of %d calls (ms; range min–max):" % len(rows),
+    ]
+    if "before" in results:
+        binfo = results["before"]["info"]
+        bmed, blo, bhi = stats(results["before"]["rows"])
+        lines += [
+            "Before: the add-on of `%s`, sending %.1f MiB (%s), receiving %.1f MiB. Median of %d "
+            "calls each (ms; range min–max), in %d alternating rounds:" % (
+                args.before, bmed["sent"] / mib, ", ".join("`%s`" % n for n in binfo["sent_names"]),
+                bmed["received"] / mib, len(after["rows"]), args.rounds),
+            "",
+            "| step | before | after | after / before | what |",
+            "|---|---|---|---|---|",
+        ]
+        for key, label, what in STEPS:
+            ratio = med[key] / bmed[key] if bmed[key] > 0 else float("nan")
+            lines.append("| %s | %s | %s | %.2f× | %s |" % (
+                label, fmt_ms(bmed, blo, bhi, key), fmt_ms(med, lo, hi, key), ratio, what))
+        lines += ["", "Request round trip (submit → reply, = transfer + daemon work): %.0f ms "
+                  "before, %.0f ms after." % (1e3 * bmed["round_trip"], 1e3 * med["round_trip"])]
+    else:
+        lines += ["Median of %d calls (ms; range min–max):" % len(after["rows"]), "",
+                  "| step | median | range | share | what |", "|---|---|---|---|---|"]
+        for key, label, what in STEPS:
+            lines.append("| %s | %.0f | %.0f–%.0f | %.0f %% | %s |" % (
+                label, 1e3 * med[key], 1e3 * lo[key], 1e3 * hi[key],
+                100.0 * med[key] / med["total"], what))
+        lines += ["", "Request round trip (submit → reply, = transfer + daemon work): %.0f ms."
+                  % (1e3 * med["round_trip"])]
+    lines += [
+        "Cross-check of the transfer: `debug.echo` of the same input arrays and then of the "
+        "output arrays, on a fresh connection, takes %.0f ms (median, after), for twice the bytes "
+        "of the request (each array goes to the daemon and back: %.1f MiB in all), so one "
+        "request's transfer should be about half of it." % (
+            1e3 * med["echo"], 2 * (med["sent"] + med["received"]) / mib),
         "",
-        "| step | median | range | share | what |",
-        "|---|---|---|---|---|",
-        line("**whole operator**", "total", "`bpy.ops.tessd.simplify(...)` call to the new object"),
-        line("Blender export", "export", "`common.arrays_of` (from the job's tick): evaluated mesh → arrays, "
-             "`foreach_get` + numpy"),
-        line("  of which `mesh_to_arrays`", "mesh_to_arrays", "the `foreach_get` reads alone "
-             "(the rest: `to_mesh` of the evaluated object)"),
-        line("transfer (both directions)", "transfer", "request round trip − daemon work"),
-        line("daemon work", "daemon", "`elapsed_ms` of the daemon's `ok` frame (`Job.elapsed_ms`)"),
-        line("Blender import", "import", "the operator's `apply_task`: arrays → mesh with "
-             "`foreach_set`, object creation"),
-        line("  of which `mesh_from_arrays`", "mesh_from_arrays", "the `foreach_set` writes and "
-             "`mesh.update`"),
-        line("remainder", "remainder", "connect, the complexity target from the arrays, operator "
-             "dispatch, undo push"),
-        "",
-        "Request round trip (submit → reply, = transfer + daemon work): %.0f ms. Cross-check of "
-        "the transfer: `debug.echo` of the same input arrays and then of the output arrays, on a "
-        "fresh connection, takes %.0f ms (median), for twice the bytes of the request (each array "
-        "goes to the daemon and back: %.1f MiB in all), so one request's transfer should be about "
-        "half of it." % (1e3 * med["round_trip"], 1e3 * med["echo"],
-                         2 * (med["sent"] + med["received"]) / mib),
-        "",
-    ])
-    print(report)
+    ]
+    return "\n".join(lines)
+
+
+def main():
+    if len(sys.argv) > 1 and sys.argv[1] == "--scenario":
+        zip_path, socket, subdivisions, target, repeats = sys.argv[2:7]
+        return scenario(zip_path, socket, int(subdivisions), float(target), int(repeats))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--subdivisions", type=int, default=9,
+                    help="ico sphere subdivisions (9: 1 310 720 triangles)")
+    ap.add_argument("--target", type=float, default=10.0, help="complexity goal, %% of vertices")
+    ap.add_argument("--repeats", type=int, default=6, help="counted calls per add-on")
+    ap.add_argument("--rounds", type=int, default=None,
+                    help="alternating rounds (default 3 with --before, else 1)")
+    ap.add_argument("--before", help="git revision of the add-on to compare against")
+    ap.add_argument("--before-daemon", help="the daemon binary for the before runs (default: "
+                                            "the same as after)")
+    ap.add_argument("--out", default=str(REPO / "bench" / "results" / "blender_roundtrip.md"),
+                    help="markdown report ('' for none)")
+    args = ap.parse_args()
+    if args.rounds is None:
+        args.rounds = 3 if args.before else 1
+    args.rounds = max(1, min(args.rounds, args.repeats))
+    sys.path[:0] = TEST_PATHS
+    import locate
+    from daemon_util import DaemonProcess, short_tmpdir
+
+    binary = str(locate.tessd_bin())
+    args.daemon_label = os.path.relpath(binary, REPO) if binary.startswith(str(REPO)) else binary
+    tmp = Path(tempfile.mkdtemp(prefix="tessd-roundtrip-"))
+    zips = {"after": build_zip(REPO, tmp / "dist_after", binary)}
+    if args.before:
+        old = tmp / "old"
+        old.mkdir()
+        archive = subprocess.run(["git", "archive", args.before, "blender_addon", "python/tessd"],
+                                 cwd=REPO, stdout=subprocess.PIPE, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(old)], input=archive, check=True)
+        zips["before"] = build_zip(old, tmp / "dist_before", args.before_daemon or binary)
+    per_round = [args.repeats // args.rounds + (1 if i < args.repeats % args.rounds else 0)
+                 for i in range(args.rounds)]
+    load_before = load_average()
+    results = {k: {"rows": []} for k in zips}
+    with short_tmpdir() as d:
+        daemons = {"after": DaemonProcess(binary, os.path.join(d, "a.sock")).start()}
+        try:
+            if args.before:
+                daemons["before"] = (DaemonProcess(args.before_daemon, os.path.join(d, "b.sock")).start()
+                                     if args.before_daemon else daemons["after"])
+            for n in per_round:
+                for which in [k for k in ("before", "after") if k in zips]:
+                    res = run_scenario(zips[which], daemons[which].socket, args, n)
+                    results[which]["rows"] += res["rows"]
+                    results[which]["info"] = res["info"]
+        finally:
+            for proc in {id(p): p for p in daemons.values()}.values():
+                proc.stop()
+    shutil.rmtree(tmp, ignore_errors=True)
+    text = report(args, results, load_before, load_average())
+    print(text)
     if args.out:
-        Path(args.out).write_text(report)
+        Path(args.out).write_text(text)
         print("wrote", args.out)
 
 

@@ -21,6 +21,8 @@ operator's report lists it instead of losing it silently.
 
 import numpy as np
 
+from . import vertex_groups
+
 #: Prefixes of the point attributes that stand for vertex groups and shape keys.
 VERTEX_GROUP = "vertex_group:"
 SHAPE_KEY = "shape_key:"
@@ -122,12 +124,7 @@ def edge_vertices(mesh):
 def _collect_groups(mesh, obj, arrays, sent):
     names = [g.name for g in obj.vertex_groups]
     if names and len(mesh.vertices):
-        weights = np.zeros((len(names), len(mesh.vertices)), dtype=np.float32)
-        # Blender has no bulk access to vertex group weights: one pass over the weights.
-        for v in mesh.vertices:
-            for g in v.groups:
-                if g.group < len(names):
-                    weights[g.group, v.index] = g.weight
+        weights = vertex_groups.weights(mesh, obj, names)
         for i, name in enumerate(names):
             arrays["point:" + VERTEX_GROUP + name] = weights[i]
         sums = weights.sum(axis=0)
