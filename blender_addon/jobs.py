@@ -40,6 +40,11 @@ from .client import tessd
 TICK_HOOKS = []
 #: Seconds of conversion work one tick may do before handing control back to Blender.
 TICK_BUDGET = 0.05
+#: Seconds between the ticks of a modal job: a reply is taken up to this long after it came
+#: (issue 33: part of what the user waits for; a tick with nothing new costs microseconds).
+TICK_INTERVAL = 0.02
+#: Seconds between redraws of the status bar's progress while a modal job runs.
+REDRAW_INTERVAL = 0.1
 #: Jobs running modally, drawn in the status bar.
 _RUNNING = []
 
@@ -365,10 +370,15 @@ class JobOperator:
         if job is None:
             return {'CANCELLED'}
         if modal and context.window is not None:
+            # The first slice at once (the conversion starts and, when it is quick, the
+            # request goes out now), then one per timer event.
+            if job.tick():
+                return self._end(context)
             wm = context.window_manager
-            self._timer = wm.event_timer_add(0.1, window=context.window)
+            self._timer = wm.event_timer_add(TICK_INTERVAL, window=context.window)
             wm.modal_handler_add(self)
             _RUNNING.append(job)
+            self._redrawn = time.perf_counter()
             _redraw_status(context)
             return {'RUNNING_MODAL'}
         job.run(context)
@@ -382,7 +392,10 @@ class JobOperator:
         if event.type == 'TIMER' and event.timer is self._timer:
             if job.tick():
                 return self._end(context)
-            _redraw_status(context)
+            now = time.perf_counter()
+            if now - self._redrawn >= REDRAW_INTERVAL:
+                self._redrawn = now
+                _redraw_status(context)
         return {'PASS_THROUGH'}
 
     def cancel(self, context):
