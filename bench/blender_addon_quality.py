@@ -154,8 +154,11 @@ def scenario(zip_path, sock):
 def build_zip(tree, out, binary):
     """The extension zip of the add-on in `tree`, bundling the daemon `binary` (an archived
     revision has no target folder of its own)."""
-    subprocess.run([sys.executable, str(tree / "blender_addon" / "build.py"), "--out", str(out),
-                    "--no-validate", "--binary", binary], check=True, stdout=subprocess.DEVNULL)
+    script = tree / "blender_addon" / "build.py"
+    # Revisions before the daemon was bundled have no --binary.
+    extra = ["--binary", binary] if "--binary" in script.read_text() else []
+    subprocess.run([sys.executable, str(script), "--out", str(out), "--no-validate"] + extra,
+                   check=True, stdout=subprocess.DEVNULL)
     return next(Path(out).glob("tessd-*.zip"))
 
 
@@ -222,9 +225,10 @@ def main():
             daemon.wait()
     text = ("# The Blender add-on: shading and data, before and after (issue 19)\n\n"
             "`.venv/bin/python bench/blender_addon_quality.py --before %s` (bpy %s, one daemon, "
-            "the working tree's target/release/tessd for both).\n\n%s\n\nReports of the "
+            "`%s`, for both).\n\n%s\n\nReports of the "
             "batch and LOD runs:\n\n- before: %s\n- after: %s\n"
-            % (args.before, "5.0.1", table(res["before"], res["after"], args.before),
+            % (args.before, "5.0.1", os.path.relpath(binary, REPO) if binary.startswith(str(REPO)) else binary,
+               table(res["before"], res["after"], args.before),
                " / ".join(res["before"]["reports"]) or "-", " / ".join(res["after"]["reports"]) or "-"))
     Path(args.out).write_text(text, encoding="utf-8")
     print(text)

@@ -228,8 +228,11 @@ def run_scenario(zip_path, socket, args, repeats):
 def build_zip(tree, out, binary):
     """The extension zip of the add-on in `tree` (the working tree or an archived revision,
     which has no target folder of its own: `binary` is bundled)."""
-    subprocess.run([sys.executable, str(tree / "blender_addon" / "build.py"), "--out", str(out),
-                    "--no-validate", "--binary", binary], check=True, stdout=subprocess.DEVNULL)
+    script = tree / "blender_addon" / "build.py"
+    # Revisions before the daemon was bundled have no --binary.
+    extra = ["--binary", binary] if "--binary" in script.read_text() else []
+    subprocess.run([sys.executable, str(script), "--out", str(out), "--no-validate"] + extra,
+                   check=True, stdout=subprocess.DEVNULL)
     return next(Path(out).glob("tessd-*.zip"))
 
 

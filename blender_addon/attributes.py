@@ -62,6 +62,7 @@ class Sent:
         self.default_color = None
         self.dropped = []
         self.uv_name = None
+        self.all_sharp_faces = False
         self.missing = set()
 
 
@@ -77,8 +78,9 @@ def collect(mesh, obj, arrays, sent, skip=()):
     """Adds the generic attributes, vertex groups, shape keys and sharp edges of `mesh`
     to `arrays` and records them in `sent` (a :class:`Sent`). `skip` names attributes
     already sent another way (the UV map sent as `uvs`). Corner values are in face order
-    as Blender stores them (convert.corner_vertices). A `sharp_face` with no face set is not
-    sent: a result without it is smooth everywhere, the same shading."""
+    as Blender stores them (convert.corner_vertices). A `sharp_face` that is the same on every
+    face is not sent: all false, a result without it is smooth everywhere; all true
+    (`sent.all_sharp_faces`), every result face is made flat."""
     sizes = {"POINT": len(mesh.vertices), "CORNER": len(mesh.loops), "FACE": len(mesh.polygons)}
     for attr in mesh.attributes:
         name = attr.name
@@ -89,7 +91,10 @@ def collect(mesh, obj, arrays, sent, skip=()):
                                                           attr.data_type.lower()))
             continue
         values = _read(attr, sizes[attr.domain])
-        if name == "sharp_face" and attr.domain == 'FACE' and not values.any():
+        if name == "sharp_face" and attr.domain == 'FACE' and (values.all() or not values.any()):
+            # The same on every face: every result face (each has a source face) gets it too,
+            # so it need not travel (a flat-shaded mesh saves 4 bytes a face each way).
+            sent.all_sharp_faces = bool(values.all()) and len(values) > 0
             continue
         arrays["%s:%s" % (DOMAINS[attr.domain], name)] = values
         sent.generic.append((name, attr.domain, attr.data_type))

@@ -299,6 +299,8 @@ def mesh_from_arrays(name, arrays, *, materials=(), uv_name="UVMap", prefix="", 
         sent.missing.add("UV map " + sent.uv_name)
     if sent is not None:
         sent.missing.update(attrs.apply_generic(mesh, arrays, prefix, sent))
+        if sent.all_sharp_faces:
+            shading.set_sharp_faces(mesh, np.ones(len(mesh.polygons), dtype=bool), update=False)
 
     crease_edges = _get(arrays, "crease_edges", prefix)
     if crease_edges is not None and len(crease_edges):

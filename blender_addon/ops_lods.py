@@ -99,9 +99,9 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
 
     def apply_task(self, context, task, created):
         req = task.requests[0]
-        depsgraph = context.evaluated_depsgraph_get()
         src = task.unit.objects[0]
         if self.use_modifiers and common.has_modifiers(src):
+            depsgraph = context.evaluated_depsgraph_get()
             lod0 = bpy.data.meshes.new_from_object(src.evaluated_get(depsgraph),
                                                    preserve_all_data_layers=True,
                                                    depsgraph=depsgraph)

@@ -87,10 +87,11 @@ def flatten_inverted(mesh, starts=None, max_rounds=64):
     return made
 
 
-def set_sharp_faces(mesh, flags):
+def set_sharp_faces(mesh, flags, update=True):
     attr = mesh.attributes.get("sharp_face") or mesh.attributes.new("sharp_face", 'BOOLEAN', 'FACE')
     attr.data.foreach_set("value", np.ascontiguousarray(flags, dtype=bool))
-    mesh.update()
+    if update:
+        mesh.update()
 
 
 def set_custom_normals(mesh, normals):

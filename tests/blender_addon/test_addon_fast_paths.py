@@ -148,22 +148,34 @@ def test_triangle_mesh_goes_as_rows_of_three_and_reads_match_the_element_api(bpy
     assert arrays["face_indices"].dtype == np.uint32 and np.array_equal(arrays["face_indices"], corner_v)
     assert np.array_equal(arrays["positions"].reshape(-1), co)
     assert np.array_equal(arrays["uvs"].reshape(-1), uv)
-    assert "face:sharp_face" in arrays and arrays["face:sharp_face"].all()  # Suzanne is flat
 
 
-def test_all_false_sharp_face_is_not_sent_and_the_result_is_smooth(bpy):
-    """A `sharp_face` attribute with no face set adds nothing: not sent, result smooth."""
+@pytest.mark.parametrize("shading", ["smooth", "flat", "mixed"])
+def test_sharp_face_travels_only_when_it_differs_between_faces(bpy, shading):
+    """`sharp_face` the same on every face is not sent: all false gives a smooth result, all
+    true a flat one (every result face has a source face); mixed, it is sent and carried."""
     convert = module("convert")
     src = scenes.suzanne()
-    src.data.shade_smooth()
-    if src.data.attributes.get("sharp_face") is None:
-        src.data.attributes.new("sharp_face", 'BOOLEAN', 'FACE')
-    arrays, _, sent = convert.mesh_to_arrays(src.data, src)
-    assert "face:sharp_face" not in arrays and "sharp_face" not in [g[0] for g in sent.generic]
+    mesh = src.data
+    flags = np.zeros(len(mesh.polygons), bool)
+    if shading == "flat":
+        flags[:] = True
+    elif shading == "mixed":
+        flags[: len(flags) // 2] = True
+    attr = mesh.attributes.get("sharp_face") or mesh.attributes.new("sharp_face", 'BOOLEAN', 'FACE')
+    attr.data.foreach_set("value", flags)
+    arrays, _, sent = convert.mesh_to_arrays(mesh, src)
+    assert ("face:sharp_face" in arrays) == (shading == "mixed")
+    assert sent.all_sharp_faces == (shading == "flat")
     select(src)
     assert bpy.ops.tessd.simplify(method='COMPLEXITY', target=30) == {'FINISHED'}
-    out = bpy.data.objects["Suzanne_simplified"].data
-    assert not art.sharp_faces(out).all()
+    out = art.sharp_faces(bpy.data.objects["Suzanne_simplified"].data)
+    if shading == "flat":
+        assert out.all()
+    elif shading == "smooth":
+        assert not out.all()  # only faces made flat against black specks, if any
+    else:
+        assert out.any() and not out.all()
 
 
 def test_generic_attributes_of_every_type_round_trip_through_native_dtypes(bpy):
