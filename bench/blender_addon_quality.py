@@ -17,6 +17,7 @@ daemon (target/release/tessd or $TESSD_BIN) and count:
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -28,9 +29,13 @@ BUNNY = Path(os.environ.get("TESSD_SHARED_DATA", REPO.parent / "shared" / "data"
 
 def run_scenario(zip_path, sock):
     """Runs this file in a fresh Python with bpy for one zip; returns its figures."""
-    env = dict(os.environ, BLENDER_USER_RESOURCES=tempfile.mkdtemp(prefix="tessd-bench-"))
-    proc = subprocess.run([sys.executable, __file__, "--scenario", str(zip_path), sock],
-                          stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env)
+    user = tempfile.mkdtemp(prefix="tessd-bench-")
+    env = dict(os.environ, BLENDER_USER_RESOURCES=user)
+    try:
+        proc = subprocess.run([sys.executable, __file__, "--scenario", str(zip_path), sock],
+                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env)
+    finally:
+        shutil.rmtree(user, ignore_errors=True)
     lines = [l for l in proc.stdout.splitlines() if l.startswith("RESULT ")]
     if not lines:
         raise SystemExit("the scenario failed for %s:\n%s" % (zip_path, proc.stdout[-3000:]))
@@ -45,7 +50,9 @@ def scenario(zip_path, sock):
     import numpy as np
     from addon_env import install_addon
 
-    install_addon(zip_path, tempfile.mkdtemp(), sock)
+    repo = os.path.join(os.environ["BLENDER_USER_RESOURCES"], "repo")
+    os.makedirs(repo, exist_ok=True)
+    install_addon(zip_path, repo, sock)
 
     def clear():
         for c in (bpy.data.objects, bpy.data.meshes, bpy.data.collections):
