@@ -24,7 +24,12 @@
 # $SIMPLIFY_HEADLINE_TRIANGLES-triangle torus, default 4e6: tessd through the daemon vs
 # meshoptimizer in process) into simplify_headline.json (+ .md); an empty value skips either.
 # The report shows them beside the committed "before" (simplify_stages_before.*,
-# simplify_headline_before.*: the library at 65769d72, before issue 33).
+# simplify_headline_before.*: the library at 65769d72, before issue 33). To measure "before"
+# again in the same run (same machine state), give the binaries built at that commit:
+#   SIMPLIFY_BEFORE_HARNESS=/work/target-before/release/bench-simplify \
+#   SIMPLIFY_BEFORE_TESSD=/work/target-before/release/tessd bash bench/run_simplify.sh
+# (the harness there needs the `stages` subcommand: bench/simplify/src copied over); they
+# rewrite $RESULTS/simplify_stages_before.* and simplify_headline_before.* (~3 min more).
 #
 #   bash bench/run_simplify.sh --quick [more options]   # ~5 min: shared meshes, 0.1 M and 1 M tori at
 #                                                        # 10 %, no 50 M torus, stages and headline on 1 M
@@ -70,5 +75,19 @@ if [[ -n "$HEADLINE_TRIANGLES" ]]; then
         --work "$WORK" --triangles "$HEADLINE_TRIANGLES" --repeat "$HEADLINE_REPEAT" --label after \
         --out "$RESULTS/simplify_headline.json"
 fi
-"$PY" bench/simplify/report.py --wall-s "$(( $(date +%s) - start ))" "${FILES[@]}" --out "$RESULTS"
+BEFORE=()
+if [[ -n "${SIMPLIFY_BEFORE_HARNESS:-}" && -n "$STAGES_SIZES" ]]; then
+    "$SIMPLIFY_BEFORE_HARNESS" stages --sizes "$STAGES_SIZES" --fraction 0.1 --repeat 3 \
+        --label "before: $SIMPLIFY_BEFORE_HARNESS" --out "$RESULTS/simplify_stages_before.json"
+    "$PY" bench/simplify/tables.py --stages "$RESULTS/simplify_stages_before.json" \
+        --out "$RESULTS/simplify_stages_before.md" --title "Simplification stage times before issue 33"
+    BEFORE+=(--before-stages "$RESULTS/simplify_stages_before.json")
+fi
+if [[ -n "${SIMPLIFY_BEFORE_TESSD:-}" && -n "$HEADLINE_TRIANGLES" ]]; then
+    "$PY" bench/simplify/headline.py run --tessd "$SIMPLIFY_BEFORE_TESSD" --harness target/release/bench-simplify \
+        --work "$WORK" --triangles "$HEADLINE_TRIANGLES" --repeat "$HEADLINE_REPEAT" --label before \
+        --out "$RESULTS/simplify_headline_before.json"
+    BEFORE+=(--before-headline "$RESULTS/simplify_headline_before.json")
+fi
+"$PY" bench/simplify/report.py --wall-s "$(( $(date +%s) - start ))" "${FILES[@]}" --out "$RESULTS" "${BEFORE[@]}"
 echo "simplify benchmark: $(( $(date +%s) - start )) s"

@@ -533,12 +533,16 @@ def main():
     head_before = load_opt(args.before_headline)
     L.append("## Headline: tessd through the daemon vs meshoptimizer (issue 33)")
     L.append("")
+    if head_before and not head_after:
+        L += ["This run made no headline (`SIMPLIFY_HEADLINE_TRIANGLES` empty): the committed *before* only.", ""]
     L += headline_table(head_after, head_before) or ["– (no headline results found)", ""]
     summary["headline"] = {"after": head_after, "before": head_before}
     stages_after = load_opt(args.stages or out / "simplify_stages.json")
     stages_before = load_opt(args.before_stages)
     L.append("## Stage times of each mode, before and after (issue 33)")
     L.append("")
+    if stages_before and not stages_after:
+        L += ["This run timed no stages (`SIMPLIFY_STAGES_SIZES` empty): the committed *before* only.", ""]
     L += stage_tables(stages_after, stages_before) or ["– (no stage times found)", ""]
     summary["stages"] = {"after": stages_after, "before": stages_before}
 
