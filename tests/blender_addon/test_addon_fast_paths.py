@@ -148,6 +148,13 @@ def test_triangle_mesh_goes_as_rows_of_three_and_reads_match_the_element_api(bpy
     assert arrays["face_indices"].dtype == np.uint32 and np.array_equal(arrays["face_indices"], corner_v)
     assert np.array_equal(arrays["positions"].reshape(-1), co)
     assert np.array_equal(arrays["uvs"].reshape(-1), uv)
+    # n-gons (a cylinder's 32-gon caps): the sizes from the faces' starts.
+    bpy.ops.mesh.primitive_cylinder_add(vertices=32)
+    cyl = bpy.context.object.data
+    arrays, _, _ = convert.mesh_to_arrays(cyl, bpy.context.object)
+    sizes = np.empty(len(cyl.polygons), np.int32)
+    cyl.polygons.foreach_get("loop_total", sizes)
+    assert sizes.max() == 32 and np.array_equal(arrays["face_sizes"], sizes)
 
 
 @pytest.mark.parametrize("shading", ["smooth", "flat", "mixed"])
