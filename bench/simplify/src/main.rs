@@ -69,6 +69,10 @@ use tessd_mesh::Mesh;
 use tessd_mesh::io::write_path;
 use timing::median;
 
+/// Mesh-sized buffers on huge pages where the kernel grants them (`tessd_mesh::allocation`).
+#[global_allocator]
+static ALLOCATOR: tessd_mesh::allocation::LargePages = tessd_mesh::allocation::LargePages;
+
 fn main() -> ExitCode {
     // The daemon's allocation policy, so that the library's figures are the daemon's.
     tessd_mesh::allocation::return_large_buffers_to_system();

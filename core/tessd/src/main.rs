@@ -477,6 +477,10 @@ enum JobAction {
     },
 }
 
+/// Mesh-sized buffers on huge pages where the kernel grants them (`tessd_mesh::allocation`).
+#[global_allocator]
+static ALLOCATOR: tessd_mesh::allocation::LargePages = tessd_mesh::allocation::LargePages;
+
 fn main() {
     // Mesh-sized buffers go back to the system when a job frees them (see the module).
     tessd_mesh::allocation::return_large_buffers_to_system();
