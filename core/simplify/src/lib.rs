@@ -61,7 +61,12 @@ mod elimination;
 mod error;
 mod feature_priority;
 pub mod features;
+mod grid_cells;
+mod grid_frame;
 mod grid_partition;
+mod grid_sums;
+#[cfg(test)]
+mod grid_tests;
 mod kd;
 pub mod lod;
 mod options;
@@ -272,16 +277,33 @@ impl<'a> Prepared<'a> {
                         "grid size {grid:?} must be positive"
                     )));
                 }
-                let (p, m) = grid_partition::grid_partition(
-                    &work.positions,
-                    weights,
-                    classes,
-                    bounds,
-                    grid,
-                    options.keep_partition,
+                // The fused passes (grid_cells.rs, grid_sums.rs), each named to the progress
+                // callback; the hash and member lists only where the box holds too many bricks.
+                step(0.15, "cells")?;
+                let keep = options.keep_partition;
+                let positions = &work.positions;
+                let boxes = options.representative == Representative::Quadric;
+                let cells = grid_cells::grid_cells(
+                    positions, weights, classes, bounds, grid, keep, boxes,
                 );
-                members = Some(m);
-                (p, None)
+                match cells {
+                    Some((p, sums)) => {
+                        let (g, _) = grid_frame::Grid::new(bounds, grid);
+                        step(0.45, "representatives")?;
+                        let rep = options.representative;
+                        let reps =
+                            grid_sums::grid_representatives(work, &p.cluster_of, &sums, &g, rep);
+                        placed = Some(reps);
+                        (p, None)
+                    }
+                    None => {
+                        let (p, m) = grid_partition::grid_partition(
+                            positions, weights, classes, bounds, grid, keep,
+                        );
+                        members = Some(m);
+                        (p, None)
+                    }
+                }
             }
             Method::Quality(length) => {
                 let tol = length.resolve(self.size);
@@ -341,7 +363,8 @@ impl<'a> Prepared<'a> {
                 (p.map_err(stopped)?, None)
             }
         };
-        step(0.6, "merge")?;
+        let grid_goal = matches!(options.method, Method::Grid(_));
+        step(0.6, if grid_goal { "faces" } else { "merge" })?;
         let corner_attributes = work.attributes.iter().any(|a| a.domain == Domain::Corner);
         let attributes = work.normals.is_some() || work.uvs.is_some() || corner_attributes;
         // Coverage rounds (quality goal): while some collapsed input face's image is off the

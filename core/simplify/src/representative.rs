@@ -5,17 +5,13 @@
 use crate::adaptive_partition::LeafView;
 use crate::area_vector;
 use crate::blocks;
+use crate::cell_table::CellTable;
 use crate::cluster_stats::{self, Stats};
 use crate::options::Representative;
-use crate::partition::Members;
+use crate::partition::{Members, UNUSED};
 use crate::quadric::Quadric;
 use rayon::prelude::*;
 use tessd_mesh::Mesh;
-
-/// Clusters whose quadrics are summed at once (80 bytes each, so 0.65 MB): the quadric
-/// representatives are placed chunk by chunk (a chunk per core at a time), and no quadric is
-/// held for every cluster.
-const CHUNK: usize = 1 << 13;
 
 /// Where the clusters' vertices, hence their statistics, come from.
 #[derive(Clone, Copy)]
@@ -70,22 +66,18 @@ pub(crate) fn place(
             });
         }
         Representative::Quadric => {
-            let touched = chunks_touched(mesh, cluster_of, n);
-            // Chunks are independent (their own clusters, their own partial sums): several
-            // at once, since one chunk's clusters meet only the few blocks of faces around them.
-            reps.par_chunks_mut(CHUNK).enumerate().for_each(|(k, out)| {
-                let first = k * CHUNK;
-                let quadrics = chunk_quadrics(mesh, cluster_of, &touched, k, out.len());
-                each_cluster(out, first, |c, out, scratch| {
-                    let s = source.stats(c, scratch);
-                    let x0 = s.barycentre();
-                    *out = quadric_point(&quadrics[c - first], &s, x0);
-                    if let (Some(tol), Source::Leaves(view)) = (tolerance, source)
-                        && view.points(c).iter().any(|q| dist(*out, q.p) > tol)
-                    {
-                        *out = x0.map(|x| x as f32);
-                    }
-                });
+            // Every cluster's quadric in one pass over the faces (no rescan per chunk of
+            // clusters), then each cluster solved on its own.
+            let quadrics = cluster_quadrics(mesh, cluster_of, n);
+            each_cluster(&mut reps, 0, |c, out, scratch| {
+                let s = source.stats(c, scratch);
+                let x0 = s.barycentre();
+                *out = quadric_point(&quadrics[c], &s, x0);
+                if let (Some(tol), Source::Leaves(view)) = (tolerance, source)
+                    && view.points(c).iter().any(|q| dist(*out, q.p) > tol)
+                {
+                    *out = x0.map(|x| x as f32);
+                }
             });
         }
     }
@@ -112,7 +104,7 @@ fn each_cluster(
 /// The quadric minimiser of a cluster with quadric `q` and statistics `s`, kept when it stays
 /// inside the cluster's box of vertices grown by a quarter of its diagonal; else `x0`, the
 /// barycentre.
-fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
+pub(crate) fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
     let x = q.minimizer(x0);
     let (lo, hi) = (s.lo, s.hi);
     let diag = (0..3)
@@ -130,92 +122,92 @@ fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
     .map(|v| v as f32)
 }
 
-/// For each fixed block of faces, the chunks of [`CHUNK`] clusters its faces touch (a bit set
-/// of `n.div_ceil(CHUNK)` bits), so that summing a chunk's quadrics visits only those blocks.
-fn chunks_touched(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Vec<u64>> {
-    let words = n.div_ceil(CHUNK).div_ceil(64);
-    if n <= CHUNK {
-        // One chunk: every block touches it.
-        return vec![vec![1]; mesh.face_count().div_ceil(blocks::BLOCK)];
-    }
-    blocks::map(mesh.face_count(), |r| {
-        let mut bits = vec![0u64; words];
-        let corners = mesh.face_offsets[r.start] as usize..mesh.face_offsets[r.end] as usize;
-        for &v in &mesh.face_indices[corners] {
-            let k = cluster_of[v as usize] as usize / CHUNK;
-            bits[k / 64] |= 1 << (k % 64);
-        }
-        bits
-    })
-}
-
-/// Sums, for the `len` clusters of chunk `k`, the area-weighted plane quadrics of the faces
-/// touching them (each face once per distinct cluster among its corners): Lindstrom 2000,
-/// section 3.2, where each triangle's quadric goes to the cells of its vertices. Fixed blocks
-/// of faces sum into partial quadrics of their own, added into the clusters in block order
-/// ([`crate::blocks`]); a cluster's sum is the same whichever chunk it is in, since it is made
-/// of the same partials in the same order.
-fn chunk_quadrics(
-    mesh: &Mesh,
-    cluster_of: &[u32],
-    touched: &[Vec<u64>],
-    k: usize,
-    len: usize,
-) -> Vec<Quadric> {
-    let first = (k * CHUNK) as u32;
-    let last = first + len as u32;
-    let blocks: Vec<usize> = (0..touched.len())
-        .filter(|&b| touched[b][k / 64] >> (k % 64) & 1 == 1)
-        .collect();
-    let partials: Vec<(Vec<u32>, Vec<Quadric>)> = blocks
-        .par_iter()
-        .map(|&b| {
-            let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
-            // The block's id of each cluster of the chunk, in the order the block meets them.
-            let mut local = vec![u32::MAX; len];
-            let (mut keys, mut q) = (Vec::new(), Vec::<Quadric>::new());
-            let mut seen: Vec<u32> = Vec::with_capacity(8);
-            for f in r {
-                let face = mesh.face(f);
-                let inside = |&v: &u32| (first..last).contains(&cluster_of[v as usize]);
-                if !face.iter().any(inside) {
-                    continue;
-                }
-                let (normal, area, centroid) = plane_of(mesh, face);
-                if area <= 0.0 {
-                    continue;
-                }
-                let d =
-                    -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
-                let fq = Quadric::plane(normal, d, area);
-                seen.clear();
-                for &v in face {
-                    let c = cluster_of[v as usize];
-                    if !seen.contains(&c) {
-                        seen.push(c);
-                        if !(first..last).contains(&c) {
-                            continue;
-                        }
-                        let slot = &mut local[(c - first) as usize];
-                        if *slot == u32::MAX {
-                            *slot = q.len() as u32;
-                            keys.push(c);
-                            q.push(Quadric::default());
-                        }
-                        q[*slot as usize].add(&fq);
-                    }
-                }
+/// Sums, for each of the `n` clusters of `cluster_of`, the area-weighted plane quadrics of
+/// the faces touching it (each face once per distinct cluster among its corners): Lindstrom
+/// 2000, section 3.2, where each triangle's quadric goes to the cells of its vertices.
+///
+/// One pass over the faces in fixed blocks ([`crate::blocks`]): each block sums into partial
+/// quadrics of its own (a small table from cluster to partial, with a cache of the last
+/// clusters met, since consecutive faces mostly hit the same clusters), and the partials are
+/// added into the clusters in block order, so a cluster's sum is the same bits on any number
+/// of threads. The blocks go in waves of [`WAVE_BLOCKS`]: while one wave's partials are added
+/// in (one core), the next wave sums (the others), and only one wave's partials are held.
+pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
+    let mut q = vec![Quadric::default(); n];
+    let blocks = mesh.face_count().div_ceil(blocks::BLOCK);
+    let merge = |q: &mut Vec<Quadric>, partials: Vec<(Vec<u32>, Vec<Quadric>)>| {
+        for (keys, partial) in &partials {
+            for (&c, p) in keys.iter().zip(partial) {
+                q[c as usize].add(p);
             }
-            (keys, q)
-        })
-        .collect();
-    let mut q = vec![Quadric::default(); len];
-    for (keys, partial) in &partials {
-        for (&c, p) in keys.iter().zip(partial) {
-            q[(c - first) as usize].add(p);
         }
+    };
+    let mut pending: Option<Vec<(Vec<u32>, Vec<Quadric>)>> = None;
+    for wave in (0..blocks).step_by(WAVE_BLOCKS) {
+        let sum = || {
+            (wave..(wave + WAVE_BLOCKS).min(blocks))
+                .into_par_iter()
+                .map(|b| block_quadrics(mesh, cluster_of, b))
+                .collect()
+        };
+        let previous = pending.take();
+        let (partials, ()) = rayon::join(sum, || {
+            if let Some(p) = previous {
+                merge(&mut q, p);
+            }
+        });
+        pending = Some(partials);
+    }
+    if let Some(p) = pending {
+        merge(&mut q, p);
     }
     q
+}
+
+/// Blocks of faces summed per wave in [`cluster_quadrics`]: a fixed number (not the thread
+/// count), enough for every core.
+const WAVE_BLOCKS: usize = 8;
+
+/// Block `b`'s partial quadrics: the clusters it touches in the order it meets them, and
+/// each one's sum over the block's faces in face order.
+fn block_quadrics(mesh: &Mesh, cluster_of: &[u32], b: usize) -> (Vec<u32>, Vec<Quadric>) {
+    let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
+    let mut table = CellTable::with_capacity(1024);
+    // The last cluster met at each of a few cache places, and its partial.
+    let mut recent = [(u32::MAX, 0u32); 64];
+    let (mut keys, mut q) = (Vec::new(), Vec::<Quadric>::new());
+    let mut seen: Vec<u32> = Vec::with_capacity(8);
+    for f in r {
+        let face = mesh.face(f);
+        let (normal, area, centroid) = plane_of(mesh, face);
+        if area <= 0.0 {
+            continue;
+        }
+        let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
+        let fq = Quadric::plane(normal, d, area);
+        seen.clear();
+        for &v in face {
+            let c = cluster_of[v as usize];
+            if c == UNUSED || seen.contains(&c) {
+                continue;
+            }
+            seen.push(c);
+            let hit = &mut recent[c as usize % recent.len()];
+            let slot = if hit.0 == c {
+                hit.1
+            } else {
+                let id = table.id(u64::from(c));
+                if id as usize == keys.len() {
+                    keys.push(c);
+                    q.push(Quadric::default());
+                }
+                *hit = (c, id);
+                id
+            };
+            q[slot as usize].add(&fq);
+        }
+    }
+    (keys, q)
 }
 
 /// Unit normal, area and a point of the plane of a face (the first corner of a triangle, the

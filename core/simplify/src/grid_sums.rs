@@ -1,0 +1,180 @@
+//! The grid's per-cluster sums and its representatives: passes S and C of the grid's fused
+//! passes (issue 33). No member lists: every vertex adds itself into its cluster's slots as
+//! the vertices stream by (`grid_cells.rs` calls [`contribution`] in the pass that numbers the
+//! cells), and the representatives are read off the slots.
+//!
+//! For the weighted barycentre (Belblidia & Perrin, section 2, "fusion des sommets") the sums
+//! are integers, so that they are the same bits in any order and every core can add into the
+//! same slots: each vertex's place inside its cell (0 to 1 along each axis; the cell is the
+//! same for the whole cluster) in 23-bit fixed point, times its weight scaled by a power of
+//! two that takes the mesh's largest weight to 2³⁷–2³⁸. A product is below 2⁶², split into
+//! its low 32 bits and the rest, each summed in a u64: exact for up to 2³² vertices a
+//! cluster. The barycentre lies within about 2⁻²⁴ of a cell side of the exact one (a few
+//! ulps of the f32 result, where the order of f64 sums used to decide the last bits); a
+//! weight below 2⁻³⁸ of the largest counts as that much. The heaviest vertex (its position
+//! is the heaviest representative) is a maximum of (weight, −index): the first met among
+//! equals.
+
+use crate::blocks;
+use crate::cluster_stats::Stats;
+use crate::grid_frame::Grid;
+use crate::options::Representative;
+use crate::representative;
+use rayon::prelude::*;
+use tessd_mesh::Mesh;
+
+/// u64 slots a cluster's sums take (x low, x high, y low, y high, z low, z high, weight; one
+/// spare to fill the cache line).
+pub(crate) const SLOTS: usize = 8;
+
+/// Fixed-point steps per cell side.
+const UNIT: f64 = (1u64 << 23) as f64;
+
+/// Per-cluster sums, as the cell pass leaves them.
+pub(crate) struct Sums {
+    /// Heaviest vertex of each cluster: `weight bits << 32 | !index`.
+    pub heavy: Vec<u64>,
+    /// [`SLOTS`] a cluster: the fixed-point sums.
+    pub sums: Vec<u64>,
+    /// Six a cluster when asked for (the quadric's bound): the vertices' box as
+    /// [`ordered`] bits, low corner then high corner.
+    pub boxes: Vec<u32>,
+}
+
+/// The weight scale: a power of two (exact) that takes the largest of `weights` to
+/// 2³⁷–2³⁸.
+pub(crate) fn weight_scale(weights: &[f32]) -> f64 {
+    let top = blocks::map(weights.len(), |r| {
+        weights[r]
+            .iter()
+            .fold(0f32, |m, &w| if w > m { w } else { m })
+    })
+    .into_iter()
+    .fold(0f32, f32::max);
+    let e = i64::from((top.to_bits() >> 23) & 0xff);
+    f64::from_bits(((1023 + 37 + 127 - e).clamp(1, 2046) as u64) << 52)
+}
+
+/// Key of vertex `v` of weight `w` for the heaviest: the largest weight, then the smallest
+/// index.
+#[inline]
+pub(crate) fn heavy_key(v: usize, w: f32) -> u64 {
+    u64::from(w.to_bits()) << 32 | u64::from(!(v as u32))
+}
+
+/// What a vertex of weight `w` at `u` inside its cell adds to its cluster's [`SLOTS`].
+#[inline]
+pub(crate) fn contribution(u: [f64; 3], w: f32, scale: f64) -> [u64; 7] {
+    // Rounded by adding a half and truncating through i64 (`f64::round` and f64 → u64 are
+    // library calls or branches on the baseline x86-64 target). A referenced vertex counts at
+    // least one step, so that every cluster's weight is positive.
+    // SAFETY (both conversions): finite values in 0..2³⁸ (a weight is at most the largest,
+    // scaled below 2³⁸; a place is clamped to 0..2 steps of 2²³).
+    let wq = (unsafe { (f64::from(w) * scale + 0.5).to_int_unchecked::<i64>() }).max(1) as u64;
+    let mut out = [0u64; 7];
+    for k in 0..3 {
+        let x = u[k].clamp(0.0, 2.0) * UNIT + 0.5;
+        let uq = unsafe { x.to_int_unchecked::<i64>() } as u64;
+        let term = wq * uq;
+        out[2 * k] = term & 0xffff_ffff;
+        out[2 * k + 1] = term >> 32;
+    }
+    out[6] = wq;
+    out
+}
+
+/// `x`'s bits turned so that unsigned order is float order.
+#[inline]
+pub(crate) fn ordered(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b & 1 << 31 != 0 { !b } else { b | 1 << 31 }
+}
+
+/// [`ordered`]'s inverse.
+fn unordered(o: u32) -> f32 {
+    f32::from_bits(if o & 1 << 31 != 0 { o & !(1 << 31) } else { !o })
+}
+
+/// The representative of each cluster of `cluster_of` (a partition of `grid`) from its sums
+/// (pass C); the quadric representative sums the faces' quadrics first.
+pub(crate) fn grid_representatives(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    sums: &Sums,
+    grid: &Grid,
+    rep: Representative,
+) -> Vec<[f32; 3]> {
+    let positions = &mesh.positions;
+    let n = sums.heavy.len();
+    let heaviest = |c: usize| !(sums.heavy[c] as u32) as usize;
+    if rep == Representative::Heaviest {
+        return (0..n)
+            .into_par_iter()
+            .map(|c| positions[heaviest(c)])
+            .collect();
+    }
+    let side = grid.side();
+    let barycentre = |c: usize| -> [f64; 3] {
+        let s = &sums.sums[c * SLOTS..(c + 1) * SLOTS];
+        let w = s[6] as f64 * UNIT;
+        let corner = grid.corner(grid.locate(&positions[heaviest(c)]).0);
+        std::array::from_fn(|k| {
+            // High part times 2³² plus low part, each rounded once, in a fixed order.
+            let x = s[2 * k + 1] as f64 * (1u64 << 32) as f64 + s[2 * k] as f64;
+            corner[k] + x / w * side[k]
+        })
+    };
+    if rep != Representative::Quadric {
+        return (0..n)
+            .into_par_iter()
+            .map(|c| barycentre(c).map(|x| x as f32))
+            .collect();
+    }
+    let quadrics = representative::cluster_quadrics(mesh, cluster_of, n);
+    (0..n)
+        .into_par_iter()
+        .map(|c| {
+            let b = &sums.boxes[6 * c..6 * c + 6];
+            let h = heaviest(c);
+            let stats = Stats {
+                sum: [0.0; 4],
+                lo: std::array::from_fn(|k| unordered(b[k])),
+                hi: std::array::from_fn(|k| unordered(b[3 + k])),
+                heaviest_w: 0.0,
+                heaviest: h as u32,
+            };
+            representative::quadric_point(&quadrics[c], &stats, barycentre(c))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ordered_bits_keep_float_order() {
+        let xs = [-3.5f32, -0.0, 0.0, 1e-30, 2.0, 7.25];
+        for w in xs.windows(2) {
+            assert!(ordered(w[0]) <= ordered(w[1]));
+        }
+        for x in xs {
+            assert_eq!(unordered(ordered(x)).to_bits(), x.to_bits());
+        }
+    }
+
+    #[test]
+    fn fixed_point_sums_give_the_weighted_mean() {
+        // Two vertices of weights 1 and 3 at 0.2 and 0.6 of a cell: mean 0.5.
+        let scale = weight_scale(&[1.0, 3.0]);
+        let a = contribution([0.2, 0.0, 1.0], 1.0, scale);
+        let b = contribution([0.6, 0.5, 1.0], 3.0, scale);
+        let s: Vec<u64> = (0..7).map(|k| a[k] + b[k]).collect();
+        let mean = |k: usize| {
+            (s[2 * k + 1] as f64 * 2f64.powi(32) + s[2 * k] as f64) / (s[6] as f64 * UNIT)
+        };
+        assert!((mean(0) - 0.5).abs() < 1e-7, "{}", mean(0));
+        assert!((mean(1) - 0.375).abs() < 1e-7);
+        assert!((mean(2) - 1.0).abs() < 1e-7);
+    }
+}

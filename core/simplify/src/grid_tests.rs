@@ -1,0 +1,197 @@
+//! The grid's fused passes (`grid_cells.rs`, `grid_sums.rs`) against a plain sequential
+//! reference — a hash map from cell to cluster in vertex order, f64 barycentres, a set of
+//! sorted cluster triples for duplicates — and against themselves on 1, 2 and 7 threads.
+
+use crate::grid_frame::Grid;
+use crate::{GridSize, Method, Representative, Simplified, SimplifyOptions, simplify};
+use std::collections::{HashMap, HashSet};
+use tessd_mesh::Mesh;
+
+/// A closed, bumpy torus of `nu × nv` quads split into triangles, vertices in row order.
+fn torus(nu: u32, nv: u32) -> Mesh {
+    let mut m = Mesh::default();
+    let tau = std::f64::consts::TAU;
+    for i in 0..nu {
+        let u = tau * f64::from(i) / f64::from(nu);
+        for j in 0..nv {
+            let v = tau * f64::from(j) / f64::from(nv);
+            let r = 0.4 * (1.0 + 0.1 * (6.0 * u).sin() * (4.0 * v).cos())
+                + 0.002 * ((i * 7919 + j * 104_729) % 97) as f64 / 97.0;
+            let ring = 1.0 + r * v.cos();
+            m.positions.push([
+                (ring * u.cos()) as f32,
+                (ring * u.sin()) as f32,
+                (r * v.sin()) as f32,
+            ]);
+        }
+    }
+    for i in 0..nu {
+        for j in 0..nv {
+            let (i1, j1) = ((i + 1) % nu, (j + 1) % nv);
+            let (a, b, c, d) = (i * nv + j, i1 * nv + j, i1 * nv + j1, i * nv + j1);
+            m.push_face(&[a, b, c]);
+            m.push_face(&[a, c, d]);
+        }
+    }
+    m
+}
+
+fn bunny() -> Mesh {
+    let path = tessd_testdata::shared("mesh/stanford_bunny.obj");
+    tessd_mesh::io::read_path(&path, &tessd_mesh::io::ReadOptions::default()).unwrap()
+}
+
+/// (clusters, output vertices, output faces, degenerate, duplicates) and the positions, the
+/// straightforward way, for a triangle mesh and the barycentre.
+fn reference(mesh: &Mesh, cells: u32) -> ([u64; 5], Vec<[f32; 3]>) {
+    let w = crate::weights::vertex_weights(mesh, crate::Weighting::LongestEdge);
+    let (bounds, _) = crate::partition::referenced_bounds(&mesh.positions, &w).unwrap();
+    let (grid, _) = Grid::new(&bounds, GridSize::CellsPerAxis(cells));
+    let mut id: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut cluster_of = vec![u32::MAX; mesh.positions.len()];
+    let mut sums: Vec<[f64; 4]> = Vec::new();
+    for (v, p) in mesh.positions.iter().enumerate() {
+        if w[v] > 0.0 {
+            let n = id.len() as u32;
+            let c = *id.entry(grid.locate(p).0).or_insert(n);
+            if c == n {
+                sums.push([0.0; 4]);
+            }
+            cluster_of[v] = c;
+            let wv = f64::from(w[v]);
+            let s = &mut sums[c as usize];
+            for k in 0..3 {
+                s[k] += wv * f64::from(p[k]);
+            }
+            s[3] += wv;
+        }
+    }
+    let reps: Vec<[f32; 3]> = sums
+        .iter()
+        .map(|s| std::array::from_fn(|k| (s[k] / s[3]) as f32))
+        .collect();
+    let (mut seen, mut used) = (HashSet::new(), HashSet::new());
+    let (mut faces, mut degenerate, mut duplicates) = (0u64, 0u64, 0u64);
+    for t in mesh.triangles().unwrap() {
+        let c = t.map(|v| cluster_of[v as usize]);
+        let p = c.map(|c| glam::Vec3::from_array(reps[c as usize]).as_dvec3());
+        let zero = (p[1] - p[0]).cross(p[2] - p[0]) == glam::DVec3::ZERO;
+        if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] || zero {
+            degenerate += 1;
+            continue;
+        }
+        let mut key = c;
+        key.sort_unstable();
+        if !seen.insert(key) {
+            duplicates += 1;
+            continue;
+        }
+        faces += 1;
+        used.extend(c);
+    }
+    let mut out: Vec<u32> = used.into_iter().collect();
+    out.sort_unstable();
+    let counts = [
+        sums.len() as u64,
+        out.len() as u64,
+        faces,
+        degenerate,
+        duplicates,
+    ];
+    (counts, out.iter().map(|&c| reps[c as usize]).collect())
+}
+
+fn run(mesh: &Mesh, options: &SimplifyOptions, threads: usize) -> Simplified {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| simplify(mesh, options, &mut |_, _| true).unwrap())
+}
+
+fn grid(cells: u32, rep: Representative) -> SimplifyOptions {
+    SimplifyOptions::new(Method::Grid(GridSize::CellsPerAxis(cells))).with_representative(rep)
+}
+
+#[test]
+fn fused_grid_counts_match_a_sequential_reference() {
+    for (name, mesh) in [("torus", torus(300, 120)), ("bunny", bunny())] {
+        for cells in [3, 20, 90, 400] {
+            let (want, positions) = reference(&mesh, cells);
+            let got = run(&mesh, &grid(cells, Representative::Barycenter), 1);
+            let r = &got.report;
+            let counts = [
+                r.clusters,
+                r.output_vertices,
+                r.output_faces,
+                r.degenerate_faces,
+                r.duplicate_faces,
+            ];
+            assert_eq!(counts, want, "{name} at {cells} cells");
+            // Positions: the same up to the last bits of the sums.
+            let size = 2.0f32;
+            for (a, b) in got.mesh.positions.iter().zip(&positions) {
+                for k in 0..3 {
+                    assert!(
+                        (a[k] - b[k]).abs() <= 1e-6 * size,
+                        "{name} {cells}: {a:?} {b:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn fused_grid_is_the_same_bytes_on_1_2_and_7_threads() {
+    let mut quads = torus(150, 60);
+    // Every other pair of triangles as one quad: a polygon mesh, kept as polygons.
+    let tris = quads.triangles().unwrap().to_vec();
+    quads.face_offsets = vec![0];
+    quads.face_indices.clear();
+    for (i, pair) in tris.chunks(2).enumerate() {
+        if i % 2 == 0 {
+            let [a, b, c] = pair[0];
+            quads.push_face(&[a, b, c, pair[1][2]]);
+        } else {
+            pair.iter().for_each(|t| quads.push_face(t));
+        }
+    }
+    let meshes = [
+        ("torus", torus(400, 160)),
+        ("quads", quads),
+        ("bunny", bunny()),
+    ];
+    let reps = [
+        Representative::Barycenter,
+        Representative::Quadric,
+        Representative::Heaviest,
+    ];
+    for (name, mesh) in &meshes {
+        for cells in [7, 60, 250] {
+            for rep in reps {
+                let mut options = grid(cells, rep);
+                options.keep_partition = true;
+                let one = run(mesh, &options, 1);
+                assert!(one.mesh.face_count() > 0);
+                for threads in [2, 7] {
+                    let other = run(mesh, &options, threads);
+                    let bits = |s: &Simplified| -> Vec<u32> {
+                        s.mesh
+                            .positions
+                            .iter()
+                            .flatten()
+                            .map(|x| x.to_bits())
+                            .collect()
+                    };
+                    let what = format!("{name} {cells} {rep:?} on {threads} threads");
+                    assert!(bits(&one) == bits(&other), "{what}");
+                    assert_eq!(one.mesh.face_indices, other.mesh.face_indices, "{what}");
+                    assert_eq!(one.mesh.face_offsets, other.mesh.face_offsets, "{what}");
+                    assert_eq!(one.cells, other.cells, "{what}");
+                    assert_eq!(one.report, other.report, "{what}");
+                }
+            }
+        }
+    }
+}
