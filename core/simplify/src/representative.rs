@@ -135,6 +135,44 @@ pub(crate) fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
 pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
     let mut q = vec![Quadric::default(); n];
     let blocks = mesh.face_count().div_ceil(blocks::BLOCK);
+    if blocks::single_thread() {
+        // One core: the same sums without tables. Each cluster's partial of the block that
+        // last touched it lives in a dense array, added into its total when a later block
+        // first touches the cluster (so in block order) or at the end.
+        let mut part = vec![Quadric::default(); n];
+        let mut block_of = vec![u32::MAX; n];
+        let mut seen: Vec<u32> = Vec::with_capacity(8);
+        for f in 0..mesh.face_count() {
+            let b = (f / blocks::BLOCK) as u32;
+            let face = mesh.face(f);
+            let Some(fq) = face_quadric(mesh, face) else {
+                continue;
+            };
+            seen.clear();
+            for &v in face {
+                let c = cluster_of[v as usize];
+                if c == UNUSED || seen.contains(&c) {
+                    continue;
+                }
+                seen.push(c);
+                let c = c as usize;
+                if block_of[c] != b {
+                    if block_of[c] != u32::MAX {
+                        q[c].add(&part[c]);
+                    }
+                    block_of[c] = b;
+                    part[c] = Quadric::default();
+                }
+                part[c].add(&fq);
+            }
+        }
+        for c in 0..n {
+            if block_of[c] != u32::MAX {
+                q[c].add(&part[c]);
+            }
+        }
+        return q;
+    }
     let merge = |q: &mut Vec<Quadric>, partials: Vec<(Vec<u32>, Vec<Quadric>)>| {
         for (keys, partial) in &partials {
             for (&c, p) in keys.iter().zip(partial) {
@@ -179,12 +217,9 @@ fn block_quadrics(mesh: &Mesh, cluster_of: &[u32], b: usize) -> (Vec<u32>, Vec<Q
     let mut seen: Vec<u32> = Vec::with_capacity(8);
     for f in r {
         let face = mesh.face(f);
-        let (normal, area, centroid) = plane_of(mesh, face);
-        if area <= 0.0 {
+        let Some(fq) = face_quadric(mesh, face) else {
             continue;
-        }
-        let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
-        let fq = Quadric::plane(normal, d, area);
+        };
         seen.clear();
         for &v in face {
             let c = cluster_of[v as usize];
@@ -208,6 +243,16 @@ fn block_quadrics(mesh: &Mesh, cluster_of: &[u32], b: usize) -> (Vec<u32>, Vec<Q
         }
     }
     (keys, q)
+}
+
+/// The area-weighted quadric of a face's plane; `None` for a face of zero area.
+fn face_quadric(mesh: &Mesh, face: &[u32]) -> Option<Quadric> {
+    let (normal, area, centroid) = plane_of(mesh, face);
+    if area <= 0.0 {
+        return None;
+    }
+    let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
+    Some(Quadric::plane(normal, d, area))
 }
 
 /// Unit normal, area and a point of the plane of a face (the first corner of a triangle, the
