@@ -16,6 +16,7 @@
 //! measures a cell's largest displacement `d` also takes `s = max plane_distance(rep, q.p,
 //! q.n)` (squared, unnormalised: [`plane_distance2`]); the cell's split key becomes [`priority`]`(s, d)` in place of `d`.
 
+use rayon::prelude::*;
 use tessd_mesh::Mesh;
 
 /// The share of the displacement added to the surface estimate: it orders the cells the
@@ -31,13 +32,38 @@ pub(crate) const DISPLACEMENT_SHARE: f32 = 1.0 / 256.0;
 ///
 /// A border is found without adjacency: around an interior vertex of a closed fan the edges
 /// opposite the vertex form a closed loop, so their vectors sum to zero; on a border they sum
-/// to the chord between the fan's two ends. Two passes over the faces share one accumulator
-/// of 12 bytes a vertex (the area vectors, then the opposite edges), so the goal's working
-/// memory stays small. Faces are visited in order, so the sums do not depend on the thread
-/// count.
+/// to the chord between the fan's two ends.
+///
+/// One pass over the faces on every core (issue 33, point 5): each core owns a range of the
+/// vertices and walks the faces in order, adding to its own vertices only, so every vertex's
+/// sums are taken in face order — the same bits on any number of cores, and as the serial
+/// pass gave. A face none of whose corners is in the range costs its index reads only.
 pub(crate) fn vertex_normals(mesh: &Mesh, weights: &[f32]) -> Vec<PackedNormal> {
-    let mut acc = vec![[0f32; 3]; mesh.vertex_count()];
+    let n = mesh.vertex_count();
+    let parts = if crate::blocks::single_thread() {
+        1
+    } else {
+        rayon::current_num_threads().clamp(1, n / 4096 + 1)
+    };
+    let chunk = n.div_ceil(parts).max(1);
+    let mut out = vec![PackedNormal::NONE; n];
+    out.par_chunks_mut(chunk)
+        .enumerate()
+        .for_each(|(i, out)| normals_of_range(mesh, weights, i * chunk, out));
+    out
+}
+
+/// [`vertex_normals`] of the vertices `lo..lo + out.len()`.
+fn normals_of_range(mesh: &Mesh, weights: &[f32], lo: usize, out: &mut [PackedNormal]) {
+    let len = out.len();
+    let all = lo == 0 && len == mesh.vertex_count();
+    // Area vectors, then the opposite edges' vectors, of the range's vertices.
+    let mut acc = vec![[[0f32; 3]; 2]; len];
+    let mine = |v: u32| (v as usize).wrapping_sub(lo);
     for face in mesh.faces() {
+        if !all && !face.iter().any(|&v| mine(v) < len) {
+            continue;
+        }
         let m = face.len();
         let p = |i: usize| mesh.positions[face[i % m] as usize];
         // Newell's area vector (twice the area), exact for triangles.
@@ -48,40 +74,26 @@ pub(crate) fn vertex_normals(mesh: &Mesh, weights: &[f32]) -> Vec<PackedNormal> 
             a[1] += (u[2] - v[2]) * (u[0] + v[0]);
             a[2] += (u[0] - v[0]) * (u[1] + v[1]);
         }
-        for &v in face {
-            let s = &mut acc[v as usize];
-            (0..3).for_each(|k| s[k] += a[k]);
-        }
-    }
-    let mut normals: Vec<PackedNormal> = acc
-        .iter()
-        .map(|s| {
-            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
-            if len > 0.0 && len.is_finite() {
-                PackedNormal::pack([s[0] / len, s[1] / len, s[2] / len])
-            } else {
-                PackedNormal::NONE
-            }
-        })
-        .collect();
-    acc.iter_mut().for_each(|s| *s = [0.0; 3]);
-    for face in mesh.faces() {
-        let m = face.len();
-        let p = |i: usize| mesh.positions[face[i % m] as usize];
-        for i in 0..m {
+        for (i, &v) in face.iter().enumerate() {
+            let Some(s) = acc.get_mut(mine(v)) else {
+                continue;
+            };
             let (prev, next) = (p(i + m - 1), p(i + 1));
-            let s = &mut acc[face[i] as usize];
-            (0..3).for_each(|k| s[k] += next[k] - prev[k]);
+            (0..3).for_each(|k| s[0][k] += a[k]);
+            (0..3).for_each(|k| s[1][k] += next[k] - prev[k]);
         }
     }
-    for ((n, s), &w) in normals.iter_mut().zip(&acc).zip(weights) {
+    for ((n, [s, e]), &w) in out.iter_mut().zip(&acc).zip(&weights[lo..lo + len]) {
+        let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
         // The opposite edges of a closed fan cancel up to rounding: a few ulps of the
         // longest edge; a border's chord is at least an edge long.
-        if (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt() > 1e-3 * w {
-            *n = PackedNormal::NONE;
-        }
+        let border = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() > 1e-3 * w;
+        *n = if len > 0.0 && len.is_finite() && !border {
+            PackedNormal::pack([s[0] / len, s[1] / len, s[2] / len])
+        } else {
+            PackedNormal::NONE
+        };
     }
-    normals
 }
 
 /// A unit normal in four bytes — octahedral: the sphere's L1 projection folded onto a square,
@@ -235,6 +247,42 @@ mod tests {
         assert_eq!(open[0], n[0]);
         assert_eq!(open[1..], [[0.0; 3]; 3]);
         assert_eq!(plane_distance([3.0, 4.0, 0.0], [0.0; 3], [0.0; 3]), 5.0);
+    }
+
+    #[test]
+    fn normals_do_not_depend_on_the_ranges() {
+        // A bumpy 30 × 30 grid with a quad strip: every split of the vertices into ranges
+        // gives the bits of the whole.
+        let mut m = Mesh::default();
+        for j in 0..30 {
+            for i in 0..30 {
+                let z = ((i * 7 + j * 13) % 5) as f32 * 0.1;
+                m.positions.push([i as f32, j as f32, z]);
+            }
+        }
+        for j in 0..29u32 {
+            for i in 0..29u32 {
+                let v = j * 30 + i;
+                if j == 3 {
+                    m.push_face(&[v, v + 1, v + 31, v + 30]);
+                } else {
+                    m.push_face(&[v, v + 1, v + 31]);
+                    m.push_face(&[v, v + 31, v + 30]);
+                }
+            }
+        }
+        let w = crate::weights::vertex_weights(&m, crate::options::Weighting::LongestEdge);
+        let mut whole = vec![PackedNormal::NONE; 900];
+        normals_of_range(&m, &w, 0, &mut whole);
+        assert!(whole.iter().filter(|&&n| n != PackedNormal::NONE).count() > 700);
+        for chunk in [1, 7, 128, 899] {
+            let mut parts = vec![PackedNormal::NONE; 900];
+            for (i, out) in parts.chunks_mut(chunk).enumerate() {
+                normals_of_range(&m, &w, i * chunk, out);
+            }
+            assert_eq!(parts, whole, "ranges of {chunk}");
+        }
+        assert_eq!(vertex_normals(&m, &w), whole);
     }
 
     #[test]

@@ -117,19 +117,29 @@ const SMALL_NODE: usize = 512;
 
 /// Splits `verts` (non-empty, not all at one position along `cut.axis`) at `cut`: moves the
 /// points below the cut to the front and returns how many they are, the two halves' boxes
-/// and the cut taken. When the midpoint rounds onto an end of the box (no point on one side),
-/// the points are split at the median instead, as before.
-pub(crate) fn split_points(verts: &mut [Point], cut: Cut) -> (usize, Bounds, Bounds, Cut) {
+/// and the cut taken. `aux` (as long as `verts`) is what travels beside the points (the
+/// complexity goal's weights and normals, nothing for the quality goal): it is moved the same
+/// way. When the midpoint rounds onto an end of the box (no point on one side), the points
+/// are split at the median instead, as before.
+pub(crate) fn split_points<A: Copy>(
+    verts: &mut [Point],
+    aux: &mut [A],
+    cut: Cut,
+) -> (usize, Bounds, Bounds, Cut) {
     let (axis, at) = (cut.axis, cut.at);
     let (mut mid, mut lb, mut rb) = if verts.len() <= SMALL_NODE {
-        partition_small(verts, axis, at)
+        partition_small(verts, aux, axis, at)
     } else {
-        partition_large(verts, axis, at)
+        partition_large(verts, aux, axis, at)
     };
     let mut cut = cut;
     if mid == 0 || mid == verts.len() {
         mid = verts.len() / 2;
-        verts.select_nth_unstable_by(mid, |a, b| a.p[axis].total_cmp(&b.p[axis]));
+        let mut pairs: Vec<(Point, A)> = verts.iter().copied().zip(aux.iter().copied()).collect();
+        pairs.select_nth_unstable_by(mid, |a, b| a.0.p[axis].total_cmp(&b.0.p[axis]));
+        for ((q, a), (pq, pa)) in verts.iter_mut().zip(aux.iter_mut()).zip(pairs) {
+            (*q, *a) = (pq, pa);
+        }
         cut.at = verts[mid].p[axis];
         (lb, rb) = (Bounds::of(&verts[..mid]), Bounds::of(&verts[mid..]));
     }
@@ -138,14 +148,22 @@ pub(crate) fn split_points(verts: &mut [Point], cut: Cut) -> (usize, Bounds, Bou
 
 /// Branch-free Lomuto partition: every point is swapped into place whatever its side, and the
 /// boxes of both sides are grown with selects, so nothing depends on a prediction.
-fn partition_small(v: &mut [Point], axis: usize, at: f32) -> (usize, Bounds, Bounds) {
+fn partition_small<A: Copy>(
+    v: &mut [Point],
+    aux: &mut [A],
+    axis: usize,
+    at: f32,
+) -> (usize, Bounds, Bounds) {
     let (mut l, mut r) = (Bounds::EMPTY, Bounds::EMPTY);
+    let aux = &mut aux[..v.len()];
     let mut lt = 0;
     for i in 0..v.len() {
-        let x = v[i];
+        let (x, xa) = (v[i], aux[i]);
         let below = x.p[axis] < at;
         v[i] = v[lt];
+        aux[i] = aux[lt];
         v[lt] = x;
+        aux[lt] = xa;
         lt += usize::from(below);
         for k in 0..3 {
             let c = x.p[k];
@@ -160,7 +178,12 @@ fn partition_small(v: &mut [Point], axis: usize, at: f32) -> (usize, Bounds, Bou
 
 /// Hoare's two-pointer partition (each point visited once, few moves), growing the box of
 /// the side each point ends on.
-fn partition_large(v: &mut [Point], axis: usize, at: f32) -> (usize, Bounds, Bounds) {
+fn partition_large<A: Copy>(
+    v: &mut [Point],
+    aux: &mut [A],
+    axis: usize,
+    at: f32,
+) -> (usize, Bounds, Bounds) {
     let (mut l, mut r) = (Bounds::EMPTY, Bounds::EMPTY);
     let (mut i, mut j) = (0, v.len());
     loop {
@@ -176,6 +199,7 @@ fn partition_large(v: &mut [Point], axis: usize, at: f32) -> (usize, Bounds, Bou
             return (i, l, r);
         }
         v.swap(i, j - 1);
+        aux.swap(i, j - 1);
         l.add(&v[i].p);
         r.add(&v[j - 1].p);
         i += 1;
@@ -221,9 +245,14 @@ mod tests {
         let xs: Vec<f32> = (0..2000).map(|i| ((i * 7919) % 1000) as f32).collect();
         for n in [1, 2, 7, 100, SMALL_NODE, 2000] {
             let (mut a, mut b) = (points(&xs[..n]), points(&xs[..n]));
-            let (ma, la, ra) = partition_small(&mut a, 0, 500.0);
-            let (mb, lb, rb) = partition_large(&mut b, 0, 500.0);
+            let ids: Vec<u32> = (0..n as u32).collect();
+            let (mut aa, mut ab) = (ids.clone(), ids);
+            let (ma, la, ra) = partition_small(&mut a, &mut aa, 0, 500.0);
+            let (mb, lb, rb) = partition_large(&mut b, &mut ab, 0, 500.0);
             assert_eq!((ma, la, ra), (mb, lb, rb));
+            // What travels beside the points moves with them.
+            assert!(a.iter().zip(&aa).all(|(q, &id)| q.id == id));
+            assert!(b.iter().zip(&ab).all(|(q, &id)| q.id == id));
             assert!(a[..ma].iter().all(|q| q.p[0] < 500.0));
             assert!(a[ma..].iter().all(|q| q.p[0] >= 500.0));
             let ids = |v: &[Point]| {

@@ -292,7 +292,7 @@ impl<'a> Prepared<'a> {
                         step(0.45, "representatives")?;
                         let rep = options.representative;
                         let reps =
-                            grid_sums::grid_representatives(work, &p.cluster_of, &sums, &g, rep);
+                            grid_sums::grid_representatives(work, &p.cluster_of, sums, &g, rep);
                         placed = Some(reps);
                         (p, None)
                     }
@@ -328,9 +328,11 @@ impl<'a> Prepared<'a> {
                 report.tolerance = Some(tol);
                 // Keep a margin for rounding the representatives to f32.
                 let inner = tol - 4.0 * f64::from(f32::EPSILON) * max_abs(bounds);
+                step(0.12, "kd")?;
                 let r = adaptive
                     .quality(classes, bounds, inner.max(tol * 0.5))
                     .map_err(stopped)?;
+                step(0.5, "label")?;
                 let p = adaptive.partition(&r);
                 refinable = Some(r);
                 (p, Some(tol))
@@ -346,20 +348,36 @@ impl<'a> Prepared<'a> {
                 report.target_vertices = Some(target);
                 // Cells are split by their surface-error estimate, not their displacement
                 // alone (feature_priority.rs): CAD creases and curved strips get the vertices.
+                step(0.11, "normals")?;
                 let normals = feature_priority::vertex_normals(work, weights);
                 let rep = options.representative;
+                step(0.12, "kd")?;
+                let mut cancelled = false;
                 let more = |p: &Partition, leaves: LeafView| {
                     // The output loses clusters whose faces all collapsed: count what survives
                     // (the last partition's representatives go first).
                     placed = None;
+                    cancelled = step(0.4, "place").is_err();
+                    if cancelled {
+                        return 0;
+                    }
                     let (cluster_of, n) = (&p.cluster_of, p.clusters);
                     let reps =
                         representative::place(work, cluster_of, n, Leaves(leaves), rep, None);
+                    cancelled = step(0.45, "count").is_err();
                     let used = elimination::count_used(work, cluster_of, &reps);
                     placed = Some(reps);
+                    // Any further splitting is the partition's again.
+                    cancelled = cancelled || step(0.5, "kd").is_err();
+                    if cancelled {
+                        return 0;
+                    }
                     target.saturating_sub(used as u64)
                 };
                 let p = adaptive.complexity(classes, bounds, target, Some(normals), more);
+                if cancelled {
+                    return Err(SimplifyError::Cancelled);
+                }
                 (p.map_err(stopped)?, None)
             }
         };
@@ -382,13 +400,14 @@ impl<'a> Prepared<'a> {
             if let Some(r) = refinable.as_mut() {
                 let mut moved = None;
                 loop {
+                    step(0.6, "cover")?;
                     let (cluster_of, n) = (&partition.cluster_of, partition.clusters);
                     let gaps = coverage::gaps_by_clusters(work, cluster_of, n, moved.as_deref());
                     if gaps.is_empty() {
                         break;
                     }
-                    step(0.6, "cover")?;
                     moved = Some(coverage::vertices_of(cluster_of, &gaps.clusters, n));
+                    step(0.6, "kd")?;
                     if adaptive
                         .split_clusters(r, &gaps.clusters)
                         .map_err(stopped)?
@@ -397,11 +416,15 @@ impl<'a> Prepared<'a> {
                         stuck = true;
                         break;
                     }
+                    step(0.6, "label")?;
                     partition = adaptive.partition(r);
                     report.refinement_rounds += 1;
                 }
             }
             // The complexity goal placed its last partition already.
+            if placed.is_none() {
+                step(0.6, "place")?;
+            }
             let reps = placed.take().unwrap_or_else(|| {
                 let source = match (&members, &refinable) {
                     (Some(m), _) => Members(m, &work.positions, weights),
@@ -419,6 +442,7 @@ impl<'a> Prepared<'a> {
                 )
             });
             members = None;
+            step(0.65, "faces")?;
             let fates = elimination::fates(work, &partition.cluster_of, &reps);
             if refinable.is_some() && !stuck && fates.flattened() == 0 {
                 // The clusters alone decided the coverage (above): this is the last round,
@@ -429,6 +453,7 @@ impl<'a> Prepared<'a> {
             // The grid goal is the fast path: it reports no surface bound.
             let check = bounded && (!quality || stuck || kept.flattened > 0);
             let gaps = if check {
+                step(0.7, "cover")?;
                 coverage::find_gaps(work, &partition.cluster_of, &kept, partition.clusters)
             } else {
                 coverage::Gaps::default()
@@ -436,7 +461,7 @@ impl<'a> Prepared<'a> {
             let Some(r) = refinable.as_mut().filter(|_| !gaps.is_empty() && !stuck) else {
                 break (reps, kept, gaps);
             };
-            step(0.6, "cover")?;
+            step(0.6, "kd")?;
             if adaptive
                 .split_clusters(r, &gaps.clusters)
                 .map_err(stopped)?
@@ -444,6 +469,7 @@ impl<'a> Prepared<'a> {
             {
                 break (reps, kept, gaps);
             }
+            step(0.6, "label")?;
             partition = adaptive.partition(r);
             report.refinement_rounds += 1;
         };
