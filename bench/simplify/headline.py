@@ -9,13 +9,15 @@ On a generated noisy torus (`bench-simplify gen`, the harness's bumpy torus: 4 M
 2 M vertices by default), one thread: each tessd mode is sent to one `tessd serve` started with
 `RAYON_NUM_THREADS=1`, the mesh as arrays (`positions` f32 [V, 3], `face_indices` u32 [T, 3]),
 and timed by the daemon's own `elapsed_ms` (intake, validation, simplification, encoding the
-output as arrays; not the socket transfer). Its peer is then matched to the daemon's output
-vertex count by an untimed search and timed in process (`bench-simplify peer`; meshoptimizer's
+output as arrays; not the socket transfer). Its peer is matched to the daemon's output vertex
+count by an untimed search and timed in process (`bench-simplify peer`; meshoptimizer's
 `target_index_count` is its parameter, so simplifySloppy's own grid-size search is timed).
+The two are interleaved: rounds of one daemon job then one peer run (a child that loads the
+mesh and times one call), so that a slow spell of the machine hits both.
 Rows (the issue's): grid barycentre (150 cells per axis) and grid quadric vs simplifySloppy,
 quality 0.5 % barycentre vs simplifySloppy, complexity barycentre at grid barycentre's count
 vs simplifySloppy, complexity quadric at the same count vs meshoptimizer `simplify`. Medians
-of `--repeat` runs (fewer, but 3 at least, once a further run would pass `--budget` seconds).
+of `--repeat` rounds (fewer, but 3 at least, once a further round would pass `--budget` s).
 *ratio* = peer time ÷ tessd time (> 1: tessd is faster). Writes the JSON and a Markdown
 table beside it (same name, `.md`).
 
@@ -58,16 +60,34 @@ ROWS = [
 ]
 
 
-def timed_jobs(client, params, arrays, repeat, budget):
-    """The daemon's elapsed_ms of `repeat` runs (3 at least within the budget) and the last result."""
-    times, result, t0 = [], None, time.perf_counter()
-    while len(times) < repeat:
-        if len(times) >= 3 and time.perf_counter() - t0 + times[-1] / 1e3 > budget:
+def peer_call(args, peer, path, count, param=None):
+    """One `bench-simplify peer` call (one timed run; the search too unless `param` is given)."""
+    cmd = [args.harness, "peer", peer, str(path), str(count), "--repeat", "1"]
+    if param is not None:
+        cmd += ["--param", repr(param)]
+    return json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True,
+                                     env={**os.environ, "RAYON_NUM_THREADS": "1"}).stdout)
+
+
+def interleaved(args, client, params, arrays, peer, path):
+    """Rounds of one daemon job then one peer run, `--repeat` rounds (fewer, but 3 at least, once
+    a further round would pass the budget): the daemon's elapsed_ms, the peer's times, the daemon's
+    output count and the peer's last record. The first round's peer call searches the parameter
+    landing at the daemon's output count; later rounds reuse it."""
+    tessd_ms, peer_ms, count, p, t0 = [], [], None, None, time.perf_counter()
+    while len(tessd_ms) < args.repeat:
+        if len(tessd_ms) >= 3 and time.perf_counter() - t0 + (tessd_ms[-1] + peer_ms[-1]) / 1e3 > args.budget:
             break
         job = client.submit("simplify", params, arrays)
         result, _ = job.result()
-        times.append(job.elapsed_ms)
-    return times, result
+        tessd_ms.append(job.elapsed_ms)
+        if count is None:
+            count = result.get("output_vertices")
+        elif result.get("output_vertices") != count:
+            raise RuntimeError(f"the daemon's output count changed: {count} then {result.get('output_vertices')}")
+        p = peer_call(args, peer, path, count, None if p is None else p["param"])
+        peer_ms.append(p["time_s"] * 1e3)
+    return tessd_ms, peer_ms, count, p
 
 
 def run(args):
@@ -100,19 +120,14 @@ def run(args):
                         params["target_vertices"] = grid_count
                     row = {"row": label, "params": params, "peer": peer}
                     try:
-                        times, result = timed_jobs(client, params, arrays, args.repeat, args.budget)
-                        count = result.get("output_vertices")
+                        times, peer_ms, count, p = interleaved(args, client, params, arrays, peer, path)
                         if grid_count is None:
                             grid_count = count
                         row.update({"tessd_runs_ms": times, "tessd_ms": statistics.median(times),
-                                    "out_vertices": count})
-                        p = json.loads(subprocess.run(
-                            [args.harness, "peer", peer, str(path), str(count), "--repeat", str(args.repeat),
-                             "--budget", str(args.budget)], check=True, capture_output=True, text=True,
-                            env={**os.environ, "RAYON_NUM_THREADS": "1"}).stdout)
-                        row.update({"peer_ms": p["time_s"] * 1e3, "peer_runs_ms": [t * 1e3 for t in p["times_s"]],
-                                    "peer_out_vertices": p["out_vertices"], "peer_hit": p["hit"],
-                                    "peer_param": p["param"], "ratio": p["time_s"] * 1e3 / row["tessd_ms"]})
+                                    "out_vertices": count, "peer_ms": statistics.median(peer_ms),
+                                    "peer_runs_ms": peer_ms, "peer_out_vertices": p["out_vertices"],
+                                    "peer_hit": p["hit"], "peer_param": p["param"]})
+                        row["ratio"] = row["peer_ms"] / row["tessd_ms"]
                         print(f"   {label:<40} tessd {row['tessd_ms']:9.1f} ms ({count} vertices)  {peer} "
                               f"{row['peer_ms']:9.1f} ms ({p['out_vertices']})  ratio {row['ratio']:.2f}",
                               file=sys.stderr)

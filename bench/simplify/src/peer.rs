@@ -2,10 +2,11 @@
 //! headline table (`headline.py`), where tessd runs in the daemon and its peer here.
 //!
 //! ```text
-//! bench-simplify peer METHOD INPUT TARGET_VERTICES [--repeat 5] [--budget 40]
+//! bench-simplify peer METHOD INPUT TARGET_VERTICES [--repeat 5] [--budget 40] [--param P]
 //! ```
 //!
-//! Searches the parameter landing at `TARGET_VERTICES` (untimed, [`params::find_param`]),
+//! Searches the parameter landing at `TARGET_VERTICES` (untimed, [`params::find_param`];
+//! `--param` gives it, as found by an earlier call, and skips the search),
 //! then times the call `--repeat` times (fewer, but 3 at least, once a further run would
 //! pass `--budget` seconds) and prints one JSON line: the parameter, output vertices, times
 //! and median.
@@ -28,7 +29,7 @@ pub fn peer_cmd(args: &[String]) -> Result<(), String> {
     let (pos, opts) = options(args)?;
     let [method, input, target] = pos.as_slice() else {
         return Err("usage: bench-simplify peer METHOD INPUT TARGET_VERTICES \
-                    [--repeat N] [--budget S]"
+                    [--repeat N] [--budget S] [--param P]"
             .into());
     };
     let method = Method::parse(method).ok_or_else(|| format!("unknown method {method}"))?;
@@ -39,7 +40,15 @@ pub fn peer_cmd(args: &[String]) -> Result<(), String> {
     let st = stats(&mesh);
     let input = Input::for_method(method, mesh);
     let t_search = Instant::now();
-    let found = find_param(method, &input, &st, target)?;
+    let found = match opt(&opts, "param") {
+        Some(p) => search::Found {
+            param: parse(p, "--param")?,
+            count: 0,
+            evals: 0,
+            hit: true,
+        },
+        None => find_param(method, &input, &st, target)?,
+    };
     let search_s = t_search.elapsed().as_secs_f64();
     let (mut times, mut out_vertices) = (Vec::new(), 0);
     let t_all = Instant::now();
