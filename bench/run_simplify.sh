@@ -24,7 +24,8 @@
 # $SIMPLIFY_HEADLINE_TRIANGLES-triangle torus, default 4e6: tessd through the daemon vs
 # meshoptimizer in process) into simplify_headline.json (+ .md); an empty value skips either.
 # The report shows them beside the committed "before" (simplify_stages_before.*,
-# simplify_headline_before.*: the library at 65769d72, before issue 33). To measure "before"
+# simplify_headline_before.*: the library at 65769d72, before issue 33), and issue 33's goal
+# rows beside the same rows on the last full run before it (simplify_goals_before.json). To measure "before"
 # again in the same run (same machine state), give the binaries built at that commit:
 #   SIMPLIFY_BEFORE_HARNESS=/work/target-before/release/bench-simplify \
 #   SIMPLIFY_BEFORE_TESSD=/work/target-before/release/tessd bash bench/run_simplify.sh

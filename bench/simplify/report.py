@@ -10,13 +10,18 @@ Reads the JSON lines written by `bench-simplify run`, `meshlab.py run` and `e2e_
 table, and the goals table with their ratios), `simplify_summary.json`
 (the goal ratios, machine-readable) and two plots: `simplify_error_vs_size.png` (RMS error vs
 output vertex count) and `simplify_time_vs_input.png` (time vs input triangles at the scaling
-fraction). Run with /work/main/.venv-bench/bin/python (needs matplotlib).
+fraction). Issue 33's goal rows carry a *before* column from `simplify_goals_before.json` (the
+same rows on the last full run before issue 33), and the report shows this run's stage times
+and headline (`simplify_stages.json`, `simplify_headline.json`) beside the committed before
+(`simplify_stages_before.json`, `simplify_headline_before.json`; tables.py). Run with
+/work/main/.venv-bench/bin/python (needs matplotlib).
 """
 
 import argparse
 import datetime
 import json
 import math
+import re
 import os
 import sys
 from collections import defaultdict
@@ -173,6 +178,8 @@ def main():
     ap.add_argument("--headline", default=None, help="this run's headline (default OUT/simplify_headline.json)")
     ap.add_argument("--before-stages", default=str(BEFORE / "simplify_stages_before.json"))
     ap.add_argument("--before-headline", default=str(BEFORE / "simplify_headline_before.json"))
+    ap.add_argument("--before-goals", default=str(BEFORE / "simplify_goals_before.json"),
+                    help="the goals of a run before issue 33 (the before column; '' for none)")
     args = ap.parse_args()
     out = Path(args.out)
     recs, e2e = load(args.jsonl)
@@ -296,6 +303,19 @@ def main():
 
     # ---------------- goals
     G = summary["goals"]
+    bg = json.loads(Path(args.before_goals).read_text()) if args.before_goals and Path(args.before_goals).exists() \
+        else None
+    before_src = f"{bg['meta']['source']}" if bg else "no earlier run (none found)"
+
+    def norm(name):
+        return re.sub(r" \(torus[^)]*\)$", "", name)
+
+    def before_goal(name):
+        if not bg:
+            return None
+        goals = bg["goals"]
+        return goals.get(name) or next((v for k, v in goals.items() if norm(k) == norm(name)), None)
+
     L.append("## Goals")
     L.append("")
     L.append(
@@ -306,8 +326,10 @@ def main():
         f"{MATCH_DEVIATION * 100:g} % of the target count."
     )
     L.append("")
-    L.append("| goal | measured (gmean) | on the 10 M torus (50 / 10 / 1 %) | range | met |")
-    L.append("|---|---|---|---|---|")
+    L.append(f"*before* = the same goal on {before_src} (`simplify_goals_before.json`; *(no)*: missed there).")
+    L.append("")
+    L.append("| goal | measured (gmean) | before | on the 10 M torus (50 / 10 / 1 %) | range | met |")
+    L.append("|---|---|---|---|---|---|")
     ten = [e["mesh"] for e in generated if e["input_triangles"] >= 9e6]
     ten = ten[0] if ten else None
     fr3 = [f for f in fractions_all if f in (0.5, 0.1, 0.01)]
@@ -321,13 +343,22 @@ def main():
                     pairs[(mesh, f)] = a["mtris_per_s"] / b["mtris_per_s"]
         return pairs
 
-    def row(name, pairs, goal_fn, ten_key_fmt=lambda v: f"{v:.2f}"):
+    def bcell(name):
+        """The before column: the same goal on the committed last full run before issue 33."""
+        b = before_goal(name)
+        if b is None:
+            return "–"
+        v = b.get("gmean")
+        return (f"{v:.2f}" if isinstance(v, (int, float)) and b.get("pairs") else "–") + ("" if b.get("met") else " (no)")
+
+    def row(name, pairs, goal_fn, ten_key_fmt=lambda v: f"{v:.2f}", before=True):
         vals = list(pairs.values())
         g = gmean(vals)
         tens = " / ".join(ten_key_fmt(pairs[(ten, f)]) if (ten, f) in pairs else "–" for f in fr3) if ten else "–"
         rng = f"{min(vals):.2f}–{max(vals):.2f}" if vals else "–"
         met = goal_fn(g) if vals else False
-        L.append(f"| {name} | {f'{g:.2f}' if vals else '– (no pairs in this run)'} | {tens} | {rng} | {ok(met)} |")
+        bc = f" {bcell(name)} |" if before else ""
+        L.append(f"| {name} | {f'{g:.2f}' if vals else '– (no pairs in this run)'} |{bc} {tens} | {rng} | {ok(met)} |")
         G[name] = {"gmean": g, "pairs": {f"{k[0]}@{k[1]}": v for k, v in pairs.items()}, "met": met}
 
     def err_ratio(m, ref, key):
@@ -350,11 +381,11 @@ def main():
     name = "complexity-quadric Hausdorff ÷ meshoptimizer simplify's ≤ 2 on fandisk (gmean of its targets)"
     if fan:
         g = gmean(list(fan.values()))
-        L.append(f"| {name} | {g:.2f} | – | " + ", ".join(f"{pct(k[1])}: {v:.2f}" for k, v in sorted(fan.items()))
+        L.append(f"| {name} | {g:.2f} | {bcell(name)} | – | " + ", ".join(f"{pct(k[1])}: {v:.2f}" for k, v in sorted(fan.items()))
                  + f" | {ok(g <= 2)} |")
         G[name] = {"gmean": g, "pairs": {f"{k[0]}@{k[1]}": v for k, v in fan.items()}, "met": g <= 2}
     else:
-        L.append(f"| {name} | – (fandisk not in this run) | – | – | **no** |")
+        L.append(f"| {name} | – (fandisk not in this run) | {bcell(name)} | – | – | **no** |")
         G[name] = {"met": False, "pairs": {}}
 
     # Thread scaling: 2 threads ÷ 1 thread on inputs ≥ 10 M triangles.
@@ -371,8 +402,8 @@ def main():
             row(f"{m[6:]}: 2 threads ≥ {SCALING_GOAL} × one thread on ≥ 10 M triangles "
                 f"({', '.join(sorted({k[0] for k in pairs}))})", pairs, lambda g: g >= SCALING_GOAL)
         else:
-            L.append(f"| {m[6:]}: 2 threads ≥ {SCALING_GOAL} × one thread on ≥ 10 M triangles | "
-                     "– (no input ≥ 10 M triangles timed with 2 threads) | – | – | **no** |")
+            name = f"{m[6:]}: 2 threads ≥ {SCALING_GOAL} × one thread on ≥ 10 M triangles"
+            L.append(f"| {name} | – (no input ≥ 10 M triangles timed with 2 threads) | {bcell(name)} | – | – | **no** |")
             G[f"{m[6:]}: 2 threads ≥ {SCALING_GOAL} × one thread on ≥ 10 M triangles"] = {"met": False, "pairs": {}}
 
     # The same speed goals end to end: the daemon's elapsed_ms (arrays in and out, one thread) on the
@@ -392,7 +423,7 @@ def main():
         if pairs:
             row(name, pairs, lambda g, goal=goal: g >= goal)
         else:
-            L.append(f"| {name} | – (no daemon pass in this run) | – | – | **no** |")
+            L.append(f"| {name} | – (no daemon pass in this run) | {bcell(name)} | – | – | **no** |")
             G[name] = {"met": False, "pairs": {}}
     L.append("")
 
@@ -416,11 +447,11 @@ def main():
     G["outputs identical across thread counts"] = {"identical": same, "differ": differ,
                                                    "met": same > 0 and not differ}
     row("complexity-quadric RMS ÷ MeshLab clustering's < 1", err_ratio("tessd-complexity-quadric", "meshlab-clustering", "rms"),
-        lambda g: g < 1)
+        lambda g: g < 1, before=False)
     row("complexity-quadric Hausdorff ÷ MeshLab clustering's < 1",
-        err_ratio("tessd-complexity-quadric", "meshlab-clustering", "hausdorff"), lambda g: g < 1)
+        err_ratio("tessd-complexity-quadric", "meshlab-clustering", "hausdorff"), lambda g: g < 1, before=False)
     row("complexity-quadric RMS ÷ meshopt simplify's ≤ 1.5", err_ratio("tessd-complexity-quadric", "meshopt-simplify", "rms"),
-        lambda g: g <= 1.5)
+        lambda g: g <= 1.5, before=False)
 
     # Linearity: slope of log time vs log triangles at the scaling fraction over the tori.
     slopes = {}
