@@ -51,9 +51,12 @@ def ico_with_groups(bpy, subdivisions=5):
 
 
 def test_vertex_groups_bulk_equals_the_loop(bpy):
-    """The geometry-nodes read gives the loop's weights exactly and leaves nothing behind."""
+    """The geometry-nodes read gives the loop's weights exactly (shape keys on the mesh too)
+    and leaves nothing behind."""
     vg = module("vertex_groups")
     obj = ico_with_groups(bpy)
+    obj.shape_key_add(name="Basis")
+    obj.shape_key_add(name="Key").value = 0.5
     names = [g.name for g in obj.vertex_groups]
     before = (len(bpy.data.objects), len(bpy.data.node_groups), len(bpy.data.scenes),
               [o.name for o in bpy.context.view_layer.objects])
