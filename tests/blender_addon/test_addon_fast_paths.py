@@ -65,6 +65,10 @@ def test_vertex_groups_bulk_equals_the_loop(bpy):
     loop = vg.weights_loop(obj.data, names)
     assert bulk.shape == (4, len(obj.data.vertices))
     assert np.array_equal(bulk, loop)
+    assert vg.agrees(obj.data, names, bulk)
+    wrong = bulk.copy()
+    wrong[1] = 0.0  # what a node wired to the wrong socket would give: caught
+    assert not vg.agrees(obj.data, names, wrong)
     assert (loop[0] > 0).sum() > 50 and (loop[1] > 0).sum() > 50 and not loop[3].any()
     assert sorted(set(loop[2][loop[2] > 0].tolist())) == [0.25, 0.5, 0.75, 1.0]
     # Nothing left behind, and the user's view layer never saw the temporary object.
