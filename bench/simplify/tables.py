@@ -18,7 +18,10 @@ SHORT = {"tessd-grid-bary": "grid, barycentre", "tessd-grid-quadric": "grid, qua
 
 
 def _ms(x):
-    return "–" if x is None else f"{x * 1e3:.0f}" if x * 1e3 >= 100 else f"{x * 1e3:.3g}"
+    if x is None:
+        return "–"
+    ms = x * 1e3
+    return f"{ms:.0f}" if ms >= 100 else f"{ms:.3g}" if ms >= 0.01 else "0"
 
 
 def _load(path):
