@@ -74,13 +74,14 @@ def _read(attr, n):
     return values.reshape(n, comps) if comps > 1 else values
 
 
-def collect(mesh, obj, arrays, sent, skip=()):
+def collect(mesh, obj, arrays, sent, skip=(), uniform_sharp_face=True):
     """Adds the generic attributes, vertex groups, shape keys and sharp edges of `mesh`
     to `arrays` and records them in `sent` (a :class:`Sent`). `skip` names attributes
     already sent another way (the UV map sent as `uvs`). Corner values are in face order
-    as Blender stores them (convert.corner_vertices). A `sharp_face` that is the same on every
-    face is not sent: all false, a result without it is smooth everywhere; all true
-    (`sent.all_sharp_faces`), every result face is made flat."""
+    as Blender stores them (convert.corner_vertices). With `uniform_sharp_face` false (the
+    result only comes back to Blender: no file keeps the attribute), a `sharp_face` that is
+    the same on every face is not sent: all false, a result without it is smooth everywhere;
+    all true (`sent.all_sharp_faces`), every result face is made flat."""
     sizes = {"POINT": len(mesh.vertices), "CORNER": len(mesh.loops), "FACE": len(mesh.polygons)}
     for attr in mesh.attributes:
         name = attr.name
@@ -91,7 +92,8 @@ def collect(mesh, obj, arrays, sent, skip=()):
                                                           attr.data_type.lower()))
             continue
         values = _read(attr, sizes[attr.domain])
-        if name == "sharp_face" and attr.domain == 'FACE' and (values.all() or not values.any()):
+        if (name == "sharp_face" and attr.domain == 'FACE' and not uniform_sharp_face
+                and (values.all() or not values.any())):
             # The same on every face: every result face (each has a source face) gets it too,
             # so it need not travel (a flat-shaded mesh saves 4 bytes a face each way).
             sent.all_sharp_faces = bool(values.all()) and len(values) > 0

@@ -136,14 +136,15 @@ def group_names_of(obj):
 
 
 def mesh_to_arrays(mesh, obj=None, *, normals=False, uvs=True, creases=True, attributes=True,
-                   shape_keys=False):
+                   shape_keys=False, uniform_sharp_face=True):
     """The protocol arrays of `mesh`, the params they need (`group_names`) and what was sent
     besides the geometry (an :class:`attributes.Sent`, for rebuilding the results).
 
     `obj` gives the material slots (face groups are sent only when it has any) and the
     vertex groups; `normals` sends Blender's corner normals (to be carried as custom
     normals); `shape_keys` sends the mesh's shape keys (only meaningful for the object's own
-    mesh, not an evaluated one)."""
+    mesh, not an evaluated one); `uniform_sharp_face` false leaves out a `sharp_face` that is
+    the same on every face (for results that only come back to Blender: attributes.collect)."""
     if len(mesh.polygons) == 0:
         raise ValueError("it has no faces")
     # Each array is read once, straight into its final dtype (convert.read); what the mesh
@@ -184,7 +185,8 @@ def mesh_to_arrays(mesh, obj=None, *, normals=False, uvs=True, creases=True, att
             arrays["crease_edges"] = attrs.edge_vertices(mesh)[keep]
             arrays["crease_values"] = c * c * np.float32(SHARPNESS_INFINITE)
     if attributes:
-        attrs.collect(mesh, obj, arrays, sent, skip={sent.uv_name} if sent.uv_name else ())
+        attrs.collect(mesh, obj, arrays, sent, skip={sent.uv_name} if sent.uv_name else (),
+                      uniform_sharp_face=uniform_sharp_face)
         if shape_keys:
             attrs.collect_shape_keys(mesh, arrays, sent)
     if obj is not None and len(obj.material_slots) > 0:

@@ -85,8 +85,10 @@ class TESSD_OT_generate_lods(JobOperator, bpy.types.Operator):
     def _steps(self, context, unit, levels, usd_file):
         yield 0.0
         src = unit.objects[0]
+        # A USD stage keeps every attribute as a primvar, sharp_face too.
         arrays, extra, sent = common.arrays_of(context, src, self.use_modifiers,
-                                               normals=self.normals == 'CUSTOM')
+                                               normals=self.normals == 'CUSTOM',
+                                               uniform_sharp_face=bool(usd_file))
         params = dict({"levels": levels, "method": self.method.lower(),
                        "representative": self.representative.lower(),
                        "weighting": self.weighting.lower()}, **extra)

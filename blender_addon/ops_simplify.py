@@ -202,7 +202,8 @@ class TESSD_OT_simplify(JobOperator, bpy.types.Operator):
         yield 0.0
         scale = unit.scale()
         arrays, extra, sent = common.arrays_of(context, unit.objects[0], evaluated,
-                                               normals=self.normals == 'CUSTOM')
+                                               normals=self.normals == 'CUSTOM',
+                                               uniform_sharp_face=False)
         params = dict(simplify_params(self, scale), **extra)
         if self.method == 'COMPLEXITY':
             params["target_vertices"] = target_vertices(self, arrays)

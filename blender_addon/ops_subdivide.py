@@ -137,8 +137,10 @@ class TESSD_OT_subdivide(JobOperator, bpy.types.Operator):
         try:
             if self.use_animation:
                 scene.frame_set(self.frame_start)  # the rest pose: the first frame
+            # The result comes back to Blender (the animation cache keeps points only).
             arrays, extra, sent = common.arrays_of(context, obj, evaluated,
-                                                   creases=self.use_creases)
+                                                   creases=self.use_creases,
+                                                   uniform_sharp_face=False)
             params = dict(self._params(), **extra)
             frames = None
             if self.use_animation:

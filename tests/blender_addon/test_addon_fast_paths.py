@@ -166,8 +166,9 @@ def test_triangle_mesh_goes_as_rows_of_three_and_reads_match_the_element_api(bpy
 
 @pytest.mark.parametrize("shading", ["smooth", "flat", "mixed"])
 def test_sharp_face_travels_only_when_it_differs_between_faces(bpy, shading):
-    """`sharp_face` the same on every face is not sent: all false gives a smooth result, all
-    true a flat one (every result face has a source face); mixed, it is sent and carried."""
+    """For a result that only comes back to Blender, `sharp_face` the same on every face is
+    not sent: all false gives a smooth result, all true a flat one (every result face has a
+    source face); mixed, it is sent and carried. For a file (USD) it always goes."""
     convert = module("convert")
     src = scenes.suzanne()
     mesh = src.data
@@ -178,7 +179,9 @@ def test_sharp_face_travels_only_when_it_differs_between_faces(bpy, shading):
         flags[: len(flags) // 2] = True
     attr = mesh.attributes.get("sharp_face") or mesh.attributes.new("sharp_face", 'BOOLEAN', 'FACE')
     attr.data.foreach_set("value", flags)
-    arrays, _, sent = convert.mesh_to_arrays(mesh, src)
+    arrays, _, sent = convert.mesh_to_arrays(mesh, src)  # for a file: always sent
+    assert "face:sharp_face" in arrays and not sent.all_sharp_faces
+    arrays, _, sent = convert.mesh_to_arrays(mesh, src, uniform_sharp_face=False)
     assert ("face:sharp_face" in arrays) == (shading == "mixed")
     assert sent.all_sharp_faces == (shading == "flat")
     select(src)
