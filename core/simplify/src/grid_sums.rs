@@ -100,7 +100,7 @@ fn unordered(o: u32) -> f32 {
 pub(crate) fn grid_representatives(
     mesh: &Mesh,
     cluster_of: &[u32],
-    sums: &Sums,
+    sums: Sums,
     grid: &Grid,
     rep: Representative,
 ) -> Vec<[f32; 3]> {
@@ -130,20 +130,32 @@ pub(crate) fn grid_representatives(
             .map(|c| barycentre(c).map(|x| x as f32))
             .collect();
     }
+    // The barycentres first (the minimiser's start and fallback; in f32, which is what the
+    // fallback gives anyway), so that the sums and the heaviest are freed before the
+    // quadrics are held: the peak stays under twice the input at half its vertices.
+    let x0: Vec<[f32; 3]> = (0..n)
+        .into_par_iter()
+        .map(|c| barycentre(c).map(|x| x as f32))
+        .collect();
+    let Sums {
+        heavy,
+        sums: fixed,
+        boxes,
+    } = sums;
+    drop((heavy, fixed));
     let quadrics = representative::cluster_quadrics(mesh, cluster_of, n);
     (0..n)
         .into_par_iter()
         .map(|c| {
-            let b = &sums.boxes[6 * c..6 * c + 6];
-            let h = heaviest(c);
+            let b = &boxes[6 * c..6 * c + 6];
             let stats = Stats {
                 sum: [0.0; 4],
                 lo: std::array::from_fn(|k| unordered(b[k])),
                 hi: std::array::from_fn(|k| unordered(b[3 + k])),
                 heaviest_w: 0.0,
-                heaviest: h as u32,
+                heaviest: 0,
             };
-            representative::quadric_point(&quadrics[c], &stats, barycentre(c))
+            representative::quadric_point(&quadrics[c], &stats, x0[c].map(f64::from))
         })
         .collect()
 }

@@ -130,45 +130,55 @@ pub(crate) fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
 /// quadrics of its own (a small table from cluster to partial, with a cache of the last
 /// clusters met, since consecutive faces mostly hit the same clusters), and the partials are
 /// added into the clusters in block order, so a cluster's sum is the same bits on any number
-/// of threads. The blocks go in waves of [`WAVE_BLOCKS`]: while one wave's partials are added
+/// of threads. The blocks go in waves (a block per core): while one wave's partials are added
 /// in (one core), the next wave sums (the others), and only one wave's partials are held.
 pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
     let mut q = vec![Quadric::default(); n];
     let blocks = mesh.face_count().div_ceil(blocks::BLOCK);
     if blocks::single_thread() {
-        // One core: the same sums without tables. Each cluster's partial of the block that
-        // last touched it lives in a dense array, added into its total when a later block
-        // first touches the cluster (so in block order) or at the end.
-        let mut part = vec![Quadric::default(); n];
+        // One core: the same sums with a table only for the clusters that earlier blocks
+        // touched. The first block that touches a cluster sums straight into its total (0 +
+        // its faces in order: the same bits as its partial, which the parallel merge adds to
+        // 0); a later block sums into a partial of its own, added at the block's end (so in
+        // block order).
         let mut block_of = vec![u32::MAX; n];
         let mut seen: Vec<u32> = Vec::with_capacity(8);
-        for f in 0..mesh.face_count() {
-            let b = (f / blocks::BLOCK) as u32;
-            let face = mesh.face(f);
-            let Some(fq) = face_quadric(mesh, face) else {
-                continue;
-            };
-            seen.clear();
-            for &v in face {
-                let c = cluster_of[v as usize];
-                if c == UNUSED || seen.contains(&c) {
+        let (mut table, mut keys, mut part) = (CellTable::with_capacity(256), vec![], vec![]);
+        for b in 0..blocks {
+            let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
+            for f in r {
+                let face = mesh.face(f);
+                let Some(fq) = face_quadric(mesh, face) else {
                     continue;
-                }
-                seen.push(c);
-                let c = c as usize;
-                if block_of[c] != b {
-                    if block_of[c] != u32::MAX {
-                        q[c].add(&part[c]);
+                };
+                seen.clear();
+                for &v in face {
+                    let c = cluster_of[v as usize];
+                    if c == UNUSED || seen.contains(&c) {
+                        continue;
                     }
-                    block_of[c] = b;
-                    part[c] = Quadric::default();
+                    seen.push(c);
+                    let at = &mut block_of[c as usize];
+                    if *at == u32::MAX {
+                        *at = b as u32;
+                    }
+                    if *at == b as u32 {
+                        q[c as usize].add(&fq);
+                    } else {
+                        let id = table.id(u64::from(c)) as usize;
+                        if id == keys.len() {
+                            keys.push(c);
+                            part.push(Quadric::default());
+                        }
+                        part[id].add(&fq);
+                    }
                 }
-                part[c].add(&fq);
             }
-        }
-        for c in 0..n {
-            if block_of[c] != u32::MAX {
-                q[c].add(&part[c]);
+            for (&c, p) in keys.iter().zip(&part) {
+                q[c as usize].add(p);
+            }
+            if !keys.is_empty() {
+                (table, keys, part) = (CellTable::with_capacity(256), vec![], vec![]);
             }
         }
         return q;
@@ -181,9 +191,12 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
         }
     };
     let mut pending: Option<Vec<(Vec<u32>, Vec<Quadric>)>> = None;
-    for wave in (0..blocks).step_by(WAVE_BLOCKS) {
+    // A block per core a wave: the partials held stay a few blocks' worth. (The wave size
+    // does not change the sums: they are added in block order whatever it is.)
+    let wave_blocks = rayon::current_num_threads().max(2);
+    for wave in (0..blocks).step_by(wave_blocks) {
         let sum = || {
-            (wave..(wave + WAVE_BLOCKS).min(blocks))
+            (wave..(wave + wave_blocks).min(blocks))
                 .into_par_iter()
                 .map(|b| block_quadrics(mesh, cluster_of, b))
                 .collect()
@@ -201,10 +214,6 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
     }
     q
 }
-
-/// Blocks of faces summed per wave in [`cluster_quadrics`]: a fixed number (not the thread
-/// count), enough for every core.
-const WAVE_BLOCKS: usize = 8;
 
 /// Block `b`'s partial quadrics: the clusters it touches in the order it meets them, and
 /// each one's sum over the block's faces in face order.

@@ -6,6 +6,9 @@
 
 #[path = "../generate.rs"]
 mod generate;
+#[path = "../mem.rs"]
+#[allow(dead_code)]
+mod mem;
 
 use meshopt::VertexDataAdapter;
 use std::time::Instant;
@@ -73,6 +76,22 @@ fn main() {
         let sv = distinct(&sloppy(b));
         // `grid_speed N runs fraction MODE`: only MODE (sloppy, bary, quadric), `runs` times, for `perf stat`.
         if let Some(mode) = args.get(4) {
+            if mode == "mem" {
+                // Extra peak memory of one call over the input's bytes.
+                let input = 12 * mesh.positions.len() + 4 * indices.len();
+                for rep in [Representative::Barycenter, Representative::Quadric] {
+                    mem::reset_peak();
+                    let before = mem::status_kib("VmRSS");
+                    let out = grid(cells, rep);
+                    let peak = mem::status_kib("VmHWM");
+                    let extra = (peak - before) as f64 * 1024.0 / input as f64;
+                    println!(
+                        "   {rep:?}: extra peak {extra:.2}x the input ({} output vertices)",
+                        out.report.output_vertices
+                    );
+                }
+                continue;
+            }
             for _ in 0..runs {
                 match mode.as_str() {
                     "sloppy" => drop(sloppy(b)),
