@@ -133,7 +133,7 @@ pub(crate) fn grid_representatives(
     // The barycentres first (the minimiser's start and fallback; in f32, which is what the
     // fallback gives anyway), so that the sums and the heaviest are freed before the
     // quadrics are held: the peak stays under twice the input at half its vertices.
-    let x0: Vec<[f32; 3]> = (0..n)
+    let mut reps: Vec<[f32; 3]> = (0..n)
         .into_par_iter()
         .map(|c| barycentre(c).map(|x| x as f32))
         .collect();
@@ -144,20 +144,19 @@ pub(crate) fn grid_representatives(
     } = sums;
     drop((heavy, fixed));
     let quadrics = representative::cluster_quadrics(mesh, cluster_of, n);
-    (0..n)
-        .into_par_iter()
-        .map(|c| {
-            let b = &boxes[6 * c..6 * c + 6];
-            let stats = Stats {
-                sum: [0.0; 4],
-                lo: std::array::from_fn(|k| unordered(b[k])),
-                hi: std::array::from_fn(|k| unordered(b[3 + k])),
-                heaviest_w: 0.0,
-                heaviest: 0,
-            };
-            representative::quadric_point(&quadrics[c], &stats, x0[c].map(f64::from))
-        })
-        .collect()
+    // Each barycentre turns into its cluster's representative in place.
+    reps.par_iter_mut().enumerate().for_each(|(c, x)| {
+        let b = &boxes[6 * c..6 * c + 6];
+        let stats = Stats {
+            sum: [0.0; 4],
+            lo: std::array::from_fn(|k| unordered(b[k])),
+            hi: std::array::from_fn(|k| unordered(b[3 + k])),
+            heaviest_w: 0.0,
+            heaviest: 0,
+        };
+        *x = representative::quadric_point(&quadrics[c], &stats, x.map(f64::from));
+    });
+    reps
 }
 
 #[cfg(test)]
