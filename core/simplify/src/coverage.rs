@@ -182,6 +182,12 @@ impl Gaps {
 ///
 /// The kept faces are read twice and the collapsed ones once more rather than copied (two bits
 /// a face say which is which): neither the kept faces nor the collapsed ones' pieces are held.
+/// Issue 33 (point 4) proposed one face pass putting the collapsed faces' segments into a
+/// deduplicated u64 set checked against the kept faces' edges; measured on a 1 M-triangle
+/// torus at 5 % of its vertices (one thread), where 9 faces in 10 collapse, sorting their
+/// pieces cost more than indexing the kept edges (24.3 against 16.2 ms), and writing the
+/// pieces down in the first pass instead of reading the collapsed faces again saved 2 % for
+/// up to 8 bytes a face of memory: this index of the kept edges (the smaller side) stays.
 pub(crate) fn gaps_by_clusters(
     mesh: &Mesh,
     cluster_of: &[u32],
@@ -343,6 +349,94 @@ mod tests {
         assert_eq!(kept.collapsed().collect::<Vec<_>>(), vec![1, 2]);
         let gaps = find_gaps(&m, &cluster_of, &kept, 3);
         assert!(gaps.is_empty(), "{gaps:?}");
+    }
+
+    #[test]
+    fn gaps_by_clusters_matches_the_definition() {
+        // A 20 × 20 grid of triangles under coarse and random clusterings (with a round's
+        // `moved` filter too): the clusters of the uncovered pieces, found by brute force
+        // (every piece of every collapsed face against every edge of every kept face).
+        let mut m = Mesh::default();
+        for j in 0..21 {
+            for i in 0..21 {
+                m.positions.push([i as f32, j as f32, 0.0]);
+            }
+        }
+        for j in 0..20u32 {
+            for i in 0..20u32 {
+                let v = j * 21 + i;
+                m.push_face(&[v, v + 1, v + 22]);
+                m.push_face(&[v, v + 22, v + 21]);
+            }
+        }
+        let mut x = 99u64;
+        let mut rnd = |n: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x % n) as u32
+        };
+        let mut with_gaps = 0;
+        for trial in 0..40 {
+            let clusters = [3, 10, 40, 150][trial % 4];
+            let cluster_of: Vec<u32> = (0..441)
+                .map(|v| {
+                    if trial % 2 == 0 {
+                        rnd(clusters as u64)
+                    } else {
+                        ((v % 21) / 3 + 7 * ((v / 21) / 4)) as u32 % clusters
+                    }
+                })
+                .collect();
+            let moved: Option<Vec<bool>> =
+                (trial % 3 == 0).then(|| (0..441).map(|_| rnd(3) == 0).collect());
+            let read = |f: usize| {
+                let t = &m.face_indices[3 * f..3 * f + 3];
+                let skip = moved
+                    .as_ref()
+                    .is_some_and(|mv| !t.iter().any(|&v| mv[v as usize]));
+                (!skip).then(|| [0, 1, 2].map(|k| cluster_of[t[k] as usize]))
+            };
+            let faces = (0..800).filter_map(read).collect::<Vec<_>>();
+            let kept: Vec<_> = faces
+                .iter()
+                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+                .collect();
+            let mut expected = std::collections::BTreeSet::new();
+            for t in faces
+                .iter()
+                .filter(|t| !(t[0] != t[1] && t[1] != t[2] && t[2] != t[0]))
+            {
+                triangle_image(*t, |p| match p {
+                    Piece::Point(c) => {
+                        if !kept.iter().any(|k| k.contains(&c)) {
+                            expected.insert(c);
+                        }
+                    }
+                    Piece::Segment(a, b) => {
+                        let edge = |k: &[u32; 3]| {
+                            (0..3).any(|i| {
+                                let (x, y) = (k[i], k[(i + 1) % 3]);
+                                (x, y) == (a, b) || (y, x) == (a, b)
+                            })
+                        };
+                        if !kept.iter().any(|k| edge(k)) {
+                            expected.insert(a);
+                            expected.insert(b);
+                        }
+                    }
+                });
+            }
+            let gaps = gaps_by_clusters(&m, &cluster_of, clusters as usize, moved.as_deref());
+            assert_eq!(
+                gaps.clusters,
+                expected.into_iter().collect::<Vec<_>>(),
+                "trial {trial}"
+            );
+            with_gaps += usize::from(!gaps.is_empty());
+        }
+        // Both kinds of outcome are exercised.
+        assert!((5..40).contains(&with_gaps), "{with_gaps}");
     }
 
     #[test]
