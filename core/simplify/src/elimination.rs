@@ -88,6 +88,11 @@ pub(crate) struct Fates {
     fate: Vec<Fate>,
     /// Per block: kept faces, kept corners, degenerate faces, flattened faces.
     counts: Vec<[u64; 4]>,
+    /// All-triangle meshes: the kept faces' clusters, written by the fate pass itself (pass
+    /// F: one pass over the faces), each block's at the place of its first face (three ids a
+    /// face, zeroed pages that only the kept faces touch); [`Fates::eliminate`] closes the
+    /// gaps between the blocks.
+    written: Option<Vec<u32>>,
 }
 
 impl Fates {
@@ -101,19 +106,24 @@ impl Fates {
 /// duplicates are found later).
 pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates {
     let mut fate = vec![Fate::Kept; mesh.face_count()];
-    // Pass 1: fates, and per block (kept faces, kept corners, degenerate, flattened).
-    let counts: Vec<[u64; 4]> = fate
-        .par_chunks_mut(blocks::BLOCK)
-        .enumerate()
-        .map(|(b, fates)| {
-            let mut c = [0u64; 4];
-            let start = b * blocks::BLOCK;
-            if let Some(triangles) = mesh.triangles() {
-                // All triangles, the common case: three ids to compare, no offsets to read.
+    if let Some(triangles) = mesh.triangles() {
+        // All triangles, the common case: three ids to compare, no offsets to read, and the
+        // kept faces written at once into their block's place.
+        let mut written = vec![0u32; 3 * triangles.len()];
+        let counts = fate
+            .par_chunks_mut(blocks::BLOCK)
+            .zip(written.par_chunks_mut(3 * blocks::BLOCK))
+            .enumerate()
+            .map(|(b, (fates, out))| {
+                let mut c = [0u64; 4];
+                let start = b * blocks::BLOCK;
+                let mut at = 0;
                 for (slot, t) in fates.iter_mut().zip(&triangles[start..]) {
                     let v = t.map(|i| cluster_of[i as usize]);
                     let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
                     if distinct && !zero_area_triangle(v, reps) {
+                        out[at..at + 3].copy_from_slice(&v);
+                        at += 3;
                         c[0] += 1;
                     } else {
                         *slot = Fate::Collapsed;
@@ -122,8 +132,22 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
                     }
                 }
                 c[1] = 3 * c[0];
-                return c;
-            }
+                c
+            })
+            .collect();
+        return Fates {
+            fate,
+            counts,
+            written: Some(written),
+        };
+    }
+    // Pass 1: fates, and per block (kept faces, kept corners, degenerate, flattened).
+    let counts: Vec<[u64; 4]> = fate
+        .par_chunks_mut(blocks::BLOCK)
+        .enumerate()
+        .map(|(b, fates)| {
+            let mut c = [0u64; 4];
+            let start = b * blocks::BLOCK;
             let mut ring = Vec::new();
             for (i, slot) in fates.iter_mut().enumerate() {
                 let f = start + i;
@@ -142,7 +166,11 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
             c
         })
         .collect();
-    Fates { fate, counts }
+    Fates {
+        fate,
+        counts,
+        written: None,
+    }
 }
 
 impl Fates {
@@ -154,10 +182,57 @@ impl Fates {
         reps: &[[f32; 3]],
         corners: bool,
     ) -> Eliminated {
-        let Fates { fate, counts } = self;
+        let Fates {
+            fate,
+            counts,
+            written,
+        } = self;
         let n = mesh.face_count();
         let faces: usize = counts.iter().map(|c| c[0] as usize).sum();
         let total: usize = counts.iter().map(|c| c[1] as usize).sum();
+        if let Some(mut indices) = written {
+            // Triangles the fate pass wrote: each block's run moved down to follow the
+            // previous one (the write position never passes the read position).
+            let mut to = 0;
+            for (b, c) in counts.iter().enumerate() {
+                let (from, len) = (3 * b * blocks::BLOCK, c[1] as usize);
+                indices.copy_within(from..from + len, to);
+                to += len;
+            }
+            indices.truncate(to);
+            indices.shrink_to_fit();
+            let mut out = Eliminated {
+                face_offsets: (0..=faces as u32).into_par_iter().map(|f| 3 * f).collect(),
+                face_indices: indices,
+                source_corner: Vec::new(),
+                degenerate: counts.iter().map(|c| c[2]).sum(),
+                flattened: counts.iter().map(|c| c[3]).sum(),
+                ..Eliminated::default()
+            };
+            if corners {
+                out.source_corner = vec![0; total];
+                let mut jobs = Vec::with_capacity(counts.len());
+                let mut rest = &mut out.source_corner[..];
+                for (b, c) in counts.iter().enumerate() {
+                    let (s, r) = std::mem::take(&mut rest).split_at_mut(c[1] as usize);
+                    rest = r;
+                    jobs.push((b, s));
+                }
+                let fate = &fate;
+                jobs.into_par_iter().for_each(|(b, s)| {
+                    let range = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(n);
+                    let kept = range.filter(|&f| fate[f] == Fate::Kept);
+                    for (k, f) in kept.enumerate() {
+                        for j in 0..3 {
+                            s[3 * k + j] = 3 * f as u32 + j as u32;
+                        }
+                    }
+                });
+            }
+            out.fate = fate;
+            remove_duplicates(&mut out, &counts, reps.len(), corners);
+            return out;
+        }
         let mut out = Eliminated {
             face_offsets: vec![0; faces + 1],
             face_indices: vec![0; total],
@@ -194,74 +269,81 @@ impl Fates {
                 });
         }
         out.fate = fate;
-        let duplicate = find_duplicates(&out, reps.len());
-        out.duplicates = duplicate.len() as u64;
-        if duplicate.is_empty() {
-            return out;
-        }
-        // The input faces of the duplicates change fate (parallel over the blocks of input
-        // faces: each knows from the counts how many kept faces come before it).
-        let firsts: Vec<u64> = counts
-            .iter()
-            .scan(0u64, |before, c| {
-                let first = *before;
-                *before += c[0];
-                Some(first)
-            })
-            .collect();
-        out.fate
-            .par_chunks_mut(blocks::BLOCK)
-            .zip(firsts)
-            .for_each(|(fates, first)| {
-                let from = duplicate.partition_point(|&d| u64::from(d) < first);
-                let mut next = duplicate[from..].iter().peekable();
-                let kept = fates.iter_mut().filter(|f| **f == Fate::Kept);
-                for (i, f) in kept.enumerate() {
-                    if next.peek().is_none() {
-                        break;
-                    }
-                    if next
-                        .next_if(|&&d| u64::from(d) == first + i as u64)
-                        .is_some()
-                    {
-                        *f = Fate::Duplicate;
-                    }
-                }
-            });
-        // Squeeze the duplicates out in place, a run of faces between two duplicates at a
-        // time (one move each); the write position never passes the read position.
-        let (mut corner_w, mut face_w) = (0usize, 0usize);
-        let runs = duplicate
-            .iter()
-            .map(|&d| d as usize)
-            .chain(std::iter::once(faces));
-        let mut from = 0usize;
-        for dup in runs {
-            // Faces from..dup survive; their corners move down by (corners dropped so far).
-            let (s, e) = (
-                out.face_offsets[from] as usize,
-                out.face_offsets[dup] as usize,
-            );
-            let shift = (s - corner_w) as u32;
-            out.face_indices.copy_within(s..e, corner_w);
-            if corners {
-                out.source_corner.copy_within(s..e, corner_w);
-            }
-            // Offsets from + 1 ..= dup end those faces: shifted down in place, then moved.
-            out.face_offsets[from + 1..=dup]
-                .iter_mut()
-                .for_each(|o| *o -= shift);
-            out.face_offsets.copy_within(from + 1..=dup, face_w + 1);
-            face_w += dup - from;
-            corner_w += e - s;
-            from = dup + 1;
-        }
-        out.face_indices.truncate(corner_w);
-        out.source_corner
-            .truncate(if corners { corner_w } else { 0 });
-        out.face_offsets.truncate(face_w + 1);
+        remove_duplicates(&mut out, &counts, reps.len(), corners);
         out
     }
+}
+
+/// Finds the duplicates among `out`'s faces ([`find_duplicates`]; `counts`: the kept faces
+/// of each block of input faces), turns their fates and squeezes them out in place.
+fn remove_duplicates(out: &mut Eliminated, counts: &[[u64; 4]], clusters: usize, corners: bool) {
+    let faces = out.face_offsets.len() - 1;
+    let duplicate = find_duplicates(out, clusters);
+    out.duplicates = duplicate.len() as u64;
+    if duplicate.is_empty() {
+        return;
+    }
+    // The input faces of the duplicates change fate (parallel over the blocks of input
+    // faces: each knows from the counts how many kept faces come before it).
+    let firsts: Vec<u64> = counts
+        .iter()
+        .scan(0u64, |before, c| {
+            let first = *before;
+            *before += c[0];
+            Some(first)
+        })
+        .collect();
+    out.fate
+        .par_chunks_mut(blocks::BLOCK)
+        .zip(firsts)
+        .for_each(|(fates, first)| {
+            let from = duplicate.partition_point(|&d| u64::from(d) < first);
+            let mut next = duplicate[from..].iter().peekable();
+            let kept = fates.iter_mut().filter(|f| **f == Fate::Kept);
+            for (i, f) in kept.enumerate() {
+                if next.peek().is_none() {
+                    break;
+                }
+                if next
+                    .next_if(|&&d| u64::from(d) == first + i as u64)
+                    .is_some()
+                {
+                    *f = Fate::Duplicate;
+                }
+            }
+        });
+    // Squeeze the duplicates out in place, a run of faces between two duplicates at a
+    // time (one move each); the write position never passes the read position.
+    let (mut corner_w, mut face_w) = (0usize, 0usize);
+    let runs = duplicate
+        .iter()
+        .map(|&d| d as usize)
+        .chain(std::iter::once(faces));
+    let mut from = 0usize;
+    for dup in runs {
+        // Faces from..dup survive; their corners move down by (corners dropped so far).
+        let (s, e) = (
+            out.face_offsets[from] as usize,
+            out.face_offsets[dup] as usize,
+        );
+        let shift = (s - corner_w) as u32;
+        out.face_indices.copy_within(s..e, corner_w);
+        if corners {
+            out.source_corner.copy_within(s..e, corner_w);
+        }
+        // Offsets from + 1 ..= dup end those faces: shifted down in place, then moved.
+        out.face_offsets[from + 1..=dup]
+            .iter_mut()
+            .for_each(|o| *o -= shift);
+        out.face_offsets.copy_within(from + 1..=dup, face_w + 1);
+        face_w += dup - from;
+        corner_w += e - s;
+        from = dup + 1;
+    }
+    out.face_indices.truncate(corner_w);
+    out.source_corner
+        .truncate(if corners { corner_w } else { 0 });
+    out.face_offsets.truncate(face_w + 1);
 }
 
 /// How many clusters the faces that survive elimination use: [`eliminate`]'s output vertex
