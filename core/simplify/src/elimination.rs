@@ -89,10 +89,9 @@ pub(crate) struct Fates {
     /// Per block: kept faces, kept corners, degenerate faces, flattened faces.
     counts: Vec<[u64; 4]>,
     /// All-triangle meshes: the kept faces' clusters, written by the fate pass itself (pass
-    /// F: one pass over the faces), each block's at the place of its first face (three ids a
-    /// face, zeroed pages that only the kept faces touch); [`Fates::eliminate`] closes the
-    /// gaps between the blocks.
-    written: Option<Vec<u32>>,
+    /// F: one pass over the faces), block by block; [`Fates::eliminate`] copies them into
+    /// place.
+    written: Option<Vec<Vec<u32>>>,
 }
 
 impl Fates {
@@ -108,22 +107,20 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
     let mut fate = vec![Fate::Kept; mesh.face_count()];
     if let Some(triangles) = mesh.triangles() {
         // All triangles, the common case: three ids to compare, no offsets to read, and the
-        // kept faces written at once into their block's place.
-        let mut written = vec![0u32; 3 * triangles.len()];
-        let counts = fate
+        // kept faces written at once, each block's into a buffer of its own (kept faces
+        // only: a few KiB to a few hundred, on the heap) that elimination copies into place.
+        let parts: Vec<([u64; 4], Vec<u32>)> = fate
             .par_chunks_mut(blocks::BLOCK)
-            .zip(written.par_chunks_mut(3 * blocks::BLOCK))
             .enumerate()
-            .map(|(b, (fates, out))| {
+            .map(|(b, fates)| {
                 let mut c = [0u64; 4];
                 let start = b * blocks::BLOCK;
-                let mut at = 0;
+                let mut out = Vec::new();
                 for (slot, t) in fates.iter_mut().zip(&triangles[start..]) {
                     let v = t.map(|i| cluster_of[i as usize]);
                     let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
                     if distinct && !zero_area_triangle(v, reps) {
-                        out[at..at + 3].copy_from_slice(&v);
-                        at += 3;
+                        out.extend_from_slice(&v);
                         c[0] += 1;
                     } else {
                         *slot = Fate::Collapsed;
@@ -132,9 +129,10 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
                     }
                 }
                 c[1] = 3 * c[0];
-                c
+                (c, out)
             })
             .collect();
+        let (counts, written) = parts.into_iter().unzip();
         return Fates {
             fate,
             counts,
@@ -190,17 +188,20 @@ impl Fates {
         let n = mesh.face_count();
         let faces: usize = counts.iter().map(|c| c[0] as usize).sum();
         let total: usize = counts.iter().map(|c| c[1] as usize).sum();
-        if let Some(mut indices) = written {
-            // Triangles the fate pass wrote: each block's run moved down to follow the
-            // previous one (the write position never passes the read position).
-            let mut to = 0;
-            for (b, c) in counts.iter().enumerate() {
-                let (from, len) = (3 * b * blocks::BLOCK, c[1] as usize);
-                indices.copy_within(from..from + len, to);
-                to += len;
+        if let Some(parts) = written {
+            // Triangles the fate pass wrote: each block's copied into its place (parallel;
+            // every block's place follows from the counts).
+            let mut indices = vec![0u32; total];
+            let mut jobs = Vec::with_capacity(parts.len());
+            let mut rest = &mut indices[..];
+            for part in &parts {
+                let (to, r) = std::mem::take(&mut rest).split_at_mut(part.len());
+                rest = r;
+                jobs.push((to, part));
             }
-            indices.truncate(to);
-            indices.shrink_to_fit();
+            jobs.into_par_iter()
+                .for_each(|(to, part)| to.copy_from_slice(part));
+            drop(parts);
             let mut out = Eliminated {
                 face_offsets: (0..=faces as u32).into_par_iter().map(|f| 3 * f).collect(),
                 face_indices: indices,

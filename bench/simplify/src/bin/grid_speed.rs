@@ -14,7 +14,12 @@ use meshopt::VertexDataAdapter;
 use std::time::Instant;
 use tessd_simplify::{GridSize, Method, Representative, SimplifyOptions, simplify};
 
+/// The daemon's allocator (`tessd_mesh::allocation`), so that the figures are the daemon's.
+#[global_allocator]
+static ALLOCATOR: tessd_mesh::allocation::LargePages = tessd_mesh::allocation::LargePages;
+
 fn main() {
+    tessd_mesh::allocation::return_large_buffers_to_system();
     let args: Vec<String> = std::env::args().collect();
     let triangles: u64 = args.get(1).map_or(1_000_000, |a| a.parse().unwrap());
     let runs: usize = args.get(2).map_or(5, |a| a.parse().unwrap());
