@@ -37,7 +37,6 @@ pub(crate) fn grid_cells(
     bounds: &Cell,
     size: GridSize,
     keep_cells: bool,
-    boxes: bool,
 ) -> Option<(Partition, Sums)> {
     let (grid, dims) = Grid::new(bounds, size);
     let bd: [u64; 3] = dims.map(|d| d.div_ceil(4));
@@ -83,7 +82,7 @@ pub(crate) fn grid_cells(
         // they are met too) and finds each cluster's heaviest vertex.
         let mut top = vec![UNUSED; bricks as usize];
         let mut pool: Vec<u32> = Vec::new();
-        let (mut heavy, mut sum, mut bx) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut heavy, mut sum) = (Vec::new(), Vec::new());
         for (v, out) in cluster_of.iter_mut().enumerate() {
             if !referenced(v) {
                 continue;
@@ -100,9 +99,6 @@ pub(crate) fn grid_cells(
                 *id = heavy.len() as u32;
                 heavy.push(0);
                 sum.extend([0u64; grid_sums::SLOTS]);
-                if boxes {
-                    bx.extend([u32::MAX, u32::MAX, u32::MAX, 0, 0, 0]);
-                }
                 if keep_cells {
                     firsts.push(v as u32);
                 }
@@ -115,21 +111,9 @@ pub(crate) fn grid_cells(
             for k in 0..7 {
                 s[k] += add[k];
             }
-            if boxes {
-                let b = &mut bx[6 * id..6 * id + 6];
-                for k in 0..3 {
-                    let o = grid_sums::ordered(p[k]);
-                    b[k] = b[k].min(o);
-                    b[3 + k] = b[3 + k].max(o);
-                }
-            }
         }
         clusters = heavy.len();
-        sums = Sums {
-            heavy,
-            sums: sum,
-            boxes: bx,
-        };
+        sums = Sums { heavy, sums: sum };
     } else {
         // V1: which bricks hold a vertex.
         let top: Vec<AtomicU32> = (0..bricks).map(|_| AtomicU32::new(UNUSED)).collect();
@@ -230,9 +214,6 @@ pub(crate) fn grid_cells(
         };
         let heavy = atomics(clusters, &|_| 0);
         let sum = atomics(clusters * grid_sums::SLOTS, &|_| 0);
-        let bx: Vec<AtomicU32> = (0..if boxes { 6 * clusters } else { 0 })
-            .map(|k| AtomicU32::new(if k % 6 < 3 { u32::MAX } else { 0 }))
-            .collect();
         cluster_of
             .par_chunks_mut(blocks::BLOCK)
             .enumerate()
@@ -254,21 +235,12 @@ pub(crate) fn grid_cells(
                     for k in 0..7 {
                         s[k].fetch_add(add[k], Relaxed);
                     }
-                    if boxes {
-                        let b = &bx[6 * id..6 * id + 6];
-                        for k in 0..3 {
-                            let o = grid_sums::ordered(p[k]);
-                            b[k].fetch_min(o, Relaxed);
-                            b[3 + k].fetch_max(o, Relaxed);
-                        }
-                    }
                 }
             });
         let plain = |a: Vec<AtomicU64>| a.into_iter().map(AtomicU64::into_inner).collect();
         sums = Sums {
             heavy: plain(heavy),
             sums: plain(sum),
-            boxes: bx.into_iter().map(AtomicU32::into_inner).collect(),
         };
     }
     let cells = firsts
@@ -316,7 +288,7 @@ mod tests {
                         .build()
                         .unwrap();
                     let got = pool
-                        .install(|| grid_cells(&positions, &weights, k, &bounds, size, true, false))
+                        .install(|| grid_cells(&positions, &weights, k, &bounds, size, true))
                         .unwrap()
                         .0;
                     assert_eq!(got.clusters, want.clusters, "{cells} cells, {threads}");

@@ -19,8 +19,11 @@ use crate::blocks;
 use crate::cluster_stats::Stats;
 use crate::grid_frame::Grid;
 use crate::options::Representative;
+use crate::partition::UNUSED;
 use crate::representative;
 use rayon::prelude::*;
+use std::sync::atomic::AtomicU32;
+use std::sync::atomic::Ordering::Relaxed;
 use tessd_mesh::Mesh;
 
 /// u64 slots a cluster's sums take (x low, x high, y low, y high, z low, z high, weight; one
@@ -36,9 +39,6 @@ pub(crate) struct Sums {
     pub heavy: Vec<u64>,
     /// [`SLOTS`] a cluster: the fixed-point sums.
     pub sums: Vec<u64>,
-    /// Six a cluster when asked for (the quadric's bound): the vertices' box as
-    /// [`ordered`] bits, low corner then high corner.
-    pub boxes: Vec<u32>,
 }
 
 /// The weight scale: a power of two (exact) that takes the largest of `weights` to
@@ -85,7 +85,7 @@ pub(crate) fn contribution(u: [f64; 3], w: f32, scale: f64) -> [u64; 7] {
 
 /// `x`'s bits turned so that unsigned order is float order.
 #[inline]
-pub(crate) fn ordered(x: f32) -> u32 {
+fn ordered(x: f32) -> u32 {
     let b = x.to_bits();
     if b & 1 << 31 != 0 { !b } else { b | 1 << 31 }
 }
@@ -137,12 +137,34 @@ pub(crate) fn grid_representatives(
         .into_par_iter()
         .map(|c| barycentre(c).map(|x| x as f32))
         .collect();
-    let Sums {
-        heavy,
-        sums: fixed,
-        boxes,
-    } = sums;
-    drop((heavy, fixed));
+    drop(sums);
+    // The box of each cluster's vertices (the minimiser's bound), taken only now that the
+    // sums are freed: six ordered bits a cluster, low corner then high corner (minima and
+    // maxima: the same whichever core takes them first).
+    let boxes: Vec<AtomicU32> = (0..6 * n)
+        .map(|k| AtomicU32::new(if k % 6 < 3 { u32::MAX } else { 0 }))
+        .collect();
+    let single = blocks::single_thread();
+    blocks::ranges(cluster_of.len()).for_each(|r| {
+        for v in r {
+            let c = cluster_of[v];
+            if c == UNUSED {
+                continue;
+            }
+            let b = &boxes[6 * c as usize..6 * c as usize + 6];
+            for k in 0..3 {
+                let o = ordered(positions[v][k]);
+                if single {
+                    b[k].store(b[k].load(Relaxed).min(o), Relaxed);
+                    b[3 + k].store(b[3 + k].load(Relaxed).max(o), Relaxed);
+                } else {
+                    b[k].fetch_min(o, Relaxed);
+                    b[3 + k].fetch_max(o, Relaxed);
+                }
+            }
+        }
+    });
+    let boxes: Vec<u32> = boxes.into_iter().map(AtomicU32::into_inner).collect();
     let quadrics = representative::cluster_quadrics(mesh, cluster_of, n);
     // Each barycentre turns into its cluster's representative in place.
     reps.par_iter_mut().enumerate().for_each(|(c, x)| {

@@ -282,10 +282,7 @@ impl<'a> Prepared<'a> {
                 step(0.15, "cells")?;
                 let keep = options.keep_partition;
                 let positions = &work.positions;
-                let boxes = options.representative == Representative::Quadric;
-                let cells = grid_cells::grid_cells(
-                    positions, weights, classes, bounds, grid, keep, boxes,
-                );
+                let cells = grid_cells::grid_cells(positions, weights, classes, bounds, grid, keep);
                 match cells {
                     Some((p, sums)) => {
                         let (g, _) = grid_frame::Grid::new(bounds, grid);
