@@ -115,7 +115,9 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
             .map(|(b, fates)| {
                 let mut c = [0u64; 4];
                 let start = b * blocks::BLOCK;
-                let mut out = Vec::new();
+                // Room for every face of the block: one size for every block and call, so
+                // that the heap hands the same chunks back (pages touched only where kept).
+                let mut out = Vec::with_capacity(3 * fates.len());
                 for (slot, t) in fates.iter_mut().zip(&triangles[start..]) {
                     let v = t.map(|i| cluster_of[i as usize]);
                     let distinct = v[0] != v[1] && v[1] != v[2] && v[0] != v[2];

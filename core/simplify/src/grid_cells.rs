@@ -82,7 +82,14 @@ pub(crate) fn grid_cells(
         // they are met too) and finds each cluster's heaviest vertex.
         let mut top = vec![UNUSED; bricks as usize];
         let mut pool: Vec<u32> = Vec::new();
-        let (mut heavy, mut sum) = (Vec::new(), Vec::new());
+        // Reserved for as many clusters as vertices: address space only (the pages of a
+        // buffer this large are its own mapping and count once touched), where growing by
+        // doubling would copy the sums and leave the smaller copies on the heap.
+        let n = cluster_of.len();
+        let (mut heavy, mut sum) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n * grid_sums::SLOTS),
+        );
         for (v, out) in cluster_of.iter_mut().enumerate() {
             if !referenced(v) {
                 continue;
