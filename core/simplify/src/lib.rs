@@ -10,14 +10,18 @@
 //!
 //! 1. [`weights`] — a weight per vertex (longest incident edge by default);
 //! 2. [`triangulate`] — optional fan triangulation of polygons;
-//! 3. a partition of the bounding volume — regular (`grid_partition.rs`), or adaptive binary
-//!    splitting driven by a quality or a complexity goal (`adaptive_partition.rs`, sections
-//!    3–5);
+//! 3. a partition of the bounding volume — regular (`grid_cells.rs`: a dense table of
+//!    4 × 4 × 4-cell bricks; `grid_partition.rs`'s hash where the box holds too many bricks), or
+//!    adaptive binary splitting driven by a quality or a complexity goal
+//!    (`adaptive_partition.rs`, sections 3–5);
 //! 4. a representative per cell — weighted barycentre or heaviest vertex (the paper), or the
-//!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000), from per-cell
-//!    statistics (`cluster_stats.rs`) summed cluster by cluster as each is placed, so that no
-//!    statistics or quadrics are held for every cluster at once (docs/simplify.md, "Memory");
-//! 5. elimination of what collapsed (`elimination.rs`);
+//!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000, every cluster's
+//!    quadric summed in one pass over the faces). The grid streams its sums into per-cluster
+//!    fixed-point slots in the pass that numbers its cells (`grid_sums.rs`); the adaptive
+//!    partitions sum per-cell statistics (`cluster_stats.rs`) cluster by cluster as each is
+//!    placed (docs/simplify.md, "Memory");
+//! 5. elimination of what collapsed (`elimination.rs`; for triangles the pass that decides the
+//!    faces' fates writes the kept ones);
 //! 6. beyond the paper, for the quality goal: cells split further until every collapsed face's
 //!    image lies on the output (`coverage.rs`), so the tolerance bounds the distance between the
 //!    surfaces, and a verified bound of that distance for every method (`surface_bound.rs`),
