@@ -1,6 +1,10 @@
 //! Regular partition (Belblidia & Perrin, section 2, after Rossignac & Borrel 1993): the
 //! bounding box cut into a grid; every non-empty cell is one cluster. The cell size is the
 //! largest detail that disappears.
+//!
+//! The grid goal takes `grid_cells.rs` (a dense brick table, sums streamed as it numbers);
+//! this hash-table binning with member lists remains for grids whose box holds more bricks
+//! than a dense table should (cells far below the mesh's detail), and for [`grid_dims`].
 
 use crate::blocks::{self, DisjointWrites};
 use crate::cell_table::CellTable;
