@@ -18,9 +18,13 @@
 //! representative lies in the box, so a box whose diagonal is within the tolerance moves no
 //! vertex farther, and one whose half largest side exceeds it moves some vertex farther. Only
 //! the cells in between get the exact pass (weights read by vertex index, the representative,
-//! the largest displacement). The complexity goal's children enter its queue with the box's
-//! bound as their key; the exact key is computed only when a cell could be among the next to
-//! split, so the leaves that are never split are never measured (design point 5).
+//! the largest displacement). With the displacement as its key, the complexity goal's children
+//! enter its queue with the box's bound; the exact key is computed only when a cell could be
+//! among the next to split, so leaves that are never split are never measured (design point
+//! 5). With the surface key (`feature_priority.rs`, what `lib.rs` uses) the bound is the
+//! cell's size and the key its sag, so nearly every child would be measured anyway (99.8 % on
+//! a 1 M-triangle torus at 10 %): they are measured as they are split, while their points
+//! are in cache, and the points carry their weights and normals beside them (`Carry`).
 
 use crate::blocks;
 use crate::feature_priority::{PackedNormal, plane_distance2, priority};
