@@ -382,8 +382,7 @@ impl<'a> Prepared<'a> {
                 (p.map_err(stopped)?, None)
             }
         };
-        let grid_goal = matches!(options.method, Method::Grid(_));
-        step(0.6, if grid_goal { "faces" } else { "merge" })?;
+        step(0.6, "merge")?;
         let corner_attributes = work.attributes.iter().any(|a| a.domain == Domain::Corner);
         let attributes = work.normals.is_some() || work.uvs.is_some() || corner_attributes;
         // Coverage rounds (quality goal): while some collapsed input face's image is off the
