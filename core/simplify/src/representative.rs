@@ -8,9 +8,10 @@ use crate::blocks;
 use crate::cell_table::CellTable;
 use crate::cluster_stats::{self, Stats};
 use crate::options::Representative;
-use crate::partition::{Members, UNUSED};
+use crate::partition::Members;
 use crate::quadric::Quadric;
 use rayon::prelude::*;
+use std::ops::Range;
 use tessd_mesh::Mesh;
 
 /// Where the clusters' vertices, hence their statistics, come from.
@@ -68,16 +69,18 @@ pub(crate) fn place(
         Representative::Quadric => {
             // Every cluster's quadric in one pass over the faces (no rescan per chunk of
             // clusters), then each cluster solved on its own.
-            let quadrics = cluster_quadrics(mesh, cluster_of, n);
-            each_cluster(&mut reps, 0, |c, out, scratch| {
-                let s = source.stats(c, scratch);
-                let x0 = s.barycentre();
-                *out = quadric_point(&quadrics[c], &s, x0);
-                if let (Some(tol), Source::Leaves(view)) = (tolerance, source)
-                    && view.points(c).iter().any(|q| dist(*out, q.p) > tol)
-                {
-                    *out = x0.map(|x| x as f32);
-                }
+            for_each_quadric_chunk(mesh, cluster_of, n, |first, quadrics| {
+                let out = &mut reps[first..first + quadrics.len()];
+                each_cluster(out, first, |c, out, scratch| {
+                    let s = source.stats(c, scratch);
+                    let x0 = s.barycentre();
+                    *out = quadric_point(&quadrics[c - first], &s, x0);
+                    if let (Some(tol), Source::Leaves(view)) = (tolerance, source)
+                        && view.points(c).iter().any(|q| dist(*out, q.p) > tol)
+                    {
+                        *out = x0.map(|x| x as f32);
+                    }
+                });
             });
         }
     }
@@ -124,17 +127,48 @@ pub(crate) fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
 
 /// Sums, for each of the `n` clusters of `cluster_of`, the area-weighted plane quadrics of
 /// the faces touching it (each face once per distinct cluster among its corners): Lindstrom
-/// 2000, section 3.2, where each triangle's quadric goes to the cells of its vertices.
+/// 2000, section 3.2, where each triangle's quadric goes to the cells of its vertices; calls
+/// `f(first cluster, their quadrics)` a chunk of clusters at a time.
 ///
-/// One pass over the faces in fixed blocks ([`crate::blocks`]): each block sums into partial
+/// A chunk is a quarter as many clusters as the mesh has vertices (at least 32 768): its
+/// quadrics (80 bytes each) stay under half the input's size, so the representatives keep
+/// the extra peak memory under twice the input; most calls are one chunk, and a mesh
+/// simplified to more than a quarter of its vertices takes one more cheap pass per chunk
+/// (faces without a corner in the chunk are skipped on their cluster ids).
+///
+/// Per chunk, one pass over the faces in fixed blocks ([`crate::blocks`]): each block sums into partial
 /// quadrics of its own (a small table from cluster to partial, with a cache of the last
 /// clusters met, since consecutive faces mostly hit the same clusters), and the partials are
 /// added into the clusters in block order, so a cluster's sum is the same bits on any number
 /// of threads. The blocks go in waves (a block per core): while one wave's partials are added
 /// in (one core), the next wave sums (the others), and only one wave's partials are held.
-pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec<Quadric> {
+pub(crate) fn for_each_quadric_chunk(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    n: usize,
+    mut f: impl FnMut(usize, &[Quadric]),
+) {
+    let chunk = (mesh.vertex_count() / 4).max(MIN_CHUNK);
+    for first in (0..n).step_by(chunk) {
+        let range = first as u32..(first + chunk).min(n) as u32;
+        f(first, &cluster_quadrics(mesh, cluster_of, range));
+    }
+}
+
+/// Fewest clusters a chunk of [`for_each_quadric_chunk`] takes (fewer in the unit tests, so
+/// that they cross chunks).
+const MIN_CHUNK: usize = if cfg!(test) { 1 << 10 } else { 1 << 15 };
+
+/// The quadrics of the clusters of `range` ([`for_each_quadric_chunk`]).
+fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Quadric> {
+    let (first, n) = (range.start, range.len());
     let mut q = vec![Quadric::default(); n];
     let blocks = mesh.face_count().div_ceil(blocks::BLOCK);
+    // Whether a face has a corner in the range (its plane is needed).
+    let touches = |face: &[u32]| {
+        face.iter()
+            .any(|&v| range.contains(&cluster_of[v as usize]))
+    };
     if blocks::single_thread() {
         // One core: the same sums with a table only for the clusters that earlier blocks
         // touched. The first block that touches a cluster sums straight into its total (0 +
@@ -148,22 +182,25 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
             let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
             for f in r {
                 let face = mesh.face(f);
+                if !touches(face) {
+                    continue;
+                }
                 let Some(fq) = face_quadric(mesh, face) else {
                     continue;
                 };
                 seen.clear();
                 for &v in face {
                     let c = cluster_of[v as usize];
-                    if c == UNUSED || seen.contains(&c) {
+                    if !range.contains(&c) || seen.contains(&c) {
                         continue;
                     }
                     seen.push(c);
-                    let at = &mut block_of[c as usize];
+                    let at = &mut block_of[(c - first) as usize];
                     if *at == u32::MAX {
                         *at = b as u32;
                     }
                     if *at == b as u32 {
-                        q[c as usize].add(&fq);
+                        q[(c - first) as usize].add(&fq);
                     } else {
                         let id = table.id(u64::from(c)) as usize;
                         if id == keys.len() {
@@ -175,7 +212,7 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
                 }
             }
             for (&c, p) in keys.iter().zip(&part) {
-                q[c as usize].add(p);
+                q[(c - first) as usize].add(p);
             }
             if !keys.is_empty() {
                 (table, keys, part) = (CellTable::with_capacity(256), vec![], vec![]);
@@ -186,7 +223,7 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
     let merge = |q: &mut Vec<Quadric>, partials: Vec<(Vec<u32>, Vec<Quadric>)>| {
         for (keys, partial) in &partials {
             for (&c, p) in keys.iter().zip(partial) {
-                q[c as usize].add(p);
+                q[(c - first) as usize].add(p);
             }
         }
     };
@@ -198,7 +235,7 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
         let sum = || {
             (wave..(wave + wave_blocks).min(blocks))
                 .into_par_iter()
-                .map(|b| block_quadrics(mesh, cluster_of, b))
+                .map(|b| block_quadrics(mesh, cluster_of, &range, b))
                 .collect()
         };
         let previous = pending.take();
@@ -217,7 +254,12 @@ pub(crate) fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], n: usize) -> Vec
 
 /// Block `b`'s partial quadrics: the clusters it touches in the order it meets them, and
 /// each one's sum over the block's faces in face order.
-fn block_quadrics(mesh: &Mesh, cluster_of: &[u32], b: usize) -> (Vec<u32>, Vec<Quadric>) {
+fn block_quadrics(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    range: &Range<u32>,
+    b: usize,
+) -> (Vec<u32>, Vec<Quadric>) {
     let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
     let mut table = CellTable::with_capacity(1024);
     // The last cluster met at each of a few cache places, and its partial.
@@ -226,13 +268,19 @@ fn block_quadrics(mesh: &Mesh, cluster_of: &[u32], b: usize) -> (Vec<u32>, Vec<Q
     let mut seen: Vec<u32> = Vec::with_capacity(8);
     for f in r {
         let face = mesh.face(f);
+        if !face
+            .iter()
+            .any(|&v| range.contains(&cluster_of[v as usize]))
+        {
+            continue;
+        }
         let Some(fq) = face_quadric(mesh, face) else {
             continue;
         };
         seen.clear();
         for &v in face {
             let c = cluster_of[v as usize];
-            if c == UNUSED || seen.contains(&c) {
+            if !range.contains(&c) || seen.contains(&c) {
                 continue;
             }
             seen.push(c);
