@@ -118,7 +118,12 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// The daemon's allocator (huge pages for mesh-sized buffers), so the times are the daemon's.
+#[global_allocator]
+static ALLOCATOR: tessd_mesh::allocation::LargePages = tessd_mesh::allocation::LargePages;
+
 fn main() {
+    tessd_mesh::allocation::return_large_buffers_to_system();
     let a: Vec<String> = std::env::args().collect();
     let runs: usize = a.get(1).map_or(5, |s| s.parse().unwrap());
     let level: u32 = a.get(2).map_or(8, |s| s.parse().unwrap());
