@@ -25,7 +25,6 @@ pub mod frame;
 pub mod holders;
 pub mod job;
 pub mod job_file;
-pub mod memory;
 pub mod registry;
 pub mod server;
 pub mod socket;

@@ -640,7 +640,8 @@ impl Connection {
                 lock(&this.jobs).remove(&id);
                 this.reply_timed(&Value::from(id), result, Some(started.elapsed()));
                 if this.shared.in_flight.fetch_sub(1, Ordering::SeqCst) == 1 {
-                    crate::memory::release_free_memory();
+                    // Idle: what the jobs freed goes back to the system.
+                    tessd_mesh::allocation::release_free_memory();
                 }
             });
         if let Err(e) = spawned {

@@ -15,24 +15,32 @@
 /// Buffers at least this large get their own mapping (see the module doc).
 pub const LARGE_BUFFER: usize = 4 << 20;
 
-/// Free memory at the top of the heap that glibc keeps for the next call instead of handing it
-/// back (its default is 128 KiB once the mmap threshold is fixed). Buffers below
-/// [`LARGE_BUFFER`] (per-block tables, small meshes' arrays) then come back without a page fault
-/// on every request: on a 2 M-triangle grid simplification, 92 000 faults per 7 calls became
-/// 39 000, and the call's median went from 105 to 89 ms (issue 33, point 6). A daemon holds at
-/// most this much more between jobs.
-pub const KEPT_HEAP: usize = 64 << 20;
-
-/// Fixes glibc's mmap threshold at [`LARGE_BUFFER`] and its trim threshold at [`KEPT_HEAP`] for
-/// this process (the daemon and the benchmarks call it first thing). A no-op on other C
-/// libraries.
+/// Fixes glibc's mmap threshold at [`LARGE_BUFFER`] for this process (the daemon and the
+/// benchmarks call it first thing). A no-op on other C libraries.
 pub fn return_large_buffers_to_system() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only changes the allocator's tuning; it is called before any thread
     // is started and the value is within glibc's accepted range.
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, LARGE_BUFFER as libc::c_int);
-        libc::mallopt(libc::M_TRIM_THRESHOLD, KEPT_HEAP as libc::c_int);
+    }
+}
+
+/// Returns the allocator's free pages to the system (glibc's `malloc_trim(0)`: the top of every
+/// arena and the whole free pages inside them); a no-op elsewhere.
+///
+/// The daemon calls it when its last running request ends: a daemon left running for a working
+/// day serves bursts of large requests from many threads, and glibc keeps what those threads
+/// freed in per-thread arenas, so
+/// the resident set after a burst would stay near its peak although nothing is in use
+/// (`scripts/soak.sh` checks it comes back). The benchmarks call it between timed calls for the
+/// same reason, so that their peaks are the daemon's. Takes a few milliseconds on a heap of a
+/// few hundred megabytes, so it runs only between jobs.
+pub fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only walks and trims the allocator's own free lists.
+    unsafe {
+        libc::malloc_trim(0);
     }
 }
 
@@ -42,9 +50,14 @@ pub fn return_large_buffers_to_system() {
 ///
 /// Why: each call's mesh-sized buffers are fresh mappings (see the module doc), and every 4 KiB
 /// page of them is faulted in on first touch (issue 33, point 6: page faults were 16 % of the
-/// samples). With the heap kept too ([`KEPT_HEAP`]), a 2 M-triangle grid simplification took
-/// 39 000 faults per 7 calls with 4 KiB pages and 29 600 with this advice. The advice is a hint: where the kernel refuses it, or on
-/// other systems, this is exactly [`std::alloc::System`].
+/// samples). On a 2 M-triangle grid simplification, 7 calls in one process (the benchmark's
+/// child), this advice took 113 000 faults down to 64 000 and the call's median from 103 to
+/// 95 ms. The advice is a hint: where the kernel refuses it, or on other systems, this is
+/// exactly [`std::alloc::System`].
+///
+/// Keeping freed heap between calls (`M_TRIM_THRESHOLD` at 64 MiB) saved another 13 % of the
+/// time but raised the extra peak of a grid call at 50 % from 1.9× to 2.6× the input, past
+/// issue 33's limit of 2×: not done.
 pub struct LargePages;
 
 // SAFETY: every method forwards to `System` with the same arguments and returns its result
