@@ -165,22 +165,28 @@ pub(crate) fn grid_representatives(
         }
     });
     let boxes: Vec<u32> = boxes.into_iter().map(AtomicU32::into_inner).collect();
-    representative::for_each_quadric_chunk(mesh, cluster_of, n, |first, quadrics| {
-        let out = &mut reps[first..first + quadrics.len()];
-        // Each barycentre turns into its cluster's representative in place.
-        out.par_iter_mut().enumerate().for_each(|(i, x)| {
-            let c = first + i;
-            let b = &boxes[6 * c..6 * c + 6];
-            let stats = Stats {
-                sum: [0.0; 4],
-                lo: std::array::from_fn(|k| unordered(b[k])),
-                hi: std::array::from_fn(|k| unordered(b[3 + k])),
-                heaviest_w: 0.0,
-                heaviest: 0,
-            };
-            *x = representative::quadric_point(&quadrics[i], &stats, x.map(f64::from));
-        });
-    });
+    representative::for_each_quadric_chunk(
+        mesh,
+        cluster_of,
+        n,
+        representative::GRID_SHARE,
+        |first, quadrics| {
+            let out = &mut reps[first..first + quadrics.len()];
+            // Each barycentre turns into its cluster's representative in place.
+            out.par_iter_mut().enumerate().for_each(|(i, x)| {
+                let c = first + i;
+                let b = &boxes[6 * c..6 * c + 6];
+                let stats = Stats {
+                    sum: [0.0; 4],
+                    lo: std::array::from_fn(|k| unordered(b[k])),
+                    hi: std::array::from_fn(|k| unordered(b[3 + k])),
+                    heaviest_w: 0.0,
+                    heaviest: 0,
+                };
+                *x = representative::quadric_point(&quadrics[i], &stats, x.map(f64::from));
+            });
+        },
+    );
     reps
 }
 
