@@ -3,7 +3,8 @@
 //! 10 %, barycentre, one thread; the call with and without UVs interleaved in one process,
 //! stage by stage (the progress callback's names), medians of `runs` (default 5).
 //!
-//! `cargo run --release -p tessd-simplify --example uv_time [runs] [level] [threads]`
+//! `cargo run --release -p tessd-simplify --example uv_time [runs] [level] [threads] [shuffle]`
+//! (`shuffle`: vertices renumbered at random, as a mesh whose vertex order has no locality).
 use std::collections::HashMap;
 use std::time::Instant;
 use tessd_mesh::{FaceVarying, Mesh};
@@ -113,6 +114,28 @@ fn corner_uvs(mesh: &Mesh) -> FaceVarying<[f32; 2]> {
     }
 }
 
+/// Renumbers the vertices in a fixed pseudo-random order (Fisher–Yates with an LCG).
+fn shuffle_vertices(mesh: &mut Mesh) {
+    let n = mesh.positions.len();
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    for i in (1..n).rev() {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        order.swap(i, ((state >> 33) % (i as u64 + 1)) as usize);
+    }
+    // order[new] = old
+    let mut new_of = vec![0u32; n];
+    for (new, &old) in order.iter().enumerate() {
+        new_of[old as usize] = new as u32;
+    }
+    mesh.positions = order.iter().map(|&o| mesh.positions[o as usize]).collect();
+    mesh.face_indices
+        .iter_mut()
+        .for_each(|v| *v = new_of[*v as usize]);
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -128,7 +151,10 @@ fn main() {
     let runs: usize = a.get(1).map_or(5, |s| s.parse().unwrap());
     let level: u32 = a.get(2).map_or(8, |s| s.parse().unwrap());
     let threads: usize = a.get(3).map_or(1, |s| s.parse().unwrap());
-    let plain = ico_sphere(level);
+    let mut plain = ico_sphere(level);
+    if a.get(4).is_some_and(|s| s == "shuffle") {
+        shuffle_vertices(&mut plain);
+    }
     let mut with_uvs = plain.clone();
     with_uvs.uvs = Some(corner_uvs(&plain));
     println!(
