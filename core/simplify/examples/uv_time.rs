@@ -3,8 +3,9 @@
 //! 10 %, barycentre, one thread; the call with and without UVs interleaved in one process,
 //! stage by stage (the progress callback's names), medians of `runs` (default 5).
 //!
-//! `cargo run --release -p tessd-simplify --example uv_time [runs] [level] [threads] [shuffle]`
-//! (`shuffle`: vertices renumbered at random, as a mesh whose vertex order has no locality).
+//! `cargo run --release -p tessd-simplify --example uv_time [runs] [level] [threads] [shuffle] [groups]`
+//! (`shuffle`: vertices renumbered at random, as a mesh whose vertex order has no locality;
+//! `groups`: four face groups in bands of z, as materials).
 use std::collections::HashMap;
 use std::time::Instant;
 use tessd_mesh::{FaceVarying, Mesh};
@@ -152,8 +153,16 @@ fn main() {
     let level: u32 = a.get(2).map_or(8, |s| s.parse().unwrap());
     let threads: usize = a.get(3).map_or(1, |s| s.parse().unwrap());
     let mut plain = ico_sphere(level);
-    if a.get(4).is_some_and(|s| s == "shuffle") {
+    if a.iter().skip(4).any(|s| s == "shuffle") {
         shuffle_vertices(&mut plain);
+    }
+    if a.iter().skip(4).any(|s| s == "groups") {
+        // Four materials in bands of z, as Blender's material indices.
+        let z = |f: usize| plain.positions[plain.face_indices[3 * f] as usize][2];
+        plain.face_groups = (0..plain.face_count())
+            .map(|f| ((z(f) + 1.0) * 2.0).min(3.0) as u32)
+            .collect();
+        plain.group_names = (0..4).map(|g| format!("m{g}")).collect();
     }
     let mut with_uvs = plain.clone();
     with_uvs.uvs = Some(corner_uvs(&plain));
