@@ -207,3 +207,61 @@ fn fused_grid_is_the_same_bytes_on_1_2_and_7_threads() {
         }
     }
 }
+
+/// A mesh of triangles alone is checked inside the weights' and bounds' passes, not by
+/// `Mesh::validate` (`Prepared::plain_triangles`): every fault, in the first block or a later
+/// one, one fault or several, gives validation's own words, on 1 and 2 threads.
+#[test]
+fn plain_triangles_fail_as_validation_does() {
+    let good = torus(200, 100); // 40 000 triangles: three blocks of faces.
+    let nv = good.positions.len() as u32;
+    type Fault = fn(&mut Mesh, u32);
+    let faults: [(&str, Fault); 8] = [
+        ("index in block 0", |m, nv| m.face_indices[5] = nv),
+        ("index in block 2", |m, nv| {
+            m.face_indices[3 * 39_000 + 1] = nv + 7
+        }),
+        ("NaN", |m, _| m.positions[1234][1] = f32::NAN),
+        ("infinity, last vertex", |m, _| {
+            m.positions.last_mut().unwrap()[2] = f32::NEG_INFINITY
+        }),
+        ("unreferenced NaN", |m, _| {
+            m.positions.push([f32::NAN, 0.0, 0.0])
+        }),
+        ("steps 2 and 4", |m, _| m.face_offsets[20_000] -= 1),
+        ("offsets past the corners", |m, _| {
+            *m.face_offsets.last_mut().unwrap() += 3;
+        }),
+        ("NaN and index", |m, nv| {
+            m.face_indices[9] = nv;
+            m.positions[15_000][0] = f32::INFINITY;
+        }),
+    ];
+    let methods = [
+        Method::Grid(GridSize::CellsPerAxis(20)),
+        Method::Quality(crate::Length::Relative(0.01)),
+    ];
+    for (what, fault) in faults {
+        let mut m = good.clone();
+        fault(&mut m, nv);
+        let want = crate::SimplifyError::from(m.validate().expect_err(what)).to_string();
+        for method in methods {
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let options = SimplifyOptions::new(method);
+                let got = pool.install(|| simplify(&m, &options, &mut |_, _| true));
+                let got = got.err().map(|e| e.to_string());
+                assert_eq!(
+                    got.as_deref(),
+                    Some(want.as_str()),
+                    "{what} {method:?} {threads}"
+                );
+            }
+        }
+    }
+    // The good mesh takes the checked path and simplifies as before.
+    assert!(simplify(&good, &SimplifyOptions::new(methods[0]), &mut |_, _| true).is_ok());
+}

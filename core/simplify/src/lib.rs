@@ -194,6 +194,9 @@ impl<'a> Prepared<'a> {
         options: &SimplifyOptions,
         force_triangles: bool,
     ) -> Result<Self, SimplifyError> {
+        if let Some(p) = Self::plain_triangles(mesh, options) {
+            return Ok(p);
+        }
         mesh.validate()?;
         if mesh.face_count() == 0 {
             return Err(SimplifyError::Empty);
@@ -228,6 +231,45 @@ impl<'a> Prepared<'a> {
             classes,
             input_vertices,
             twists,
+        })
+    }
+
+    /// [`Prepared::new`] for a mesh of triangles and positions alone (the usual large input),
+    /// checked inside the passes it needs anyway rather than by [`Mesh::validate`]'s own
+    /// (issue 33): offsets and indices in the weights' face pass, finite coordinates in the
+    /// bounds' vertex pass. `None` for any other mesh, or where a check fails: then
+    /// [`Mesh::validate`] runs and names the fault with its usual words.
+    fn plain_triangles(mesh: &'a Mesh, options: &SimplifyOptions) -> Option<Self> {
+        let plain = mesh.face_count() > 0
+            && mesh.triangles().is_some()
+            && mesh.face_offsets.first() == Some(&0)
+            && mesh.face_offsets.last().map(|&o| o as usize) == Some(mesh.face_indices.len())
+            && mesh.normals.is_none()
+            && mesh.uvs.is_none()
+            && mesh.creases.is_empty()
+            && mesh.face_groups.is_empty()
+            && mesh.attributes.is_empty()
+            && mesh.sharp_edges.is_empty();
+        if !plain {
+            return None;
+        }
+        let weights = weights::checked_triangle_weights(mesh, options.weighting)?;
+        let (bounds, finite) = partition::checked_bounds(&mesh.positions, &weights);
+        let (bounds, input_vertices) = bounds.filter(|_| finite)?;
+        let size = (0..3)
+            .map(|k| f64::from(bounds.max[k] - bounds.min[k]))
+            .fold(0.0, f64::max);
+        let classes = options
+            .preserve_boundaries
+            .then(|| features::feature_classes(mesh, options.feature_angle_deg));
+        Some(Prepared {
+            work: Cow::Borrowed(mesh),
+            weights,
+            bounds,
+            size,
+            classes,
+            input_vertices,
+            twists: polygon_twist::Twists::default(),
         })
     }
 

@@ -43,6 +43,23 @@ impl Members {
 /// `None` if there are none. Minima, maxima and counts do not depend on the order they are
 /// taken in: every core takes them.
 pub(crate) fn referenced_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Option<(Cell, u64)> {
+    bounds_of::<false>(positions, weights).0
+}
+
+/// [`referenced_bounds`] of positions not yet validated, and whether every position (referenced
+/// or not) is finite, taken in the same pass (issue 33's pass B; [`tessd_mesh::Mesh::validate`]
+/// names the first that is not).
+pub(crate) fn checked_bounds(
+    positions: &[[f32; 3]],
+    weights: &[f32],
+) -> (Option<(Cell, u64)>, bool) {
+    bounds_of::<true>(positions, weights)
+}
+
+fn bounds_of<const CHECK: bool>(
+    positions: &[[f32; 3]],
+    weights: &[f32],
+) -> (Option<(Cell, u64)>, bool) {
     let parts = crate::blocks::map(positions.len(), |r| {
         let (block, w) = (&positions[r.clone()], &weights[r]);
         let count = w.iter().map(|&w| u64::from(w > 0.0)).sum::<u64>();
@@ -54,28 +71,38 @@ pub(crate) fn referenced_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Opti
             let flat = block.as_flattened();
             let mut lo = [f32::INFINITY; 12];
             let mut hi = [f32::NEG_INFINITY; 12];
+            // Any infinity or NaN turns `x · 0` into NaN, and a sum with one NaN: no branch.
+            let mut nan = [0f32; 12];
             let steps = flat.chunks_exact(12);
             let rest = steps.remainder();
             for p in steps {
                 for l in 0..12 {
                     lo[l] = if p[l] < lo[l] { p[l] } else { lo[l] };
                     hi[l] = if p[l] > hi[l] { p[l] } else { hi[l] };
+                    if CHECK {
+                        nan[l] += p[l] * 0.0;
+                    }
                 }
             }
             for (l, &p) in rest.iter().enumerate() {
                 lo[l] = lo[l].min(p);
                 hi[l] = hi[l].max(p);
+                nan[l] += p * 0.0;
             }
             let lane = |a: &[f32; 12], k: usize, f: fn(f32, f32) -> f32| {
                 (k..12).step_by(3).map(|l| a[l]).reduce(f).unwrap()
             };
             let lo: [f32; 3] = std::array::from_fn(|k| lane(&lo, k, f32::min));
             let hi: [f32; 3] = std::array::from_fn(|k| lane(&hi, k, f32::max));
-            return (lo, hi, count);
+            return (lo, hi, count, nan.iter().sum::<f32>() == 0.0);
         }
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
+        let mut nan = 0f32;
         for (p, &w) in block.iter().zip(w) {
+            if CHECK {
+                nan += p[0] * 0.0 + p[1] * 0.0 + p[2] * 0.0;
+            }
             if w > 0.0 {
                 for k in 0..3 {
                     lo[k] = lo[k].min(p[k]);
@@ -83,17 +110,19 @@ pub(crate) fn referenced_bounds(positions: &[[f32; 3]], weights: &[f32]) -> Opti
                 }
             }
         }
-        (lo, hi, count)
+        (lo, hi, count, nan == 0.0)
     });
-    let (lo, hi, count) = parts.into_iter().fold(
-        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0),
-        |(lo, hi, n), (l, h, c)| {
+    let (lo, hi, count, finite) = parts.into_iter().fold(
+        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0, true),
+        |(lo, hi, n, ok), (l, h, c, f)| {
             (
                 std::array::from_fn(|k| lo[k].min(l[k])),
                 std::array::from_fn(|k| hi[k].max(h[k])),
                 n + c,
+                ok && f,
             )
         },
     );
-    (count > 0).then_some((Cell { min: lo, max: hi }, count))
+    let bounds = (count > 0).then_some((Cell { min: lo, max: hi }, count));
+    (bounds, finite || !CHECK)
 }

@@ -6,8 +6,8 @@ use crate::blocks;
 use crate::options::Weighting;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::atomic::AtomicU32;
 use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicBool, AtomicU32};
 use tessd_mesh::Mesh;
 
 /// The weight of every vertex (0 for vertices no face uses).
@@ -19,13 +19,29 @@ use tessd_mesh::Mesh;
 ///   average normal), times the longest incident edge: sharp corners win.
 /// - [`Weighting::Uniform`]: 1 for every referenced vertex.
 pub fn vertex_weights(mesh: &Mesh, weighting: Weighting) -> Vec<f32> {
+    weights_of(mesh, weighting, false).expect("the mesh was validated")
+}
+
+/// [`vertex_weights`] of a mesh of triangles that was not validated: the face pass checks, as
+/// it goes, that every offset is three corners on and every index names a vertex, and gives
+/// `None` if not (issue 33, the face pass validates; [`Mesh::validate`] then names the fault).
+/// The caller has checked that `mesh.triangles()` is some.
+pub(crate) fn checked_triangle_weights(mesh: &Mesh, weighting: Weighting) -> Option<Vec<f32>> {
+    weights_of(mesh, weighting, true)
+}
+
+fn weights_of(mesh: &Mesh, weighting: Weighting, check: bool) -> Option<Vec<f32>> {
     // A vertex used only by faces of zero size still counts: its longest edge is raised to a
     // tiny weight so that barycentres stay defined (curvature raises its product instead).
     let floor = match weighting {
         Weighting::Curvature => 0.0,
         _ => f32::MIN_POSITIVE,
     };
-    let longest = longest_edges(mesh, floor);
+    let longest = longest_edges(mesh, floor, check)?;
+    Some(weigh(mesh, weighting, longest))
+}
+
+fn weigh(mesh: &Mesh, weighting: Weighting, longest: Vec<f32>) -> Vec<f32> {
     match weighting {
         Weighting::LongestEdge => longest,
         Weighting::Uniform => longest
@@ -69,7 +85,11 @@ pub fn vertex_weights(mesh: &Mesh, weighting: Weighting) -> Vec<f32> {
 /// with atomic compare-and-swap: a maximum does not depend on the order it is taken in, so
 /// neither does the result. Squared lengths are kept as their bits plus one (non-negative
 /// floats order as their bits; 0 marks a vertex no face uses) and rooted once per vertex.
-fn longest_edges(mesh: &Mesh, floor: f32) -> Vec<f32> {
+///
+/// `check`: the mesh is triangles (`mesh.triangles()` is some) not yet validated; every block
+/// checks its offsets (face `f` starts at corner `3 f`) and indices (below the vertex count)
+/// as it reads them, and `None` comes back if any fails.
+fn longest_edges(mesh: &Mesh, floor: f32, check: bool) -> Option<Vec<f32>> {
     let longest: Vec<AtomicU32> = (0..mesh.vertex_count())
         .map(|_| AtomicU32::new(0))
         .collect();
@@ -91,9 +111,32 @@ fn longest_edges(mesh: &Mesh, floor: f32) -> Vec<f32> {
         raise(a, bits);
         raise(b, bits);
     };
+    if check && mesh.triangles().is_none() {
+        return None;
+    }
+    let faulty = AtomicBool::new(false);
+    let n = p.len();
     if let Some(triangles) = mesh.triangles() {
         // Each corner takes the longer of its two edges: three raises a triangle, not six.
         blocks::ranges(triangles.len()).for_each(|r| {
+            if check {
+                // Offsets and indices: branch-free over the block, then one test.
+                let offsets = &mesh.face_offsets[r.clone()];
+                // (3 f fits a u32: the last offset, a u32, is 3 × the face count.)
+                let start = 3 * r.start as u32;
+                let off = offsets
+                    .iter()
+                    .zip((start..).step_by(3))
+                    .fold(0u32, |bad, (&o, want)| bad | (o ^ want));
+                let top = triangles[r.clone()]
+                    .as_flattened()
+                    .iter()
+                    .fold(0u32, |m, &v| m.max(v));
+                if off != 0 || top as usize >= n {
+                    faulty.store(true, Relaxed);
+                    return;
+                }
+            }
             for &[a, b, c] in &triangles[r] {
                 let (pa, pb, pc) = (p[a as usize], p[b as usize], p[c as usize]);
                 let ab = dist2(pa, pb).to_bits() + 1;
@@ -114,13 +157,18 @@ fn longest_edges(mesh: &Mesh, floor: f32) -> Vec<f32> {
             }
         });
     }
-    longest
-        .into_par_iter()
-        .map(|b| match b.into_inner() {
-            0 => 0.0,
-            b => f32::from_bits(b - 1).sqrt().max(floor),
-        })
-        .collect()
+    if faulty.into_inner() {
+        return None;
+    }
+    Some(
+        longest
+            .into_par_iter()
+            .map(|b| match b.into_inner() {
+                0 => 0.0,
+                b => f32::from_bits(b - 1).sqrt().max(floor),
+            })
+            .collect(),
+    )
 }
 
 /// Raises every referenced vertex's weight to at least `floor`.

@@ -46,6 +46,74 @@ fn main() {
         simplify(&mesh, &o, &mut |_, _| true).unwrap()
     };
     let nv = mesh.positions.len();
+    if fractions.is_empty() || args.get(4).is_some_and(|m| m == "prep") {
+        // The preparation's passes one by one (medians of `runs`).
+        let med = |f: &mut dyn FnMut()| {
+            let mut v: Vec<f64> = (0..runs)
+                .map(|_| {
+                    let s = Instant::now();
+                    f();
+                    s.elapsed().as_secs_f64() * 1e3
+                })
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        if args.get(5).is_some_and(|m| m == "weights") {
+            // Only the weights pass, for `perf record`.
+            for _ in 0..runs {
+                drop(tessd_simplify::weights::vertex_weights(
+                    &mesh,
+                    tessd_simplify::Weighting::LongestEdge,
+                ));
+            }
+            return;
+        }
+        let validate = med(&mut || mesh.validate().unwrap());
+        let polygons = med(&mut || assert!(!mesh.faces().any(|f| f.len() > 3)));
+        let weights = med(&mut || {
+            drop(tessd_simplify::weights::vertex_weights(
+                &mesh,
+                tessd_simplify::Weighting::LongestEdge,
+            ))
+        });
+        println!(
+            "prep: validate {validate:.2} ms, polygons {polygons:.2} ms, weights {weights:.2} ms"
+        );
+        // The preparation stage (until the first progress call) of a mesh of triangles alone,
+        // checked inside its passes, against the same mesh with one crease, which takes
+        // `Mesh::validate` and the separate passes; interleaved, medians.
+        let mut creased = mesh.clone();
+        creased.creases.push(tessd_mesh::Crease {
+            a: mesh.face_indices[0],
+            b: mesh.face_indices[1],
+            value: 1.0,
+        });
+        let o = SimplifyOptions::new(Method::Grid(GridSize::CellsPerAxis(40)));
+        let prepare = |m: &tessd_mesh::Mesh| {
+            let s = Instant::now();
+            let mut t = None;
+            simplify(m, &o, &mut |_, _| {
+                t.get_or_insert(s.elapsed().as_secs_f64() * 1e3);
+                true
+            })
+            .unwrap();
+            t.unwrap()
+        };
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for _ in 0..runs {
+            a.push(prepare(&mesh));
+            b.push(prepare(&creased));
+        }
+        a.sort_by(f64::total_cmp);
+        b.sort_by(f64::total_cmp);
+        let (a, b) = (a[runs / 2], b[runs / 2]);
+        println!(
+            "prepare stage: plain triangles {a:.2} ms, validated {b:.2} ms ({:.2}x)",
+            b / a
+        );
+        return;
+    }
     println!(
         "torus {} triangles, {} vertices, RAYON_NUM_THREADS={:?}",
         mesh.face_count(),
