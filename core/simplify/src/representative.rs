@@ -318,31 +318,32 @@ fn block_quadrics(
 }
 
 /// The area-weighted quadric of a face's plane; `None` for a face of zero area.
+///
+/// From the unnormalised area vector `N` (twice the area times the unit normal) and a point
+/// `p` of the plane: `area · (n·x + d)² = (N·x − N·p)² · ½ / |N|`, so one square root and one
+/// division a face, not a division per component of the normal (the latency chain that bound
+/// the quadric pass; a few ulps from normalising first).
 fn face_quadric(mesh: &Mesh, face: &[u32]) -> Option<Quadric> {
-    let (normal, area, centroid) = plane_of(mesh, face);
-    if area <= 0.0 {
+    let (n, at) = area_vector_of(mesh, face);
+    let len2 = n.length_squared();
+    if len2 == 0.0 {
         return None;
     }
-    let d = -(normal[0] * centroid[0] + normal[1] * centroid[1] + normal[2] * centroid[2]);
-    Some(Quadric::plane(normal, d, area))
+    let d = -n.dot(at);
+    Some(Quadric::plane(n.to_array(), d, 0.5 / len2.sqrt()))
 }
 
-/// Unit normal, area and a point of the plane of a face (the first corner of a triangle, the
-/// centroid of a polygon).
-fn plane_of(mesh: &Mesh, face: &[u32]) -> ([f64; 3], f64, [f64; 3]) {
+/// Area vector (twice the area along the normal) and a point of the plane of a face (the
+/// first corner of a triangle, the centroid of a polygon).
+fn area_vector_of(mesh: &Mesh, face: &[u32]) -> (glam::DVec3, glam::DVec3) {
     let p = |i: usize| area_vector::f64_point(mesh.positions[face[i] as usize]);
-    let (n, at) = match face.len() {
+    match face.len() {
         3 => (area_vector::triangle(p(0), p(1), p(2)), p(0)),
         m => {
             let c = (0..m).map(p).fold(glam::DVec3::ZERO, |c, q| c + q);
             (area_vector::polygon(m, p), c / m as f64)
         }
-    };
-    let len = n.length();
-    if len == 0.0 {
-        return ([0.0; 3], 0.0, at.to_array());
     }
-    ((n / len).to_array(), 0.5 * len, at.to_array())
 }
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {
