@@ -323,6 +323,7 @@ fn block_quadrics(
 /// `p` of the plane: `area · (n·x + d)² = (N·x − N·p)² · ½ / |N|`, so one square root and one
 /// division a face, not a division per component of the normal (the latency chain that bound
 /// the quadric pass; a few ulps from normalising first).
+#[inline(always)] // Into the face loops: the next faces' loads overlap this one's root.
 fn face_quadric(mesh: &Mesh, face: &[u32]) -> Option<Quadric> {
     let (n, at) = area_vector_of(mesh, face);
     let len2 = n.length_squared();
@@ -335,6 +336,7 @@ fn face_quadric(mesh: &Mesh, face: &[u32]) -> Option<Quadric> {
 
 /// Area vector (twice the area along the normal) and a point of the plane of a face (the
 /// first corner of a triangle, the centroid of a polygon).
+#[inline(always)]
 fn area_vector_of(mesh: &Mesh, face: &[u32]) -> (glam::DVec3, glam::DVec3) {
     let p = |i: usize| area_vector::f64_point(mesh.positions[face[i] as usize]);
     match face.len() {
