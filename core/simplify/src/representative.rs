@@ -179,11 +179,6 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Q
     let (first, n) = (range.start, range.len());
     let mut q = vec![Quadric::default(); n];
     let blocks = mesh.face_count().div_ceil(blocks::BLOCK);
-    // Whether a face has a corner in the range (its plane is needed).
-    let touches = |face: &[u32]| {
-        face.iter()
-            .any(|&v| range.contains(&cluster_of[v as usize]))
-    };
     if blocks::single_thread() {
         // One core: the same sums with a table only for the clusters that earlier blocks
         // touched. The first block that touches a cluster sums straight into its total (0 +
@@ -191,41 +186,25 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Q
         // 0); a later block sums into a partial of its own, added at the block's end (so in
         // block order).
         let mut block_of = vec![u32::MAX; n];
-        let mut seen: Vec<u32> = Vec::with_capacity(8);
         let (mut table, mut keys, mut part) = (CellTable::with_capacity(256), vec![], vec![]);
         for b in 0..blocks {
             let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
-            for f in r {
-                let face = mesh.face(f);
-                if !touches(face) {
-                    continue;
+            each_face_quadric(mesh, cluster_of, &range, r, |c, fq| {
+                let at = &mut block_of[(c - first) as usize];
+                if *at == u32::MAX {
+                    *at = b as u32;
                 }
-                let Some(fq) = face_quadric(mesh, face) else {
-                    continue;
-                };
-                seen.clear();
-                for &v in face {
-                    let c = cluster_of[v as usize];
-                    if !range.contains(&c) || seen.contains(&c) {
-                        continue;
+                if *at == b as u32 {
+                    q[(c - first) as usize].add(fq);
+                } else {
+                    let id = table.id(u64::from(c)) as usize;
+                    if id == keys.len() {
+                        keys.push(c);
+                        part.push(Quadric::default());
                     }
-                    seen.push(c);
-                    let at = &mut block_of[(c - first) as usize];
-                    if *at == u32::MAX {
-                        *at = b as u32;
-                    }
-                    if *at == b as u32 {
-                        q[(c - first) as usize].add(&fq);
-                    } else {
-                        let id = table.id(u64::from(c)) as usize;
-                        if id == keys.len() {
-                            keys.push(c);
-                            part.push(Quadric::default());
-                        }
-                        part[id].add(&fq);
-                    }
+                    part[id].add(fq);
                 }
-            }
+            });
             for (&c, p) in keys.iter().zip(&part) {
                 q[(c - first) as usize].add(p);
             }
@@ -280,9 +259,38 @@ fn block_quadrics(
     // The last cluster met at each of a few cache places, and its partial.
     let mut recent = [(u32::MAX, 0u32); 64];
     let (mut keys, mut q) = (Vec::new(), Vec::<Quadric>::new());
+    each_face_quadric(mesh, cluster_of, range, r, |c, fq| {
+        let hit = &mut recent[c as usize % recent.len()];
+        let slot = if hit.0 == c {
+            hit.1
+        } else {
+            let id = table.id(u64::from(c));
+            if id as usize == keys.len() {
+                keys.push(c);
+                q.push(Quadric::default());
+            }
+            *hit = (c, id);
+            id
+        };
+        q[slot as usize].add(fq);
+    });
+    (keys, q)
+}
+
+/// Calls `f(cluster, the face's quadric)` for every face of `faces`, in order, once for each
+/// distinct cluster of `range` among its corners (Lindstrom's rule: a face's quadric goes to
+/// the cells of its vertices, once per cell); faces without a corner in `range`, or of zero
+/// area, are passed over.
+#[inline(always)]
+fn each_face_quadric(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    range: &Range<u32>,
+    faces: Range<usize>,
+    mut f: impl FnMut(u32, &Quadric),
+) {
     let mut seen: Vec<u32> = Vec::with_capacity(8);
-    for f in r {
-        let face = mesh.face(f);
+    for face in faces.map(|i| mesh.face(i)) {
         if !face
             .iter()
             .any(|&v| range.contains(&cluster_of[v as usize]))
@@ -295,26 +303,12 @@ fn block_quadrics(
         seen.clear();
         for &v in face {
             let c = cluster_of[v as usize];
-            if !range.contains(&c) || seen.contains(&c) {
-                continue;
+            if range.contains(&c) && !seen.contains(&c) {
+                seen.push(c);
+                f(c, &fq);
             }
-            seen.push(c);
-            let hit = &mut recent[c as usize % recent.len()];
-            let slot = if hit.0 == c {
-                hit.1
-            } else {
-                let id = table.id(u64::from(c));
-                if id as usize == keys.len() {
-                    keys.push(c);
-                    q.push(Quadric::default());
-                }
-                *hit = (c, id);
-                id
-            };
-            q[slot as usize].add(&fq);
         }
     }
-    (keys, q)
 }
 
 /// The area-weighted quadric of a face's plane; `None` for a face of zero area.
