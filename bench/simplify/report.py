@@ -289,7 +289,10 @@ def main():
         "(`tessd_mesh::allocation`): buffers that large are returned to the system when freed, for every "
         "method alike (meshoptimizer's allocations go through the same malloc); with glibc's default rising "
         "threshold, freed buffers stay in the heap and the peak over several runs grows (grid-bary on "
-        "torus_1M at 50 %: 1.29 on one run, 2.00 over three)."
+        "torus_1M at 50 %: 1.29 on one run, 2.00 over three). Between two timed runs the child returns freed "
+        "memory to the system (`malloc_trim`), as the daemon does when its last job ends, and its allocator, "
+        "like the daemon's, asks for transparent huge pages on buffers of 4 MiB or more "
+        "(`tessd_mesh::allocation::LargePages`; meshoptimizer's buffers come from malloc without that advice)."
     )
     L.append(
         "* **Error**: tessd-compare (Metro-style) of every output against its input with the same options for all "
