@@ -281,9 +281,14 @@ impl<'a> Prepared<'a> {
         progress: &mut ProgressFn,
     ) -> Result<Simplified, SimplifyError> {
         let cancel = options.cancel.as_deref();
+        // The passes name themselves as they run; some run again in later rounds (placing and
+        // counting, coverage), so the fraction reported is the furthest reached: a status bar
+        // fed by it never goes back.
+        let mut reached = 0f64;
         let mut step = |fraction: f64, stage: &str| -> Result<(), SimplifyError> {
+            reached = reached.max(fraction);
             let stop = cancel.is_some_and(|c| c.load(Ordering::Relaxed));
-            if stop || !progress(fraction, stage) {
+            if stop || !progress(reached, stage) {
                 Err(SimplifyError::Cancelled)
             } else {
                 Ok(())

@@ -4,6 +4,8 @@
 //! vertices and faces and the coverage rounds on shared meshes and a noisy torus, as commit
 //! 65769d72 (before that redesign) produced them, and the same bytes on 1, 2 and 7 threads.
 
+mod adversarial;
+
 use tessd_mesh::Mesh;
 use tessd_mesh::io::{ReadOptions, read_path};
 use tessd_simplify::{
@@ -215,4 +217,42 @@ fn adaptive_outputs_are_identical_on_1_2_and_7_threads() {
             }
         }
     }
+}
+
+/// The progress a goal reports never goes back (a status bar fed by it would jump), however
+/// many rounds its passes take: the complexity goal's placing and counting rounds, the quality
+/// goal's coverage rounds.
+#[test]
+fn progress_never_goes_back() {
+    let torus = noisy_torus(120, 150);
+    let mut meshes = vec![torus, shared("bun_zipper.ply")];
+    meshes.extend(adversarial::all().into_iter().map(|(_, m)| m));
+    let goals = [
+        Method::Grid(tessd_simplify::GridSize::CellsPerAxis(40)),
+        Method::Quality(Length::Relative(0.05)),
+        Method::Quality(Length::Relative(0.001)),
+        Method::Complexity(Count::Relative(0.5)),
+        Method::Complexity(Count::Relative(0.1)),
+        Method::Complexity(Count::Relative(0.01)),
+    ];
+    let runs = meshes.iter().flat_map(|m| goals.map(|g| (m, g)));
+    let mut repeated = 0;
+    for (mesh, method) in runs {
+        let options = SimplifyOptions::new(method);
+        let mut seen: Vec<(f64, String)> = Vec::new();
+        let result = simplify(mesh, &options, &mut |f, stage| {
+            seen.push((f, stage.to_string()));
+            true
+        });
+        result.unwrap_or_else(|e| panic!("{method:?}: {e}"));
+        let places = seen.iter().filter(|(_, s)| s == "place").count();
+        repeated += usize::from(places > 1);
+        for w in seen.windows(2) {
+            assert!(w[1].0 >= w[0].0, "{method:?}: {:?} after {:?}", w[1], w[0]);
+        }
+        assert_eq!(seen.last().map(|l| l.0), Some(1.0), "{method:?}");
+    }
+    // Some runs place their clusters more than once (the rounds that once sent the fraction
+    // back), so the test sees what it is for.
+    assert!(repeated > 0, "no run placed its clusters twice");
 }
