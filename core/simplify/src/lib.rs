@@ -215,15 +215,27 @@ impl<'a> Prepared<'a> {
             Cow::Borrowed(mesh)
         };
         let weights = weights::vertex_weights(&work, options.weighting);
-        let (bounds, input_vertices) =
+        let referenced =
             referenced_bounds(&work.positions, &weights).ok_or(SimplifyError::Empty)?;
+        Ok(Self::of(work, weights, referenced, options, twists))
+    }
+
+    /// The preparation of `work`, from its weights and its referenced bounds and vertex count:
+    /// the size the relative lengths scale with and the feature classes.
+    fn of(
+        work: Cow<'a, Mesh>,
+        weights: Vec<f32>,
+        (bounds, input_vertices): (Cell, u64),
+        options: &SimplifyOptions,
+        twists: polygon_twist::Twists,
+    ) -> Self {
         let size = (0..3)
             .map(|k| f64::from(bounds.max[k] - bounds.min[k]))
             .fold(0.0, f64::max);
         let classes = options
             .preserve_boundaries
             .then(|| features::feature_classes(&work, options.feature_angle_deg));
-        Ok(Prepared {
+        Prepared {
             work,
             weights,
             bounds,
@@ -231,7 +243,7 @@ impl<'a> Prepared<'a> {
             classes,
             input_vertices,
             twists,
-        })
+        }
     }
 
     /// [`Prepared::new`] for a mesh of triangles and positions alone (the usual large input),
@@ -255,22 +267,15 @@ impl<'a> Prepared<'a> {
         }
         let weights = weights::checked_triangle_weights(mesh, options.weighting)?;
         let (bounds, finite) = partition::checked_bounds(&mesh.positions, &weights);
-        let (bounds, input_vertices) = bounds.filter(|_| finite)?;
-        let size = (0..3)
-            .map(|k| f64::from(bounds.max[k] - bounds.min[k]))
-            .fold(0.0, f64::max);
-        let classes = options
-            .preserve_boundaries
-            .then(|| features::feature_classes(mesh, options.feature_angle_deg));
-        Some(Prepared {
-            work: Cow::Borrowed(mesh),
+        let referenced = bounds.filter(|_| finite)?;
+        let twists = polygon_twist::Twists::default();
+        Some(Self::of(
+            Cow::Borrowed(mesh),
             weights,
-            bounds,
-            size,
-            classes,
-            input_vertices,
-            twists: polygon_twist::Twists::default(),
-        })
+            referenced,
+            options,
+            twists,
+        ))
     }
 
     /// Runs one simplification (the method, representative and partition flag of `options`;

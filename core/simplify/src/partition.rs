@@ -87,7 +87,9 @@ fn bounds_of<const CHECK: bool>(
             for (l, &p) in rest.iter().enumerate() {
                 lo[l] = lo[l].min(p);
                 hi[l] = hi[l].max(p);
-                nan[l] += p * 0.0;
+                if CHECK {
+                    nan[l] += p * 0.0;
+                }
             }
             let lane = |a: &[f32; 12], k: usize, f: fn(f32, f32) -> f32| {
                 (k..12).step_by(3).map(|l| a[l]).reduce(f).unwrap()
