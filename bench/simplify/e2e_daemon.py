@@ -37,6 +37,17 @@ import tessd  # noqa: E402
 from tessd.daemon import stop_daemon  # noqa: E402
 
 
+def mesh_arrays(harness, path, adir):
+    """The mesh file `path` as the arrays a client sends (`positions` f32 [V, 3], `face_indices`
+    u32 [T, 3]), written by the harness's `arrays` into `adir` and read back; and its shape."""
+    shape = json.loads(subprocess.run([harness, "arrays", str(path), str(adir)], check=True,
+                                      capture_output=True, text=True).stdout)
+    pos = np.fromfile(Path(adir) / "positions.f32", dtype="<f4").reshape(-1, 3)
+    faces = np.fromfile(Path(adir) / "faces.u32", dtype="<u4").reshape(-1, 3)
+    shutil.rmtree(adir, ignore_errors=True)
+    return shape, {"positions": pos, "face_indices": faces}
+
+
 def params_of(rec):
     """The daemon's `simplify` params for a harness record (`methods.rs`'s settings)."""
     _, mode, rep = rec["method"].split("-")
@@ -79,14 +90,9 @@ def run(args):
                                   key=lambda kr: (-kr[0][2], kr[0][1]))
                     if not todo:
                         continue
-                    adir = work / "arrays" / e["mesh"]
-                    shape = json.loads(subprocess.run([args.harness, "arrays", e["path"], str(adir)], check=True,
-                                                      capture_output=True, text=True).stdout)
-                    pos = np.fromfile(adir / "positions.f32", dtype="<f4").reshape(-1, 3)
-                    faces = np.fromfile(adir / "faces.u32", dtype="<u4").reshape(-1, 3)
-                    shutil.rmtree(adir, ignore_errors=True)
+                    shape, arrays = mesh_arrays(args.harness, e["path"], work / "arrays" / e["mesh"])
+                    pos, faces = arrays["positions"], arrays["face_indices"]
                     assert len(faces) == shape["triangles"] == e["input_triangles"], (shape, e["mesh"])
-                    arrays = {"positions": pos, "face_indices": faces}
                     print(f"== {e['mesh']} (e2e: {len(pos)} vertices, {len(faces)} triangles)", file=sys.stderr)
                     for (mesh, method, frac), r in todo:
                         params = params_of(r)

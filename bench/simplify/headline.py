@@ -28,7 +28,6 @@ import argparse
 import datetime
 import json
 import os
-import shutil
 import statistics
 import subprocess
 import sys
@@ -36,13 +35,13 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "python"))
 sys.path.insert(0, HERE)
 import tessd  # noqa: E402
 from tessd.daemon import stop_daemon  # noqa: E402
+from e2e_daemon import mesh_arrays  # noqa: E402
 from tables import headline_table  # noqa: E402
 
 # (row, daemon params (None for a count filled in from the grid's), peer method)
@@ -98,13 +97,7 @@ def run(args):
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
         subprocess.run([args.harness, "gen", str(tri), str(path)], check=True)
-    adir = work / "arrays" / f"headline_{name}"
-    shape = json.loads(subprocess.run([args.harness, "arrays", str(path), str(adir)], check=True,
-                                      capture_output=True, text=True).stdout)
-    pos = np.fromfile(adir / "positions.f32", dtype="<f4").reshape(-1, 3)
-    faces = np.fromfile(adir / "faces.u32", dtype="<u4").reshape(-1, 3)
-    shutil.rmtree(adir, ignore_errors=True)
-    arrays = {"positions": pos, "face_indices": faces}
+    shape, arrays = mesh_arrays(args.harness, path, work / "arrays" / f"headline_{name}")
     print(f"== headline {name}: {shape['vertices']} vertices, {shape['triangles']} triangles "
           f"({args.label or 'no label'}, {args.tessd})", file=sys.stderr)
     os.environ["RAYON_NUM_THREADS"] = "1"
