@@ -30,6 +30,23 @@ pub(crate) fn single_thread() -> bool {
     rayon::current_num_threads() == 1
 }
 
+/// `slice` cut into consecutive parts of the given lengths (which must not add up to more than
+/// its length), for a parallel pass whose blocks each fill their own part: the places a
+/// counting pass gave them.
+pub(crate) fn split_lengths<T>(
+    mut slice: &mut [T],
+    lengths: impl IntoIterator<Item = usize>,
+) -> Vec<&mut [T]> {
+    lengths
+        .into_iter()
+        .map(|n| {
+            let (part, rest) = std::mem::take(&mut slice).split_at_mut(n);
+            slice = rest;
+            part
+        })
+        .collect()
+}
+
 /// A slice that the blocks of a parallel pass write at once, each at places no other block
 /// writes (the caller's counting fixes them beforehand, as in a counting sort): the one
 /// shape of shared writing that safe Rust cannot split up front, since a block's places are

@@ -194,14 +194,9 @@ impl Fates {
             // Triangles the fate pass wrote: each block's copied into its place (parallel;
             // every block's place follows from the counts).
             let mut indices = vec![0u32; total];
-            let mut jobs = Vec::with_capacity(parts.len());
-            let mut rest = &mut indices[..];
-            for part in &parts {
-                let (to, r) = std::mem::take(&mut rest).split_at_mut(part.len());
-                rest = r;
-                jobs.push((to, part));
-            }
-            jobs.into_par_iter()
+            blocks::split_lengths(&mut indices, parts.iter().map(Vec::len))
+                .into_par_iter()
+                .zip(&parts)
                 .for_each(|(to, part)| to.copy_from_slice(part));
             drop(parts);
             let mut out = Eliminated {
@@ -214,15 +209,10 @@ impl Fates {
             };
             if corners {
                 out.source_corner = vec![0; total];
-                let mut jobs = Vec::with_capacity(counts.len());
-                let mut rest = &mut out.source_corner[..];
-                for (b, c) in counts.iter().enumerate() {
-                    let (s, r) = std::mem::take(&mut rest).split_at_mut(c[1] as usize);
-                    rest = r;
-                    jobs.push((b, s));
-                }
                 let fate = &fate;
-                jobs.into_par_iter().for_each(|(b, s)| {
+                let lengths = counts.iter().map(|c| c[1] as usize);
+                let parts = blocks::split_lengths(&mut out.source_corner, lengths);
+                parts.into_par_iter().enumerate().for_each(|(b, s)| {
                     let range = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(n);
                     let kept = range.filter(|&f| fate[f] == Fate::Kept);
                     for (k, f) in kept.enumerate() {
