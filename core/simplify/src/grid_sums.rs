@@ -16,7 +16,6 @@
 //! equals.
 
 use crate::blocks;
-use crate::cluster_stats::Stats;
 use crate::grid_frame::Grid;
 use crate::options::Representative;
 use crate::partition::UNUSED;
@@ -176,14 +175,9 @@ pub(crate) fn grid_representatives(
             out.par_iter_mut().enumerate().for_each(|(i, x)| {
                 let c = first + i;
                 let b = &boxes[6 * c..6 * c + 6];
-                let stats = Stats {
-                    sum: [0.0; 4],
-                    lo: std::array::from_fn(|k| unordered(b[k])),
-                    hi: std::array::from_fn(|k| unordered(b[3 + k])),
-                    heaviest_w: 0.0,
-                    heaviest: 0,
-                };
-                *x = representative::quadric_point(&quadrics[i], &stats, x.map(f64::from));
+                let lo = std::array::from_fn(|k| unordered(b[k]));
+                let hi = std::array::from_fn(|k| unordered(b[3 + k]));
+                *x = representative::quadric_point(&quadrics[i], [lo, hi], x.map(f64::from));
             });
         },
     );

@@ -80,7 +80,7 @@ pub(crate) fn place(
                 each_cluster(out, first, |c, out, scratch| {
                     let s = source.stats(c, scratch);
                     let x0 = s.barycentre();
-                    *out = quadric_point(&quadrics[c - first], &s, x0);
+                    *out = quadric_point(&quadrics[c - first], [s.lo, s.hi], x0);
                     if let (Some(tol), Source::Leaves(view)) = (tolerance, source)
                         && view.points(c).iter().any(|q| dist(*out, q.p) > tol)
                     {
@@ -110,12 +110,11 @@ fn each_cluster(
         });
 }
 
-/// The quadric minimiser of a cluster with quadric `q` and statistics `s`, kept when it stays
-/// inside the cluster's box of vertices grown by a quarter of its diagonal; else `x0`, the
+/// The quadric minimiser of a cluster with quadric `q`, kept when it stays inside the box
+/// `lo`–`hi` of the cluster's vertices grown by a quarter of its diagonal; else `x0`, the
 /// barycentre.
-pub(crate) fn quadric_point(q: &Quadric, s: &Stats, x0: [f64; 3]) -> [f32; 3] {
+pub(crate) fn quadric_point(q: &Quadric, [lo, hi]: [[f32; 3]; 2], x0: [f64; 3]) -> [f32; 3] {
     let x = q.minimizer(x0);
-    let (lo, hi) = (s.lo, s.hi);
     let diag = (0..3)
         .map(|k| f64::from(hi[k] - lo[k]).powi(2))
         .sum::<f64>()
