@@ -1,11 +1,40 @@
 //! The frame of a regular grid (Belblidia & Perrin, section 2): which cell a point falls in
-//! and where inside it, shared by the grid's passes (`grid_cells.rs`, `grid_sums.rs`).
+//! and where inside it, shared by the grid's passes (`grid_cells.rs`, `grid_sums.rs`) and
+//! the hash of `grid_partition.rs`.
 
-use crate::grid_partition::grid_dims;
 use crate::options::GridSize;
 use crate::partition::Cell;
 
-/// The cell coordinates of a point, as the grid computes them (`grid_partition.rs` too).
+/// Largest number of cells along one axis (keeps cell keys in 21 bits per axis).
+const MAX_CELLS_PER_AXIS: u64 = 1 << 20;
+
+/// Cells per axis and cell sides for a grid of `size` over `bounds`.
+fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
+    let ext: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.max[k] - bounds.min[k]));
+    let largest = ext.iter().cloned().fold(0.0, f64::max);
+    let dims: [u64; 3] = match size {
+        GridSize::CellsPerAxis(n) => {
+            // Flat axes (a plane, a line) get one cell.
+            std::array::from_fn(|k| if ext[k] > 0.0 { u64::from(n.max(1)) } else { 1 })
+        }
+        GridSize::CellSize(s) => std::array::from_fn(|k| {
+            let n = (ext[k] / s).ceil() as u64;
+            n.clamp(1, MAX_CELLS_PER_AXIS)
+        }),
+    };
+    let dims = dims.map(|d| d.min(MAX_CELLS_PER_AXIS));
+    let side = std::array::from_fn(|k| {
+        if ext[k] > 0.0 {
+            ext[k] / dims[k] as f64
+        } else {
+            largest.max(1.0)
+        }
+    });
+    (dims, side)
+}
+
+/// The cell coordinates of a point, as every grid pass computes them (`grid_cells.rs`,
+/// `grid_sums.rs`, and the hash of `grid_partition.rs`).
 #[derive(Clone, Copy)]
 pub(crate) struct Grid {
     lo: [f64; 3],
@@ -58,7 +87,7 @@ impl Grid {
         self.side
     }
 
-    /// The box of cell `c`, as `grid_partition.rs` gives it.
+    /// The box of cell `c` ("show partition").
     pub(crate) fn cell_box(&self, c: [u32; 3]) -> Cell {
         let (lo, side) = (self.lo, self.side);
         Cell {

@@ -4,45 +4,19 @@
 //!
 //! The grid goal takes `grid_cells.rs` (a dense brick table, sums streamed as it numbers);
 //! this hash-table binning with member lists remains for grids whose box holds more bricks
-//! than a dense table should (cells far below the mesh's detail), and for [`grid_dims`].
+//! than a dense table should (cells far below the mesh's detail); both place the cells by
+//! `grid_frame.rs`.
 
 use crate::blocks::{self, DisjointWrites};
 use crate::cell_table::CellTable;
+use crate::grid_frame::Grid;
 use crate::options::GridSize;
 use crate::partition::{Cell, Members, Partition, UNUSED};
 use rayon::prelude::*;
 
-/// Largest number of cells along one axis (keeps cell keys in 21 bits per axis).
-pub const MAX_CELLS_PER_AXIS: u64 = 1 << 20;
-
 /// Blocks binned per wave (see [`grid_partition`]): enough for every core, few enough that
 /// a wave's block-local tables stay a fraction of the mesh.
 const WAVE_BLOCKS: usize = 8;
-
-/// Cells per axis and cell sides for a grid of `size` over `bounds`.
-pub(crate) fn grid_dims(bounds: &Cell, size: GridSize) -> ([u64; 3], [f64; 3]) {
-    let ext: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.max[k] - bounds.min[k]));
-    let largest = ext.iter().cloned().fold(0.0, f64::max);
-    let dims: [u64; 3] = match size {
-        GridSize::CellsPerAxis(n) => {
-            // Flat axes (a plane, a line) get one cell.
-            std::array::from_fn(|k| if ext[k] > 0.0 { u64::from(n.max(1)) } else { 1 })
-        }
-        GridSize::CellSize(s) => std::array::from_fn(|k| {
-            let n = (ext[k] / s).ceil() as u64;
-            n.clamp(1, MAX_CELLS_PER_AXIS)
-        }),
-    };
-    let dims = dims.map(|d| d.min(MAX_CELLS_PER_AXIS));
-    let side = std::array::from_fn(|k| {
-        if ext[k] > 0.0 {
-            ext[k] / dims[k] as f64
-        } else {
-            largest.max(1.0)
-        }
-    });
-    (dims, side)
-}
 
 /// Assigns every vertex with non-zero weight to the grid cell containing it, and lists the
 /// vertices of every cluster. With `classes`, vertices of different classes never share a
@@ -68,23 +42,15 @@ pub(crate) fn grid_partition(
     size: GridSize,
     keep_cells: bool,
 ) -> (Partition, Members) {
-    let (dims, side) = grid_dims(bounds, size);
-    let inv: [f64; 3] = std::array::from_fn(|k| 1.0 / side[k]);
-    let lo: [f64; 3] = std::array::from_fn(|k| f64::from(bounds.min[k]));
-    let top: [i64; 3] = std::array::from_fn(|k| dims[k] as i64 - 1);
+    let (grid, _) = Grid::new(bounds, size);
     let key_of = |p: &[f32; 3], class: u64| -> u64 {
-        let c: [u64; 3] = std::array::from_fn(|k| {
-            (((f64::from(p[k]) - lo[k]) * inv[k]) as i64).clamp(0, top[k]) as u64
-        });
+        let c = grid.locate(p).0.map(u64::from);
         (((c[0] << 21 | c[1]) << 21 | c[2]) << 1) | class
     };
     let mut cluster_of = vec![UNUSED; positions.len()];
     let cell_box = |key: u64| {
         let c = [key >> 43, (key >> 22) & 0x1f_ffff, (key >> 1) & 0x1f_ffff];
-        Cell {
-            min: std::array::from_fn(|k| (lo[k] + c[k] as f64 * side[k]) as f32),
-            max: std::array::from_fn(|k| (lo[k] + (c[k] + 1) as f64 * side[k]) as f32),
-        }
+        grid.cell_box(c.map(|x| x as u32))
     };
     let mut table = CellTable::with_capacity(blocks::BLOCK);
     let mut cells = Vec::new();
