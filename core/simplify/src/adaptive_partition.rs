@@ -26,9 +26,9 @@
 //! a 1 M-triangle torus at 10 %): they are measured as they are split, while their points
 //! are in cache, and the points carry their weights and normals beside them (`Carry`).
 
-use crate::blocks;
+use crate::blocks::{self, disjoint_slices};
 use crate::feature_priority::{PackedNormal, plane_distance2, priority};
-use crate::kd::{Bounds, Cut, Point, disjoint_slices, split_points};
+use crate::kd::{Bounds, Cut, Point, split_points};
 use crate::options::Representative;
 use crate::partition::{Cell, Partition, UNUSED};
 use crate::split_queue::{ByError, SplitQueue};

@@ -30,21 +30,36 @@ pub(crate) fn single_thread() -> bool {
     rayon::current_num_threads() == 1
 }
 
-/// `slice` cut into consecutive parts of the given lengths (which must not add up to more than
-/// its length), for a parallel pass whose blocks each fill their own part: the places a
-/// counting pass gave them.
-pub(crate) fn split_lengths<T>(
-    mut slice: &mut [T],
-    lengths: impl IntoIterator<Item = usize>,
+/// The slices `ranges` (increasing, disjoint) of `order`, each mutable on its own, for a
+/// parallel pass whose parts each write their own range: the cells of an adaptive partition
+/// own disjoint ranges of the vertex order; the blocks of a counting pass own [`consecutive`]
+/// ranges of its output.
+pub(crate) fn disjoint_slices<T>(
+    order: &mut [T],
+    ranges: impl Iterator<Item = Range<usize>>,
 ) -> Vec<&mut [T]> {
-    lengths
-        .into_iter()
-        .map(|n| {
-            let (part, rest) = std::mem::take(&mut slice).split_at_mut(n);
-            slice = rest;
-            part
+    let (mut rest, mut consumed) = (order, 0usize);
+    ranges
+        .map(|r| {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(r.start - consumed);
+            let (mine, tail) = tail.split_at_mut(r.end - r.start);
+            rest = tail;
+            consumed = r.end;
+            mine
         })
         .collect()
+}
+
+/// The consecutive ranges of the given lengths from 0: the places a counting pass gives the
+/// blocks of the next one, for [`disjoint_slices`].
+pub(crate) fn consecutive(
+    lengths: impl IntoIterator<Item = usize>,
+) -> impl Iterator<Item = Range<usize>> {
+    lengths.into_iter().scan(0usize, |at, n| {
+        let r = *at..*at + n;
+        *at += n;
+        Some(r)
+    })
 }
 
 /// A slice that the blocks of a parallel pass write at once, each at places no other block

@@ -194,10 +194,13 @@ impl Fates {
             // Triangles the fate pass wrote: each block's copied into its place (parallel;
             // every block's place follows from the counts).
             let mut indices = vec![0u32; total];
-            blocks::split_lengths(&mut indices, parts.iter().map(Vec::len))
-                .into_par_iter()
-                .zip(&parts)
-                .for_each(|(to, part)| to.copy_from_slice(part));
+            blocks::disjoint_slices(
+                &mut indices,
+                blocks::consecutive(parts.iter().map(Vec::len)),
+            )
+            .into_par_iter()
+            .zip(&parts)
+            .for_each(|(to, part)| to.copy_from_slice(part));
             drop(parts);
             let mut out = Eliminated {
                 face_offsets: (0..=faces as u32).into_par_iter().map(|f| 3 * f).collect(),
@@ -211,7 +214,8 @@ impl Fates {
                 out.source_corner = vec![0; total];
                 let fate = &fate;
                 let lengths = counts.iter().map(|c| c[1] as usize);
-                let parts = blocks::split_lengths(&mut out.source_corner, lengths);
+                let parts =
+                    blocks::disjoint_slices(&mut out.source_corner, blocks::consecutive(lengths));
                 parts.into_par_iter().enumerate().for_each(|(b, s)| {
                     let range = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(n);
                     let kept = range.filter(|&f| fate[f] == Fate::Kept);

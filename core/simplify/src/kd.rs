@@ -175,25 +175,6 @@ fn partition<A: Copy>(
     }
 }
 
-/// The slices `ranges` (increasing, disjoint) of `order`, each mutable on its own: the cells
-/// of a partition own disjoint ranges of the vertex order, so they can be refined or split in
-/// parallel.
-pub(crate) fn disjoint_slices<T>(
-    order: &mut [T],
-    ranges: impl Iterator<Item = std::ops::Range<usize>>,
-) -> Vec<&mut [T]> {
-    let (mut rest, mut consumed) = (order, 0usize);
-    ranges
-        .map(|r| {
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(r.start - consumed);
-            let (mine, tail) = tail.split_at_mut(r.end - r.start);
-            rest = tail;
-            consumed = r.end;
-            mine
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
