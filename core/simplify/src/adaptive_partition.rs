@@ -330,15 +330,10 @@ impl<'a> Adaptive<'a> {
         let mut order: Vec<Point> = Vec::with_capacity(total);
         let boxes: Vec<[Bounds; 2]> = {
             // Each block's two destination slices, cut from the front of either class's part.
-            let (mut zero, mut one) = order.spare_capacity_mut()[..total].split_at_mut(split);
-            let mut jobs = Vec::with_capacity(counts.len());
-            for c in &counts {
-                let (a, rest) = std::mem::take(&mut zero).split_at_mut(c[0]);
-                zero = rest;
-                let (b, rest) = std::mem::take(&mut one).split_at_mut(c[1]);
-                one = rest;
-                jobs.push([a, b]);
-            }
+            let (zero, one) = order.spare_capacity_mut()[..total].split_at_mut(split);
+            let zero = disjoint_slices(zero, blocks::consecutive(counts.iter().map(|c| c[0])));
+            let one = disjoint_slices(one, blocks::consecutive(counts.iter().map(|c| c[1])));
+            let jobs: Vec<_> = zero.into_iter().zip(one).map(|(a, b)| [a, b]).collect();
             blocks::ranges(n)
                 .zip(jobs)
                 .map(|(r, out)| {
