@@ -75,13 +75,7 @@ fn ico_sphere(level: u32) -> Mesh {
         positions: p,
         face_offsets: (0..=f.len() as u32).map(|i| i * 3).collect(),
         face_indices: f.into_iter().flatten().collect(),
-        normals: None,
-        uvs: None,
-        creases: Vec::new(),
-        face_groups: Vec::new(),
-        group_names: Vec::new(),
-        attributes: Vec::new(),
-        sharp_edges: Vec::new(),
+        ..Mesh::default()
     }
 }
 
