@@ -74,12 +74,14 @@ pub struct JobContext<'a> {
     sink: &'a (dyn Fn(Progress) + Sync),
     cancel: CancelToken,
     limits: JobLimits,
-    /// When the last report was sent, and its stage.
-    last: std::sync::Mutex<Option<(Instant, String)>>,
+    /// When the last report was sent, and every stage reported so far.
+    last: std::sync::Mutex<(Option<Instant>, Vec<String>)>,
 }
 
 /// Progress reports closer together than this are dropped (except the final one and the first
 /// of each stage, which a client may be waiting for), so a tight loop cannot flood the socket.
+/// A stage that comes back (the simplification's place / count / kd rounds alternate) is
+/// rate-limited like any other report: only its first appearance always goes out.
 const PROGRESS_INTERVAL: Duration = Duration::from_millis(10);
 
 impl<'a> JobContext<'a> {
@@ -89,7 +91,7 @@ impl<'a> JobContext<'a> {
             sink,
             cancel,
             limits: JobLimits::default(),
-            last: std::sync::Mutex::new(None),
+            last: std::sync::Mutex::new((None, Vec::new())),
         }
     }
 
@@ -132,12 +134,15 @@ impl<'a> JobContext<'a> {
         let now = Instant::now();
         let send = {
             let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-            let due = fraction >= 1.0
-                || last
-                    .as_ref()
-                    .is_none_or(|(t, s)| now - *t >= PROGRESS_INTERVAL || s != stage);
+            let (at, seen) = &mut *last;
+            let new_stage = !seen.iter().any(|s| s == stage);
+            let due =
+                fraction >= 1.0 || new_stage || at.is_none_or(|t| now - t >= PROGRESS_INTERVAL);
+            if new_stage {
+                seen.push(stage.to_string());
+            }
             if due {
-                *last = Some((now, stage.to_string()));
+                *at = Some(now);
             }
             due
         };
@@ -173,7 +178,8 @@ impl<'a> JobContext<'a> {
 mod tests {
     use super::*;
 
-    /// Reports inside the interval are dropped, except a new stage's first and the final one.
+    /// Reports inside the interval are dropped, except a new stage's first and the final one; a
+    /// stage that comes back is not new.
     #[test]
     fn a_new_stage_and_the_end_always_go_out() {
         let sent = std::sync::Mutex::new(Vec::new());
@@ -185,6 +191,9 @@ mod tests {
         ctx.progress(0.1, "read", "").unwrap();
         ctx.progress(0.2, "a_to_b", "").unwrap();
         ctx.progress(0.3, "a_to_b", "").unwrap();
+        // Stages that come back in rounds are not new: dropped inside the interval.
+        ctx.progress(0.4, "read", "").unwrap();
+        ctx.progress(0.5, "a_to_b", "").unwrap();
         ctx.progress(1.0, "done", "").unwrap();
         let sent = sent.lock().unwrap().clone();
         assert_eq!(
