@@ -17,6 +17,7 @@ pub struct Quadric {
 
 impl Quadric {
     /// The quadric of the plane `n·x + d = 0` (`n` unit), weighted by `w` (e.g. the face area).
+    #[inline] // Into the face passes, which build one a face.
     pub fn plane(n: [f64; 3], d: f64, w: f64) -> Quadric {
         Quadric {
             a: [
@@ -34,6 +35,7 @@ impl Quadric {
     }
 
     /// Adds `other`.
+    #[inline]
     pub fn add(&mut self, other: &Quadric) {
         for k in 0..6 {
             self.a[k] += other.a[k];

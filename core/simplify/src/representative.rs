@@ -137,7 +137,8 @@ pub(crate) fn quadric_point(q: &Quadric, [lo, hi]: [[f32; 3]; 2], x0: [f64; 3]) 
 ///
 /// A chunk is `1 / share` as many clusters as the mesh has vertices (at least 32 768): its
 /// quadrics (80 bytes each) stay under a fraction of the input's size, so the representatives
-/// keep the extra peak memory under twice the input; most calls are one chunk, and a mesh
+/// keep the extra peak memory under twice the input; every call with at most
+/// [`ONE_PASS_SHARE`]'s share of clusters is one chunk, and a mesh
 /// simplified to more than `1 / share` of its vertices takes one more cheap pass per chunk
 /// (faces without a corner in the chunk are skipped on their cluster ids).
 ///
@@ -154,7 +155,12 @@ pub(crate) fn for_each_quadric_chunk(
     share: usize,
     mut f: impl FnMut(usize, &[Quadric]),
 ) {
-    let chunk = (mesh.vertex_count() / share).max(MIN_CHUNK);
+    let v = mesh.vertex_count();
+    let chunk = if n <= v / ONE_PASS_SHARE {
+        n.max(1)
+    } else {
+        (v / share).max(MIN_CHUNK)
+    };
     for first in (0..n).step_by(chunk) {
         let range = first as u32..(first + chunk).min(n) as u32;
         f(first, &cluster_quadrics(mesh, cluster_of, range));
@@ -169,9 +175,21 @@ pub(crate) const GRID_SHARE: usize = 6;
 /// 65769d72's 1.81×).
 const ADAPTIVE_SHARE: usize = 12;
 
+/// Up to `1 / ONE_PASS_SHARE` of the vertex count in clusters, every cluster goes in one
+/// chunk, one face pass: the quality goal at 10 % of a 1 M-triangle torus (50 k clusters)
+/// took two passes with a twelfth. Its quadrics (≤ 10 bytes a vertex, a twelfth's 6.7 and
+/// 3.3 more) stay within the memory limit, since the arrays of 16 bytes a cluster that are
+/// alive beside them (leaf starts, representatives) hold 6 bytes a vertex less than at the
+/// 50 % target, where the limit is measured.
+const ONE_PASS_SHARE: usize = 8;
+
 /// Fewest clusters a chunk of [`for_each_quadric_chunk`] takes (fewer in the unit tests, so
 /// that they cross chunks).
 const MIN_CHUNK: usize = if cfg!(test) { 1 << 10 } else { 1 << 15 };
+
+#[cfg(test)]
+#[path = "representative_speed.rs"]
+mod speed;
 
 /// The quadrics of the clusters of `range` ([`for_each_quadric_chunk`]).
 fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Quadric> {
@@ -288,6 +306,10 @@ fn each_face_quadric(
     faces: Range<usize>,
     mut f: impl FnMut(u32, &Quadric),
 ) {
+    if let Some(triangles) = mesh.triangles() {
+        each_triangle_quadric(&mesh.positions, &triangles[faces], cluster_of, range, f);
+        return;
+    }
     let mut seen: Vec<u32> = Vec::with_capacity(8);
     for face in faces.map(|i| mesh.face(i)) {
         if !face
@@ -305,6 +327,68 @@ fn each_face_quadric(
             if range.contains(&c) && !seen.contains(&c) {
                 seen.push(c);
                 f(c, &fq);
+            }
+        }
+    }
+}
+
+/// Triangles a batch of [`each_triangle_quadric`] holds.
+const BATCH: usize = 16;
+
+/// [`each_face_quadric`] for a mesh of triangles, by batches of [`BATCH`] faces: first the
+/// area vectors of a batch's faces with a corner in `range`, then their weights (`0.5 / |N|`,
+/// a square root and a division each: with one face at a time their latency chain bound the
+/// pass, 25 % of its samples; a batch's roots are independent and issue back to back), then
+/// the quadrics, added in face order. The same arithmetic as [`face_quadric`], so the same
+/// bits.
+#[inline(always)]
+fn each_triangle_quadric(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    cluster_of: &[u32],
+    range: &Range<u32>,
+    mut f: impl FnMut(u32, &Quadric),
+) {
+    let (first, len) = (range.start, range.end - range.start);
+    let inside = |c: u32| c.wrapping_sub(first) < len;
+    let mut normal = [[0f64; 3]; BATCH];
+    let mut offset = [0f64; BATCH];
+    let mut len2 = [0f64; BATCH];
+    let mut weight = [0f64; BATCH];
+    let mut clusters = [[0u32; 3]; BATCH];
+    for batch in triangles.chunks(BATCH) {
+        let mut k = 0;
+        for t in batch {
+            let c = t.map(|v| cluster_of[v as usize]);
+            if !(inside(c[0]) || inside(c[1]) || inside(c[2])) {
+                continue;
+            }
+            let p = t.map(|v| area_vector::f64_point(positions[v as usize]));
+            let n = area_vector::triangle(p[0], p[1], p[2]);
+            normal[k] = n.to_array();
+            offset[k] = -n.dot(p[0]);
+            len2[k] = n.length_squared();
+            clusters[k] = c;
+            k += 1;
+        }
+        // Every slot, stale ones too: a fixed count the compiler unrolls into paired roots.
+        for (w, l) in weight.iter_mut().zip(&len2) {
+            *w = 0.5 / l.sqrt();
+        }
+        for i in 0..k {
+            if len2[i] == 0.0 {
+                continue;
+            }
+            let q = Quadric::plane(normal[i], offset[i], weight[i]);
+            let [a, b, c] = clusters[i];
+            if inside(a) {
+                f(a, &q);
+            }
+            if b != a && inside(b) {
+                f(b, &q);
+            }
+            if c != a && c != b && inside(c) {
+                f(c, &q);
             }
         }
     }
