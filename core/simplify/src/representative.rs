@@ -402,7 +402,26 @@ fn each_triangle_quadric(
 /// the quadric pass; a few ulps from normalising first).
 #[inline(always)] // Into the face loops: the next faces' loads overlap this one's root.
 fn face_quadric(mesh: &Mesh, face: &[u32]) -> Option<Quadric> {
+    if let &[a, b, c] = face {
+        return triangle_quadric([a, b, c].map(|v| mesh.positions[v as usize]));
+    }
     let (n, at) = area_vector_of(mesh, face);
+    plane_quadric(n, at)
+}
+
+/// The area-weighted quadric of the triangle `p` ([`face_quadric`]; `None` for zero area):
+/// the bits the batched walk of [`each_triangle_quadric`] gives, for the grid's own face pass.
+/// A pass that calls it face after face waits on its root and division: computing a few
+/// faces' area vectors before their weights, as [`each_triangle_quadric`] does, hides them.
+#[inline(always)]
+pub(crate) fn triangle_quadric(p: [[f32; 3]; 3]) -> Option<Quadric> {
+    let p = p.map(area_vector::f64_point);
+    plane_quadric(area_vector::triangle(p[0], p[1], p[2]), p[0])
+}
+
+/// The quadric of the plane with area vector `n` through `at`, weighted by its area.
+#[inline(always)]
+fn plane_quadric(n: glam::DVec3, at: glam::DVec3) -> Option<Quadric> {
     let len2 = n.length_squared();
     if len2 == 0.0 {
         return None;
@@ -411,18 +430,14 @@ fn face_quadric(mesh: &Mesh, face: &[u32]) -> Option<Quadric> {
     Some(Quadric::plane(n.to_array(), d, 0.5 / len2.sqrt()))
 }
 
-/// Area vector (twice the area along the normal) and a point of the plane of a face (the
-/// first corner of a triangle, the centroid of a polygon).
+/// Area vector (twice the area along the normal, Newell's) and a point of the plane (the
+/// centroid) of a polygon.
 #[inline(always)]
 fn area_vector_of(mesh: &Mesh, face: &[u32]) -> (glam::DVec3, glam::DVec3) {
     let p = |i: usize| area_vector::f64_point(mesh.positions[face[i] as usize]);
-    match face.len() {
-        3 => (area_vector::triangle(p(0), p(1), p(2)), p(0)),
-        m => {
-            let c = (0..m).map(p).fold(glam::DVec3::ZERO, |c, q| c + q);
-            (area_vector::polygon(m, p), c / m as f64)
-        }
-    }
+    let m = face.len();
+    let c = (0..m).map(p).fold(glam::DVec3::ZERO, |c, q| c + q);
+    (area_vector::polygon(m, p), c / m as f64)
 }
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {

@@ -99,6 +99,30 @@ fn median(mut t: Vec<f64>) -> f64 {
     t[t.len() / 2]
 }
 
+/// The batched walk gives the previous version's bits, on 1 and 2 threads, across chunks.
+#[test]
+fn batched_walk_keeps_the_bits() {
+    let mesh = bumpy_torus(60_000);
+    for leaf in [2usize, 9] {
+        let (cluster_of, n) = kd_clusters(&mesh.positions, leaf);
+        let expected = old::cluster_quadrics(&mesh, &cluster_of, 0..n as u32);
+        for threads in [1usize, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut got = vec![];
+            pool.install(|| {
+                for_each_quadric_chunk(&mesh, &cluster_of, n, ADAPTIVE_SHARE, |first, q| {
+                    assert_eq!(first, got.len());
+                    got.extend_from_slice(q)
+                })
+            });
+            assert!(got == expected, "leaf {leaf}, {threads} threads");
+        }
+    }
+}
+
 #[test]
 #[ignore = "timing; run with --ignored --nocapture"]
 fn quadric_pass_speed() {
