@@ -34,53 +34,104 @@ pub(crate) const DISPLACEMENT_SHARE: f32 = 1.0 / 256.0;
 /// opposite the vertex form a closed loop, so their vectors sum to zero; on a border they sum
 /// to the chord between the fan's two ends.
 ///
-/// One pass over the faces on every core (issue 33, point 5): each core owns a range of the
-/// vertices and walks the faces in order, adding to its own vertices only, so every vertex's
-/// sums are taken in face order — the same bits on any number of cores, and as the serial
-/// pass gave. A face none of whose corners is in the range costs its index reads only.
+/// One pass over the faces, in parallel (issue 33, point 5): the vertices are cut into
+/// ranges, and each range walks the faces in order, adding to its own vertices only, so every
+/// vertex's sums are taken in face order — the same bits on any number of cores, and as the
+/// serial pass gave. A first pass takes the smallest and largest vertex index of every block
+/// of [`SPAN_FACES`] faces ([`face_spans`]), and a range walks only the blocks whose span
+/// meets it. Where faces and vertices come in a similar order (scans, generated and exported
+/// meshes) a range then reads about its share of the faces, so the ranges can be
+/// [`VERTEX_RANGE`] vertices each — many more than cores, their sums in cache; where they do
+/// not, there is one range per core, each walking every face.
 pub(crate) fn vertex_normals(mesh: &Mesh, weights: &[f32]) -> Vec<PackedNormal> {
     let n = mesh.vertex_count();
+    let faces = mesh.face_count();
+    let spans = face_spans(mesh);
+    let chunk = range_size(&spans, n);
+    let mut out = vec![PackedNormal::NONE; n];
+    out.par_chunks_mut(chunk).enumerate().for_each(|(i, out)| {
+        let (lo, hi) = (i * chunk, i * chunk + out.len());
+        let blocks = spans
+            .iter()
+            .enumerate()
+            .filter(|&(_, &(a, b))| (a as usize) < hi && b as usize >= lo)
+            .map(|(b, _)| b * SPAN_FACES..((b + 1) * SPAN_FACES).min(faces));
+        normals_of_range(mesh, weights, lo, out, blocks);
+    });
+    out
+}
+
+/// Vertices per range of [`vertex_normals`] when the faces' order follows the vertices': the
+/// range's sums (24 bytes a vertex) fit in a core's cache.
+const VERTEX_RANGE: usize = 1 << 15;
+
+/// The vertices per range of [`vertex_normals`] for `n` vertices: [`VERTEX_RANGE`] when the
+/// ranges would walk at most 1.25 times the face blocks between them, else one range per
+/// thread (with `n / 4096 + 1` at most).
+fn range_size(spans: &[(u32, u32)], n: usize) -> usize {
+    let walked: usize = spans
+        .iter()
+        .filter(|(a, b)| a <= b)
+        .map(|&(a, b)| b as usize / VERTEX_RANGE - a as usize / VERTEX_RANGE + 1)
+        .sum();
+    if walked <= spans.len() + spans.len() / 4 {
+        return VERTEX_RANGE;
+    }
     let parts = if crate::blocks::single_thread() {
         1
     } else {
         rayon::current_num_threads().clamp(1, n / 4096 + 1)
     };
-    let chunk = n.div_ceil(parts).max(1);
-    let mut out = vec![PackedNormal::NONE; n];
-    out.par_chunks_mut(chunk)
-        .enumerate()
-        .for_each(|(i, out)| normals_of_range(mesh, weights, i * chunk, out));
-    out
+    n.div_ceil(parts).max(1)
 }
 
-/// [`vertex_normals`] of the vertices `lo..lo + out.len()`.
-fn normals_of_range(mesh: &Mesh, weights: &[f32], lo: usize, out: &mut [PackedNormal]) {
+/// Faces per block of [`face_spans`]: small enough that a core skips most of what is not its
+/// own, large enough that the spans are a few kilobytes.
+const SPAN_FACES: usize = 1024;
+
+/// The smallest and largest vertex index of every block of [`SPAN_FACES`] faces, in parallel
+/// (an index pass; `(u32::MAX, 0)` for a block without corners).
+fn face_spans(mesh: &Mesh) -> Vec<(u32, u32)> {
+    let faces = mesh.face_count();
+    (0..faces.div_ceil(SPAN_FACES))
+        .into_par_iter()
+        .map(|b| {
+            let (f0, f1) = (b * SPAN_FACES, ((b + 1) * SPAN_FACES).min(faces));
+            let corners = mesh.face_offsets[f0] as usize..mesh.face_offsets[f1] as usize;
+            mesh.face_indices[corners]
+                .iter()
+                .fold((u32::MAX, 0), |(a, b), &v| (a.min(v), b.max(v)))
+        })
+        .collect()
+}
+
+/// [`vertex_normals`] of the vertices `lo..lo + out.len()`, from the faces of `blocks`
+/// (increasing ranges of face indices holding every face with a corner in the range).
+fn normals_of_range(
+    mesh: &Mesh,
+    weights: &[f32],
+    lo: usize,
+    out: &mut [PackedNormal],
+    blocks: impl Iterator<Item = std::ops::Range<usize>>,
+) {
     let len = out.len();
-    let all = lo == 0 && len == mesh.vertex_count();
     // Area vectors, then the opposite edges' vectors, of the range's vertices.
     let mut acc = vec![[[0f32; 3]; 2]; len];
-    let mine = |v: u32| (v as usize).wrapping_sub(lo);
-    for face in mesh.faces() {
-        if !all && !face.iter().any(|&v| mine(v) < len) {
-            continue;
+    let whole = lo == 0 && len == mesh.vertex_count();
+    match mesh.triangles() {
+        Some(tris) => {
+            for r in blocks {
+                for t in &tris[r] {
+                    add_triangle(&mesh.positions, *t, lo, whole, &mut acc);
+                }
+            }
         }
-        let m = face.len();
-        let p = |i: usize| mesh.positions[face[i % m] as usize];
-        // Newell's area vector (twice the area), exact for triangles.
-        let mut a = [0f32; 3];
-        for i in 0..m {
-            let (u, v) = (p(i), p(i + 1));
-            a[0] += (u[1] - v[1]) * (u[2] + v[2]);
-            a[1] += (u[2] - v[2]) * (u[0] + v[0]);
-            a[2] += (u[0] - v[0]) * (u[1] + v[1]);
-        }
-        for (i, &v) in face.iter().enumerate() {
-            let Some(s) = acc.get_mut(mine(v)) else {
-                continue;
-            };
-            let (prev, next) = (p(i + m - 1), p(i + 1));
-            (0..3).for_each(|k| s[0][k] += a[k]);
-            (0..3).for_each(|k| s[1][k] += next[k] - prev[k]);
+        None => {
+            for r in blocks {
+                for f in r {
+                    add_face(&mesh.positions, mesh.face(f), lo, whole, &mut acc);
+                }
+            }
         }
     }
     for ((n, [s, e]), &w) in out.iter_mut().zip(&acc).zip(&weights[lo..lo + len]) {
@@ -93,6 +144,73 @@ fn normals_of_range(mesh: &Mesh, weights: &[f32], lo: usize, out: &mut [PackedNo
         } else {
             PackedNormal::NONE
         };
+    }
+}
+
+/// [`add_face`] of a triangle, with the same operations in the same order (the same bits),
+/// its corners loaded once.
+#[inline(always)]
+fn add_triangle(
+    positions: &[[f32; 3]],
+    t: [u32; 3],
+    lo: usize,
+    whole: bool,
+    acc: &mut [[[f32; 3]; 2]],
+) {
+    let mine = t.map(|v| (v as usize).wrapping_sub(lo));
+    if !whole && mine.iter().all(|&i| i >= acc.len()) {
+        return;
+    }
+    let p = t.map(|v| positions[v as usize]);
+    let mut a = [0f32; 3];
+    for i in 0..3 {
+        let (u, v) = (p[i], p[(i + 1) % 3]);
+        a[0] += (u[1] - v[1]) * (u[2] + v[2]);
+        a[1] += (u[2] - v[2]) * (u[0] + v[0]);
+        a[2] += (u[0] - v[0]) * (u[1] + v[1]);
+    }
+    for i in 0..3 {
+        let Some(s) = acc.get_mut(mine[i]) else {
+            continue;
+        };
+        let (prev, next) = (p[(i + 2) % 3], p[(i + 1) % 3]);
+        (0..3).for_each(|k| s[0][k] += a[k]);
+        (0..3).for_each(|k| s[1][k] += next[k] - prev[k]);
+    }
+}
+
+/// Adds one face's area vector and, for each corner, the vector of its opposite edge to the
+/// sums of its corners in `lo..lo + acc.len()` (`whole`: every vertex is in the range).
+#[inline(always)]
+fn add_face<F: AsRef<[u32]> + ?Sized>(
+    positions: &[[f32; 3]],
+    face: &F,
+    lo: usize,
+    whole: bool,
+    acc: &mut [[[f32; 3]; 2]],
+) {
+    let face = face.as_ref();
+    let mine = |v: u32| (v as usize).wrapping_sub(lo);
+    if !whole && !face.iter().any(|&v| mine(v) < acc.len()) {
+        return;
+    }
+    let m = face.len();
+    let p = |i: usize| positions[face[i % m] as usize];
+    // Newell's area vector (twice the area), exact for triangles.
+    let mut a = [0f32; 3];
+    for i in 0..m {
+        let (u, v) = (p(i), p(i + 1));
+        a[0] += (u[1] - v[1]) * (u[2] + v[2]);
+        a[1] += (u[2] - v[2]) * (u[0] + v[0]);
+        a[2] += (u[0] - v[0]) * (u[1] + v[1]);
+    }
+    for (i, &v) in face.iter().enumerate() {
+        let Some(s) = acc.get_mut(mine(v)) else {
+            continue;
+        };
+        let (prev, next) = (p(i + m - 1), p(i + 1));
+        (0..3).for_each(|k| s[0][k] += a[k]);
+        (0..3).for_each(|k| s[1][k] += next[k] - prev[k]);
     }
 }
 
@@ -249,40 +367,237 @@ mod tests {
         assert_eq!(plane_distance([3.0, 4.0, 0.0], [0.0; 3], [0.0; 3]), 5.0);
     }
 
-    #[test]
-    fn normals_do_not_depend_on_the_ranges() {
-        // A bumpy 30 × 30 grid with a quad strip: every split of the vertices into ranges
-        // gives the bits of the whole.
+    /// A bumpy `n` × `n` grid of quads split in two, the faces of row 3 left whole (polygons),
+    /// with its vertices in row order or shuffled (the faces then span the whole index range).
+    fn bumpy_grid(n: u32, shuffled: bool) -> Mesh {
         let mut m = Mesh::default();
-        for j in 0..30 {
-            for i in 0..30 {
+        for j in 0..n {
+            for i in 0..n {
                 let z = ((i * 7 + j * 13) % 5) as f32 * 0.1;
                 m.positions.push([i as f32, j as f32, z]);
             }
         }
-        for j in 0..29u32 {
-            for i in 0..29u32 {
-                let v = j * 30 + i;
+        let id = |v: u32| if shuffled { (v * 7919) % (n * n) } else { v };
+        if shuffled {
+            let old = m.positions.clone();
+            (0..n * n).for_each(|v| m.positions[id(v) as usize] = old[v as usize]);
+        }
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let v = j * n + i;
+                let [a, b, c, d] = [v, v + 1, v + n + 1, v + n].map(id);
                 if j == 3 {
-                    m.push_face(&[v, v + 1, v + 31, v + 30]);
+                    m.push_face(&[a, b, c, d]);
                 } else {
-                    m.push_face(&[v, v + 1, v + 31]);
-                    m.push_face(&[v, v + 31, v + 30]);
+                    m.push_face(&[a, b, c]);
+                    m.push_face(&[a, c, d]);
                 }
             }
         }
+        m
+    }
+
+    /// The serial pass: every face in order, every vertex in range.
+    fn serial_normals(m: &Mesh, w: &[f32]) -> Vec<PackedNormal> {
+        let mut out = vec![PackedNormal::NONE; m.vertex_count()];
+        normals_of_range(m, w, 0, &mut out, std::iter::once(0..m.face_count()));
+        out
+    }
+
+    #[test]
+    fn normals_do_not_depend_on_the_ranges() {
+        // Every split of the vertices into ranges gives the bits of the whole.
+        let m = bumpy_grid(30, false);
         let w = crate::weights::vertex_weights(&m, crate::options::Weighting::LongestEdge);
-        let mut whole = vec![PackedNormal::NONE; 900];
-        normals_of_range(&m, &w, 0, &mut whole);
+        let whole = serial_normals(&m, &w);
         assert!(whole.iter().filter(|&&n| n != PackedNormal::NONE).count() > 700);
         for chunk in [1, 7, 128, 899] {
             let mut parts = vec![PackedNormal::NONE; 900];
             for (i, out) in parts.chunks_mut(chunk).enumerate() {
-                normals_of_range(&m, &w, i * chunk, out);
+                normals_of_range(&m, &w, i * chunk, out, std::iter::once(0..m.face_count()));
             }
             assert_eq!(parts, whole, "ranges of {chunk}");
         }
         assert_eq!(vertex_normals(&m, &w), whole);
+    }
+
+    #[test]
+    fn normals_are_the_serial_bits_on_any_number_of_threads() {
+        // 300 × 300 vertices: 174 blocks of faces, so a core skips the blocks outside its
+        // range; shuffled, every block spans every range and no block may be skipped.
+        for shuffled in [false, true] {
+            let m = bumpy_grid(300, shuffled);
+            let w = crate::weights::vertex_weights(&m, crate::options::Weighting::LongestEdge);
+            let serial = serial_normals(&m, &w);
+            let spans = face_spans(&m);
+            assert!(spans.len() > 100);
+            let narrow = spans.iter().filter(|(a, b)| b - a < 5000).count();
+            assert_eq!(narrow > 100, !shuffled, "{narrow} narrow spans");
+            for threads in [1, 2, 7] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let n = pool.install(|| vertex_normals(&m, &w));
+                assert!(n == serial, "{threads} threads, shuffled {shuffled}");
+            }
+        }
+    }
+
+    /// The normals pass before its face spans (dd33ec6): every core walks every face.
+    fn normals_walking_every_face(mesh: &Mesh, weights: &[f32]) -> Vec<PackedNormal> {
+        let n = mesh.vertex_count();
+        let parts = rayon::current_num_threads().clamp(1, n / 4096 + 1);
+        let chunk = n.div_ceil(parts).max(1);
+        let mut out = vec![PackedNormal::NONE; n];
+        out.par_chunks_mut(chunk)
+            .enumerate()
+            .for_each(|(i, out)| old_normals_of_range(mesh, weights, i * chunk, out));
+        out
+    }
+
+    fn old_normals_of_range(mesh: &Mesh, weights: &[f32], lo: usize, out: &mut [PackedNormal]) {
+        let len = out.len();
+        let all = lo == 0 && len == mesh.vertex_count();
+        // Area vectors, then the opposite edges' vectors, of the range's vertices.
+        let mut acc = vec![[[0f32; 3]; 2]; len];
+        let mine = |v: u32| (v as usize).wrapping_sub(lo);
+        for face in mesh.faces() {
+            if !all && !face.iter().any(|&v| mine(v) < len) {
+                continue;
+            }
+            let m = face.len();
+            let p = |i: usize| mesh.positions[face[i % m] as usize];
+            // Newell's area vector (twice the area), exact for triangles.
+            let mut a = [0f32; 3];
+            for i in 0..m {
+                let (u, v) = (p(i), p(i + 1));
+                a[0] += (u[1] - v[1]) * (u[2] + v[2]);
+                a[1] += (u[2] - v[2]) * (u[0] + v[0]);
+                a[2] += (u[0] - v[0]) * (u[1] + v[1]);
+            }
+            for (i, &v) in face.iter().enumerate() {
+                let Some(s) = acc.get_mut(mine(v)) else {
+                    continue;
+                };
+                let (prev, next) = (p(i + m - 1), p(i + 1));
+                (0..3).for_each(|k| s[0][k] += a[k]);
+                (0..3).for_each(|k| s[1][k] += next[k] - prev[k]);
+            }
+        }
+        for ((n, [s, e]), &w) in out.iter_mut().zip(&acc).zip(&weights[lo..lo + len]) {
+            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+            // The opposite edges of a closed fan cancel up to rounding: a few ulps of the
+            // longest edge; a border's chord is at least an edge long.
+            let border = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() > 1e-3 * w;
+            *n = if len > 0.0 && len.is_finite() && !border {
+                PackedNormal::pack([s[0] / len, s[1] / len, s[2] / len])
+            } else {
+                PackedNormal::NONE
+            };
+        }
+    }
+
+    /// `cargo test --release -p tessd-simplify --lib normals_time -- --ignored --nocapture`:
+    /// the pass before and after its face spans on a 4 M-triangle grid (2 M vertices) at 1
+    /// and 2 threads, interleaved, medians of 7.
+    #[test]
+    #[ignore]
+    fn normals_time() {
+        let m = bumpy_grid(1415, false);
+        let w = crate::weights::vertex_weights(&m, crate::options::Weighting::LongestEdge);
+        let serial = serial_normals(&m, &w);
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (mut before, mut after) = (Vec::new(), Vec::new());
+            for round in 0..7 {
+                for old in [round % 2 == 0, round % 2 == 1] {
+                    let t = std::time::Instant::now();
+                    let n = if old {
+                        pool.install(|| normals_walking_every_face(&m, &w))
+                    } else {
+                        pool.install(|| vertex_normals(&m, &w))
+                    };
+                    let ms = t.elapsed().as_secs_f64() * 1e3;
+                    if old {
+                        before.push(ms)
+                    } else {
+                        after.push(ms)
+                    }
+                    assert!(n == serial);
+                }
+            }
+            before.sort_by(f64::total_cmp);
+            after.sort_by(f64::total_cmp);
+            println!(
+                "{threads} threads, {} faces: before {:.1} ms, after {:.1} ms (medians of 7)",
+                m.face_count(),
+                before[3],
+                after[3]
+            );
+        }
+        // Each core's share of the 2-thread pass, timed alone on this thread (what a shared
+        // machine's clock cannot show in the parallel run): its spans and range, then its walk.
+        let half = m.vertex_count().div_ceil(2 * VERTEX_RANGE) * VERTEX_RANGE;
+        let (mut before, mut after) = (vec![Vec::new(); 2], vec![Vec::new(); 2]);
+        for round in 0..7 {
+            for part in 0..2 {
+                let lo = part * half;
+                let hi = (lo + half).min(m.vertex_count());
+                for old in [round % 2 == 0, round % 2 == 1] {
+                    let mut out = vec![PackedNormal::NONE; hi - lo];
+                    let t = std::time::Instant::now();
+                    if old {
+                        old_normals_of_range(&m, &w, lo, &mut out);
+                    } else {
+                        // All the spans (a core computes half of them), then this half's
+                        // ranges one after another.
+                        let spans = face_spans(&m);
+                        let faces = m.face_count();
+                        for (i, out) in out.chunks_mut(VERTEX_RANGE).enumerate() {
+                            let lo = lo + i * VERTEX_RANGE;
+                            let hi = lo + out.len();
+                            let blocks = spans
+                                .iter()
+                                .enumerate()
+                                .filter(|&(_, &(a, b))| (a as usize) < hi && b as usize >= lo)
+                                .map(|(b, _)| b * SPAN_FACES..((b + 1) * SPAN_FACES).min(faces));
+                            normals_of_range(&m, &w, lo, out, blocks);
+                        }
+                    }
+                    let ms = t.elapsed().as_secs_f64() * 1e3;
+                    if old {
+                        before[part].push(ms)
+                    } else {
+                        after[part].push(ms)
+                    }
+                    assert!(out == serial[lo..hi]);
+                }
+            }
+        }
+        for part in 0..2 {
+            before[part].sort_by(f64::total_cmp);
+            after[part].sort_by(f64::total_cmp);
+        }
+        let spans_ms = {
+            let mut t = (0..7)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    std::hint::black_box(face_spans(&m));
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .collect::<Vec<_>>();
+            t.sort_by(f64::total_cmp);
+            t[3]
+        };
+        println!(
+            "one core's half of 2 threads: before {:.1} / {:.1} ms, after {:.1} / {:.1} ms \
+             (spans of all faces on one core {spans_ms:.1} ms, half of it per core)",
+            before[0][3], before[1][3], after[0][3], after[1][3]
+        );
     }
 
     #[test]
