@@ -92,12 +92,33 @@ pub(crate) struct Fates {
     /// F: one pass over the faces), block by block; [`Fates::eliminate`] copies them into
     /// place.
     written: Option<Vec<Vec<u32>>>,
+    /// The zero-area test is still to run on the written faces (pass O): the grid's face
+    /// pass decided the fates from the clusters alone, before the representatives.
+    areas_pending: bool,
 }
 
 impl Fates {
     /// Faces with 3 distinct clusters whose representatives are collinear.
     pub(crate) fn flattened(&self) -> u64 {
         self.counts.iter().map(|c| c[3]).sum()
+    }
+
+    /// The fates of a triangle mesh decided from its clusters alone, block by block (`fate`,
+    /// per block `counts` as [`fates`] keeps them and the `written` kept faces): a face is
+    /// kept when its corners are in three distinct clusters. [`Fates::eliminate`] then
+    /// runs the zero-area test on the kept faces only (issue 33's pass O: a duplicate of a
+    /// zero-area face is zero-area too), with the same result as [`fates`].
+    pub(crate) fn before_areas(
+        fate: Vec<Fate>,
+        counts: Vec<[u64; 4]>,
+        written: Vec<Vec<u32>>,
+    ) -> Fates {
+        Fates {
+            fate,
+            counts,
+            written: Some(written),
+            areas_pending: true,
+        }
     }
 }
 
@@ -139,6 +160,7 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
             fate,
             counts,
             written: Some(written),
+            areas_pending: false,
         };
     }
     // Pass 1: fates, and per block (kept faces, kept corners, degenerate, flattened).
@@ -170,6 +192,7 @@ pub(crate) fn fates(mesh: &Mesh, cluster_of: &[u32], reps: &[[f32; 3]]) -> Fates
         fate,
         counts,
         written: None,
+        areas_pending: false,
     }
 }
 
@@ -183,11 +206,37 @@ impl Fates {
         corners: bool,
     ) -> Eliminated {
         let Fates {
-            fate,
-            counts,
-            written,
+            mut fate,
+            mut counts,
+            mut written,
+            areas_pending,
         } = self;
         let n = mesh.face_count();
+        if let (Some(parts), true) = (&mut written, areas_pending) {
+            // Pass O: the kept faces' area test, each block's in place.
+            parts
+                .par_iter_mut()
+                .zip(fate.par_chunks_mut(blocks::BLOCK))
+                .zip(counts.par_iter_mut())
+                .for_each(|((part, fates), c)| {
+                    let mut w = 0;
+                    let kept = fates.iter_mut().filter(|f| **f == Fate::Kept);
+                    for (k, slot) in kept.enumerate() {
+                        let t = [part[3 * k], part[3 * k + 1], part[3 * k + 2]];
+                        if zero_area_triangle(t, reps) {
+                            *slot = Fate::Collapsed;
+                            c[0] -= 1;
+                            c[1] -= 3;
+                            c[2] += 1;
+                            c[3] += 1;
+                        } else {
+                            part[w..w + 3].copy_from_slice(&t);
+                            w += 3;
+                        }
+                    }
+                    part.truncate(w);
+                });
+        }
         let faces: usize = counts.iter().map(|c| c[0] as usize).sum();
         let total: usize = counts.iter().map(|c| c[1] as usize).sum();
         if let Some(parts) = written {

@@ -27,7 +27,8 @@ const FIRST: u32 = 1 << 31;
 
 /// The grid partition of the vertices with non-zero weight, through the brick table, and the
 /// heaviest vertex of each cluster as `weight bits << 32 | !index` (the largest weight, the
-/// first met among equals: pass S's first half, taken while the ids are read); `None`
+/// first met among equals: pass S's first half, taken while the ids are read) and, with
+/// `boxes` (the quadric representative's bound), the box of each cluster's vertices; `None`
 /// when the box holds too many bricks for a dense top level (a cell size far below the
 /// mesh's detail), where the caller falls back to `grid_partition.rs`'s hash.
 pub(crate) fn grid_cells(
@@ -37,6 +38,7 @@ pub(crate) fn grid_cells(
     bounds: &Cell,
     size: GridSize,
     keep_cells: bool,
+    boxes: bool,
 ) -> Option<(Partition, Sums)> {
     let (grid, dims) = Grid::new(bounds, size);
     let bd: [u64; 3] = dims.map(|d| d.div_ceil(4));
@@ -90,6 +92,7 @@ pub(crate) fn grid_cells(
             Vec::with_capacity(n),
             Vec::with_capacity(n * grid_sums::SLOTS),
         );
+        let mut bounds: Vec<u32> = Vec::with_capacity(if boxes { 6 * n } else { 0 });
         for (v, out) in cluster_of.iter_mut().enumerate() {
             if !referenced(v) {
                 continue;
@@ -106,6 +109,9 @@ pub(crate) fn grid_cells(
                 *id = heavy.len() as u32;
                 heavy.push(0);
                 sum.extend([0u64; grid_sums::SLOTS]);
+                if boxes {
+                    bounds.extend(grid_sums::EMPTY_BOX);
+                }
                 if keep_cells {
                     firsts.push(v as u32);
                 }
@@ -118,9 +124,21 @@ pub(crate) fn grid_cells(
             for k in 0..7 {
                 s[k] += add[k];
             }
+            if boxes {
+                let b = &mut bounds[6 * id..6 * id + 6];
+                for k in 0..3 {
+                    let o = grid_sums::ordered(p[k]);
+                    b[k] = b[k].min(o);
+                    b[3 + k] = b[3 + k].max(o);
+                }
+            }
         }
         clusters = heavy.len();
-        sums = Sums { heavy, sums: sum };
+        sums = Sums {
+            heavy,
+            sums: sum,
+            boxes: bounds,
+        };
     } else {
         // V1: which bricks hold a vertex.
         let top: Vec<AtomicU32> = (0..bricks).map(|_| AtomicU32::new(UNUSED)).collect();
@@ -221,6 +239,10 @@ pub(crate) fn grid_cells(
         };
         let heavy = atomics(clusters, &|_| 0);
         let sum = atomics(clusters * grid_sums::SLOTS, &|_| 0);
+        let empty = |k: usize| u64::from(grid_sums::EMPTY_BOX[k % 6]);
+        let bounds: Vec<AtomicU32> = (0..if boxes { 6 * clusters } else { 0 })
+            .map(|k| AtomicU32::new(empty(k) as u32))
+            .collect();
         cluster_of
             .par_chunks_mut(blocks::BLOCK)
             .enumerate()
@@ -242,12 +264,21 @@ pub(crate) fn grid_cells(
                     for k in 0..7 {
                         s[k].fetch_add(add[k], Relaxed);
                     }
+                    if boxes {
+                        let b = &bounds[6 * id..6 * id + 6];
+                        for k in 0..3 {
+                            let o = grid_sums::ordered(p[k]);
+                            b[k].fetch_min(o, Relaxed);
+                            b[3 + k].fetch_max(o, Relaxed);
+                        }
+                    }
                 }
             });
         let plain = |a: Vec<AtomicU64>| a.into_iter().map(AtomicU64::into_inner).collect();
         sums = Sums {
             heavy: plain(heavy),
             sums: plain(sum),
+            boxes: bounds.into_iter().map(AtomicU32::into_inner).collect(),
         };
     }
     let cells = firsts
@@ -295,7 +326,7 @@ mod tests {
                         .build()
                         .unwrap();
                     let got = pool
-                        .install(|| grid_cells(&positions, &weights, k, &bounds, size, true))
+                        .install(|| grid_cells(&positions, &weights, k, &bounds, size, true, false))
                         .unwrap()
                         .0;
                     assert_eq!(got.clusters, want.clusters, "{cells} cells, {threads}");

@@ -18,11 +18,9 @@
 use crate::blocks;
 use crate::grid_frame::Grid;
 use crate::options::Representative;
-use crate::partition::UNUSED;
+use crate::quadric::Quadric;
 use crate::representative;
 use rayon::prelude::*;
-use std::sync::atomic::AtomicU32;
-use std::sync::atomic::Ordering::Relaxed;
 use tessd_mesh::Mesh;
 
 /// u64 slots a cluster's sums take (x low, x high, y low, y high, z low, z high, weight; one
@@ -38,7 +36,14 @@ pub(crate) struct Sums {
     pub heavy: Vec<u64>,
     /// [`SLOTS`] a cluster: the fixed-point sums.
     pub sums: Vec<u64>,
+    /// When asked for (the quadric representative): the box of each cluster's vertices, six
+    /// [`ordered`] bits a cluster, low corner then high corner (minima and maxima: the same
+    /// whichever core takes them first).
+    pub boxes: Vec<u32>,
 }
+
+/// A cluster's box before its first vertex, in [`ordered`] bits.
+pub(crate) const EMPTY_BOX: [u32; 6] = [u32::MAX, u32::MAX, u32::MAX, 0, 0, 0];
 
 /// The weight scale: a power of two (exact) that takes the largest of `weights` to
 /// 2³⁷–2³⁸.
@@ -84,7 +89,7 @@ pub(crate) fn contribution(u: [f64; 3], w: f32, scale: f64) -> [u64; 7] {
 
 /// `x`'s bits turned so that unsigned order is float order.
 #[inline]
-fn ordered(x: f32) -> u32 {
+pub(crate) fn ordered(x: f32) -> u32 {
     let b = x.to_bits();
     if b & 1 << 31 != 0 { !b } else { b | 1 << 31 }
 }
@@ -95,13 +100,16 @@ fn unordered(o: u32) -> f32 {
 }
 
 /// The representative of each cluster of `cluster_of` (a partition of `grid`) from its sums
-/// (pass C); the quadric representative sums the faces' quadrics first.
+/// (pass C); the quadric representative takes every cluster's quadric from `quadrics` (the
+/// face pass summed them, `grid_quadrics.rs`) or, without them, sums them first, a chunk of
+/// clusters at a time.
 pub(crate) fn grid_representatives(
     mesh: &Mesh,
     cluster_of: &[u32],
     sums: Sums,
     grid: &Grid,
     rep: Representative,
+    quadrics: Option<Vec<Quadric>>,
 ) -> Vec<[f32; 3]> {
     let positions = &mesh.positions;
     let n = sums.heavy.len();
@@ -136,51 +144,36 @@ pub(crate) fn grid_representatives(
         .into_par_iter()
         .map(|c| barycentre(c).map(|x| x as f32))
         .collect();
-    drop(sums);
-    // The box of each cluster's vertices (the minimiser's bound), taken only now that the
-    // sums are freed: six ordered bits a cluster, low corner then high corner (minima and
-    // maxima: the same whichever core takes them first).
-    let boxes: Vec<AtomicU32> = (0..6 * n)
-        .map(|k| AtomicU32::new(if k % 6 < 3 { u32::MAX } else { 0 }))
-        .collect();
-    let single = blocks::single_thread();
-    blocks::ranges(cluster_of.len()).for_each(|r| {
-        for v in r {
-            let c = cluster_of[v];
-            if c == UNUSED {
-                continue;
-            }
-            let b = &boxes[6 * c as usize..6 * c as usize + 6];
-            for k in 0..3 {
-                let o = ordered(positions[v][k]);
-                if single {
-                    b[k].store(b[k].load(Relaxed).min(o), Relaxed);
-                    b[3 + k].store(b[3 + k].load(Relaxed).max(o), Relaxed);
-                } else {
-                    b[k].fetch_min(o, Relaxed);
-                    b[3 + k].fetch_max(o, Relaxed);
-                }
-            }
-        }
-    });
-    let boxes: Vec<u32> = boxes.into_iter().map(AtomicU32::into_inner).collect();
-    representative::for_each_quadric_chunk(
-        mesh,
-        cluster_of,
-        n,
-        representative::GRID_SHARE,
-        |first, quadrics| {
-            let out = &mut reps[first..first + quadrics.len()];
-            // Each barycentre turns into its cluster's representative in place.
-            out.par_iter_mut().enumerate().for_each(|(i, x)| {
-                let c = first + i;
-                let b = &boxes[6 * c..6 * c + 6];
-                let lo = std::array::from_fn(|k| unordered(b[k]));
-                let hi = std::array::from_fn(|k| unordered(b[3 + k]));
-                *x = representative::quadric_point(&quadrics[i], [lo, hi], x.map(f64::from));
-            });
-        },
+    // The box of each cluster's vertices (the minimiser's bound), taken in the cell pass.
+    let boxes = sums.boxes;
+    assert_eq!(
+        boxes.len(),
+        6 * n,
+        "the cell pass takes the boxes for quadrics"
     );
+    drop(sums.sums);
+    drop(sums.heavy);
+    let mut solve = |first: usize, quadrics: &[Quadric]| {
+        let out = &mut reps[first..first + quadrics.len()];
+        // Each barycentre turns into its cluster's representative in place.
+        out.par_iter_mut().enumerate().for_each(|(i, x)| {
+            let c = first + i;
+            let b = &boxes[6 * c..6 * c + 6];
+            let lo = std::array::from_fn(|k| unordered(b[k]));
+            let hi = std::array::from_fn(|k| unordered(b[3 + k]));
+            *x = representative::quadric_point(&quadrics[i], [lo, hi], x.map(f64::from));
+        });
+    };
+    match quadrics {
+        Some(q) => solve(0, &q),
+        None => representative::for_each_quadric_chunk(
+            mesh,
+            cluster_of,
+            n,
+            representative::GRID_SHARE,
+            solve,
+        ),
+    }
     reps
 }
 

@@ -265,3 +265,84 @@ fn plain_triangles_fail_as_validation_does() {
     // The good mesh takes the checked path and simplifies as before.
     assert!(simplify(&good, &SimplifyOptions::new(methods[0]), &mut |_, _| true).is_ok());
 }
+
+/// The grid's face pass with the quadrics in it (`grid_quadrics.rs`: F before the
+/// representatives, the area test after them) gives what the separate passes give — every
+/// cluster's quadric to the bit (`representative.rs`'s chunks), and the same fates, faces,
+/// corners and counts as `elimination::fates` with the representatives known — on 1, 2 and 7
+/// threads; the representatives put many kept faces at zero area, so pass O has work.
+#[test]
+fn face_pass_quadrics_and_fates_match_the_separate_passes() {
+    for (name, mesh) in [("torus", torus(400, 160)), ("bunny", bunny())] {
+        // The bunny's few polygons fan-triangulated: the pass takes triangle meshes.
+        let mesh = crate::triangulate::triangulate(&mesh);
+        let w = crate::weights::vertex_weights(&mesh, crate::Weighting::LongestEdge);
+        let (bounds, _) = crate::partition::referenced_bounds(&mesh.positions, &w).unwrap();
+        // (Up to 150 cells a side: the brick table, not the hash, takes these.)
+        for cells in [7, 60, 150] {
+            let size = GridSize::CellsPerAxis(cells);
+            let cells_of = crate::grid_cells::grid_cells(
+                &mesh.positions,
+                &w,
+                None,
+                &bounds,
+                size,
+                false,
+                false,
+            );
+            let (p, _) = cells_of.unwrap();
+            let n = p.clusters;
+            // Even clusters on one line (their faces have zero area), odd ones off it.
+            let reps: Vec<[f32; 3]> = (0..n)
+                .map(|c| {
+                    let t = (c % 7) as f32;
+                    if c % 2 == 0 {
+                        [t, 2.0 * t, 3.0 * t]
+                    } else {
+                        [t, 0.5 * c as f32, 1.0]
+                    }
+                })
+                .collect();
+            let mut want_q = Vec::new();
+            crate::representative::for_each_quadric_chunk(
+                &mesh,
+                &p.cluster_of,
+                n,
+                crate::representative::GRID_SHARE,
+                |_, q| want_q.extend_from_slice(q),
+            );
+            let want = crate::elimination::eliminate(&mesh, &p.cluster_of, &reps, true);
+            assert!(want.flattened > 0, "{name} {cells}");
+            let bits = |q: &[crate::Quadric]| -> Vec<u64> {
+                q.iter()
+                    .flat_map(|q| q.a.iter().chain(&q.b).chain([&q.c]).map(|x| x.to_bits()))
+                    .collect()
+            };
+            for threads in [1, 2, 7] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let triangles = mesh.triangles().unwrap();
+                let (fates, q) = pool.install(|| {
+                    crate::grid_quadrics::faces_and_quadrics(
+                        &mesh.positions,
+                        triangles,
+                        &p.cluster_of,
+                        n,
+                    )
+                });
+                let what = format!("{name} {cells} cells, {threads} threads");
+                assert!(bits(&q) == bits(&want_q), "{what}");
+                let got = pool.install(|| fates.eliminate(&mesh, &p.cluster_of, &reps, true));
+                assert_eq!(got.fate, want.fate, "{what}");
+                assert_eq!(got.face_indices, want.face_indices, "{what}");
+                assert_eq!(got.face_offsets, want.face_offsets, "{what}");
+                assert_eq!(got.source_corner, want.source_corner, "{what}");
+                let counts =
+                    |e: &crate::elimination::Eliminated| [e.degenerate, e.flattened, e.duplicates];
+                assert_eq!(counts(&got), counts(&want), "{what}");
+            }
+        }
+    }
+}

@@ -68,6 +68,7 @@ pub mod features;
 mod grid_cells;
 mod grid_frame;
 mod grid_partition;
+mod grid_quadrics;
 mod grid_sums;
 #[cfg(test)]
 mod grid_tests;
@@ -322,6 +323,8 @@ impl<'a> Prepared<'a> {
         // The complexity goal places the representatives of its last partition to count what
         // survives: they are kept for the output.
         let mut placed = None;
+        // The grid's face pass, when it ran before the representatives (quadrics).
+        let mut faced = None;
         let (mut partition, tolerance) = match options.method {
             Method::Grid(grid) => {
                 let ok = match grid {
@@ -338,14 +341,40 @@ impl<'a> Prepared<'a> {
                 step(0.15, "cells")?;
                 let keep = options.keep_partition;
                 let positions = &work.positions;
-                let cells = grid_cells::grid_cells(positions, weights, classes, bounds, grid, keep);
+                // The quadric representative's bounds are taken in the cell pass.
+                let q = options.representative == Representative::Quadric;
+                let cells =
+                    grid_cells::grid_cells(positions, weights, classes, bounds, grid, keep, q);
                 match cells {
                     Some((p, sums)) => {
                         let (g, _) = grid_frame::Grid::new(bounds, grid);
-                        step(0.45, "representatives")?;
                         let rep = options.representative;
-                        let reps =
-                            grid_sums::grid_representatives(work, &p.cluster_of, sums, &g, rep);
+                        // Quadrics: summed in the face pass (F before C, the area test after
+                        // C), where every cluster's quadric can be held at once.
+                        let fused = work
+                            .triangles()
+                            .filter(|_| rep == Representative::Quadric)
+                            .filter(|_| grid_quadrics::fits(p.clusters, positions.len()));
+                        let mut quadrics = None;
+                        if let Some(triangles) = fused {
+                            step(0.3, "faces")?;
+                            let (f, q) = grid_quadrics::faces_and_quadrics(
+                                positions,
+                                triangles,
+                                &p.cluster_of,
+                                p.clusters,
+                            );
+                            (faced, quadrics) = (Some(f), Some(q));
+                        }
+                        step(0.45, "representatives")?;
+                        let reps = grid_sums::grid_representatives(
+                            work,
+                            &p.cluster_of,
+                            sums,
+                            &g,
+                            rep,
+                            quadrics,
+                        );
                         placed = Some(reps);
                         (p, None)
                     }
@@ -495,7 +524,9 @@ impl<'a> Prepared<'a> {
             });
             members = None;
             step(0.65, "faces")?;
-            let fates = elimination::fates(work, &partition.cluster_of, &reps);
+            let fates = faced
+                .take()
+                .unwrap_or_else(|| elimination::fates(work, &partition.cluster_of, &reps));
             if refinable.is_some() && !stuck && fates.flattened() == 0 {
                 // The clusters alone decided the coverage (above): this is the last round,
                 // and the partition's vertex order can go before the faces are written.
