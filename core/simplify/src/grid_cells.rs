@@ -7,11 +7,15 @@
 //! reads away, with no probing, and the pool is dense where surfaces are.
 //!
 //! Cluster ids follow the order in which vertices first meet their cells (the same order as
-//! `grid_partition.rs`, so the same ids). On one thread that is one sequential pass. On more,
-//! every core takes part: each cell keeps the smallest index of its vertices (atomic min); a
-//! vertex is its cell's first when it holds that minimum; blocks count their first vertices,
-//! a prefix over the blocks numbers them, and every vertex reads its cell's number back. The
-//! result is the sequential numbering exactly, with no serial step over the vertices.
+//! `grid_partition.rs`, so the same ids). That order is the cells first met in any prefix of
+//! the vertices, in their order, then those of the rest not met before, in theirs. So each
+//! core numbers a contiguous chunk of the vertices on its own, in one sequential pass (its
+//! own brick table, local ids and local sums); a short serial pass over the later chunks'
+//! cells (not their vertices) gives each its global id, adding its sums into the cell's
+//! (integers, maxima and minima: the same bits in any order); and each later chunk's
+//! vertices read their global ids back in parallel. The result is the sequential numbering
+//! exactly, whatever the number of chunks, with no serial step over the vertices (issue 33,
+//! point 1: the design's atomic-minimum numbering took five parallel passes instead).
 
 use crate::blocks;
 use crate::grid_frame::Grid;
@@ -19,11 +23,6 @@ use crate::grid_sums::{self, Sums};
 use crate::options::GridSize;
 use crate::partition::{Cell, Partition, UNUSED};
 use rayon::prelude::*;
-use std::sync::atomic::Ordering::Relaxed;
-use std::sync::atomic::{AtomicU32, AtomicU64};
-
-/// Marks a vertex that is the first of its cell while the clusters are numbered.
-const FIRST: u32 = 1 << 31;
 
 /// The grid partition of the vertices with non-zero weight, through the brick table, and the
 /// heaviest vertex of each cluster as `weight bits << 32 | !index` (the largest weight, the
@@ -62,225 +61,80 @@ pub(crate) fn grid_cells(
             None => l,
         }
     };
-    // Where each block's items start, from the blocks' counts.
-    let firsts_of = |counts: &[u32]| {
-        counts
-            .iter()
-            .scan(0u32, |n, &c| {
-                let first = *n;
-                *n += c;
-                Some(first)
-            })
-            .collect::<Vec<u32>>()
-    };
     let key = |v: usize| grid_sums::heavy_key(v, weights[v]);
     let scale = grid_sums::weight_scale(weights);
-    let mut cluster_of = vec![UNUSED; positions.len()];
-    let mut firsts: Vec<u32> = Vec::new();
-    let clusters;
-    let sums: Sums;
-    if blocks::single_thread() {
-        // One core: one pass numbers the cells as the vertices meet them (bricks taken as
-        // they are met too) and finds each cluster's heaviest vertex.
-        let mut top = vec![UNUSED; bricks as usize];
-        let mut pool: Vec<u32> = Vec::new();
-        // Reserved for as many clusters as vertices: address space only (the pages of a
-        // buffer this large are its own mapping and count once touched), where growing by
-        // doubling would copy the sums and leave the smaller copies on the heap.
-        let n = cluster_of.len();
-        let (mut heavy, mut sum) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n * grid_sums::SLOTS),
-        );
-        let mut bounds: Vec<u32> = Vec::with_capacity(if boxes { 6 * n } else { 0 });
-        for (v, out) in cluster_of.iter_mut().enumerate() {
-            if !referenced(v) {
-                continue;
+    let n = positions.len();
+    let mut cluster_of = vec![UNUSED; n];
+    // One chunk of vertices a core (the ids do not depend on how many: see the module's
+    // note), each numbered on its own.
+    let chunks = rayon::current_num_threads().clamp(1, n.div_ceil(blocks::BLOCK).max(1));
+    let len = n.div_ceil(chunks);
+    let mut parts: Vec<Chunk> = cluster_of
+        .par_chunks_mut(len.max(1))
+        .enumerate()
+        .map(|(k, out)| {
+            let first = k * len;
+            let mut c = Chunk::new(bricks as usize, if k == 0 { n } else { out.len() }, boxes);
+            for (i, o) in out.iter_mut().enumerate() {
+                let v = first + i;
+                if !referenced(v) {
+                    continue;
+                }
+                let p = &positions[v];
+                let (cell, u) = grid.locate(p);
+                let brick = brick_of(cell);
+                let slot = local_of(cell, v);
+                let id = c.id(brick, slot, per_brick, v as u32, keep_cells);
+                *o = id as u32;
+                let add = grid_sums::contribution(u, weights[v], scale);
+                c.add(id, key(v), &add, p);
             }
-            let p = &positions[v];
-            let (c, u) = grid.locate(p);
-            let t = &mut top[brick_of(c)];
-            if *t == UNUSED {
-                *t = (pool.len() / per_brick) as u32;
-                pool.resize(pool.len() + per_brick, UNUSED);
-            }
-            let id = &mut pool[*t as usize * per_brick + local_of(c, v)];
-            if *id == UNUSED {
-                *id = heavy.len() as u32;
-                heavy.push(0);
-                sum.extend([0u64; grid_sums::SLOTS]);
-                if boxes {
-                    bounds.extend(grid_sums::EMPTY_BOX);
-                }
-                if keep_cells {
-                    firsts.push(v as u32);
-                }
-            }
-            let id = *id as usize;
-            *out = id as u32;
-            heavy[id] = heavy[id].max(key(v));
-            let add = grid_sums::contribution(u, weights[v], scale);
-            let s = &mut sum[id * grid_sums::SLOTS..][..7];
-            for k in 0..7 {
-                s[k] += add[k];
-            }
-            if boxes {
-                let b = &mut bounds[6 * id..6 * id + 6];
-                for k in 0..3 {
-                    let o = grid_sums::ordered(p[k]);
-                    b[k] = b[k].min(o);
-                    b[3 + k] = b[3 + k].max(o);
-                }
-            }
-        }
-        clusters = heavy.len();
-        sums = Sums {
-            heavy,
-            sums: sum,
-            boxes: bounds,
-        };
-    } else {
-        // V1: which bricks hold a vertex.
-        let top: Vec<AtomicU32> = (0..bricks).map(|_| AtomicU32::new(UNUSED)).collect();
-        blocks::ranges(positions.len()).for_each(|r| {
-            let mut last = usize::MAX;
-            for v in r {
-                if referenced(v) {
-                    let b = brick_of(grid.locate(&positions[v]).0);
-                    if b != last {
-                        top[b].store(0, Relaxed);
-                        last = b;
-                    }
-                }
-            }
-        });
-        // Bricks numbered in box order (their place in the pool).
-        let mut top: Vec<u32> = top.into_iter().map(AtomicU32::into_inner).collect();
-        let counts = blocks::map(top.len(), |r| {
-            top[r].iter().filter(|&&t| t != UNUSED).count() as u32
-        });
-        let used_bricks: u32 = counts.iter().sum();
-        top.par_chunks_mut(blocks::BLOCK)
-            .zip(firsts_of(&counts))
-            .for_each(|(chunk, mut next)| {
-                for t in chunk.iter_mut().filter(|t| **t != UNUSED) {
-                    *t = next;
-                    next += 1;
-                }
-            });
-        let slots = used_bricks as usize * per_brick;
-        let slot_of = |v: usize| {
-            let c = grid.locate(&positions[v]).0;
-            top[brick_of(c)] as usize * per_brick + local_of(c, v)
-        };
-        // V2: each cell's smallest vertex; each vertex's slot meanwhile.
-        let pool: Vec<AtomicU32> = (0..slots).map(|_| AtomicU32::new(UNUSED)).collect();
-        cluster_of
-            .par_chunks_mut(blocks::BLOCK)
-            .enumerate()
-            .for_each(|(b, out)| {
-                for (i, o) in out.iter_mut().enumerate() {
-                    let v = b * blocks::BLOCK + i;
-                    if referenced(v) {
-                        let s = slot_of(v);
-                        if pool[s].load(Relaxed) > v as u32 {
-                            pool[s].fetch_min(v as u32, Relaxed);
-                        }
-                        *o = s as u32;
-                    }
-                }
-            });
-        // V3: first vertices flagged and counted per block.
-        let counts: Vec<u32> = cluster_of
-            .par_chunks_mut(blocks::BLOCK)
-            .enumerate()
-            .map(|(b, out)| {
-                let mut n = 0;
-                for (i, o) in out.iter_mut().enumerate() {
-                    let v = (b * blocks::BLOCK + i) as u32;
-                    if *o != UNUSED && pool[*o as usize].load(Relaxed) == v {
-                        *o |= FIRST;
-                        n += 1;
-                    }
-                }
-                n
-            })
-            .collect();
-        clusters = counts.iter().sum::<u32>() as usize;
-        // V4: the first vertices number their cells (each writes its own cell).
-        cluster_of
-            .par_chunks(blocks::BLOCK)
-            .zip(firsts_of(&counts))
-            .for_each(|(out, mut next)| {
-                for &o in out.iter().filter(|&&o| o != UNUSED && o & FIRST != 0) {
-                    pool[(o & !FIRST) as usize].store(next, Relaxed);
-                    next += 1;
-                }
-            });
-        if keep_cells {
-            firsts = vec![0; clusters];
-            let writes = blocks::DisjointWrites::new(&mut firsts);
-            cluster_of
-                .par_chunks(blocks::BLOCK)
-                .enumerate()
-                .for_each(|(b, out)| {
-                    for (i, &o) in out.iter().enumerate() {
-                        if o != UNUSED && o & FIRST != 0 {
-                            let id = pool[(o & !FIRST) as usize].load(Relaxed);
-                            writes.write(id as usize, (b * blocks::BLOCK + i) as u32);
-                        }
-                    }
-                });
-        }
-        // V5 (with pass S): every vertex reads its cell's number and adds itself into the
-        // cluster's sums and maxima (integers: the same whichever core adds first).
-        let atomics = |n: usize, init: &dyn Fn(usize) -> u64| -> Vec<AtomicU64> {
-            (0..n).map(|k| AtomicU64::new(init(k))).collect()
-        };
-        let heavy = atomics(clusters, &|_| 0);
-        let sum = atomics(clusters * grid_sums::SLOTS, &|_| 0);
-        let empty = |k: usize| u64::from(grid_sums::EMPTY_BOX[k % 6]);
-        let bounds: Vec<AtomicU32> = (0..if boxes { 6 * clusters } else { 0 })
-            .map(|k| AtomicU32::new(empty(k) as u32))
-            .collect();
-        cluster_of
-            .par_chunks_mut(blocks::BLOCK)
-            .enumerate()
-            .for_each(|(b, out)| {
-                for (i, o) in out.iter_mut().enumerate() {
-                    if *o == UNUSED {
-                        continue;
-                    }
-                    let v = b * blocks::BLOCK + i;
-                    let id = pool[(*o & !FIRST) as usize].load(Relaxed) as usize;
-                    *o = id as u32;
-                    let k = key(v);
-                    if k > heavy[id].load(Relaxed) {
-                        heavy[id].fetch_max(k, Relaxed);
-                    }
-                    let p = &positions[v];
-                    let add = grid_sums::contribution(grid.locate(p).1, weights[v], scale);
-                    let s = &sum[id * grid_sums::SLOTS..][..7];
-                    for k in 0..7 {
-                        s[k].fetch_add(add[k], Relaxed);
-                    }
-                    if boxes {
-                        let b = &bounds[6 * id..6 * id + 6];
-                        for k in 0..3 {
-                            let o = grid_sums::ordered(p[k]);
-                            b[k].fetch_min(o, Relaxed);
-                            b[3 + k].fetch_max(o, Relaxed);
-                        }
-                    }
-                }
-            });
-        let plain = |a: Vec<AtomicU64>| a.into_iter().map(AtomicU64::into_inner).collect();
-        sums = Sums {
-            heavy: plain(heavy),
-            sums: plain(sum),
-            boxes: bounds.into_iter().map(AtomicU32::into_inner).collect(),
-        };
+            c
+        })
+        .collect();
+    // The later chunks' cells into the first's table (a serial pass over cells, not
+    // vertices): a cell already met keeps its id and takes the chunk's sums (integers,
+    // maxima, minima: the same bits in any order), a new one is numbered next.
+    if parts.is_empty() {
+        parts.push(Chunk::new(bricks as usize, 0, boxes));
     }
+    let mut rest = parts.split_off(1);
+    let mut all = parts.pop().expect("one chunk at least");
+    let maps: Vec<Vec<u32>> = rest
+        .iter_mut()
+        .map(|c| {
+            (0..c.heavy.len())
+                .map(|l| {
+                    let cell = c.cells[l] as usize;
+                    let (brick, slot) = (cell / per_brick, cell % per_brick);
+                    let first = if keep_cells { c.firsts[l] } else { 0 };
+                    let id = all.id(brick, slot, per_brick, first, keep_cells);
+                    let s = &c.sums[l * grid_sums::SLOTS..][..7];
+                    let add = std::array::from_fn(|k| s[k]);
+                    all.merge(id, c.heavy[l], &add, c.bounds.get(6 * l..6 * l + 6));
+                    id as u32
+                })
+                .collect()
+        })
+        .collect();
+    drop(rest);
+    // The later chunks' vertices take their global ids.
+    cluster_of
+        .par_chunks_mut(len.max(1))
+        .skip(1)
+        .zip(maps)
+        .for_each(|(out, map)| {
+            for o in out.iter_mut().filter(|o| **o != UNUSED) {
+                *o = map[*o as usize];
+            }
+        });
+    let clusters = all.heavy.len();
+    let firsts = std::mem::take(&mut all.firsts);
+    let sums = Sums {
+        heavy: all.heavy,
+        sums: all.sums,
+        boxes: all.bounds,
+    };
     let cells = firsts
         .par_iter()
         .map(|&v| grid.cell_box(grid.locate(&positions[v as usize]).0))
@@ -291,6 +145,100 @@ pub(crate) fn grid_cells(
         cells,
     };
     Some((partition, sums))
+}
+
+/// One chunk's cells, numbered as its vertices meet them (bricks taken as they are met too),
+/// with each cell's sums ([`Sums`], by local id).
+struct Chunk {
+    /// Pool place of each brick of the box that holds a vertex of the chunk.
+    top: Vec<u32>,
+    /// Local id of each cell of the pool's bricks.
+    pool: Vec<u32>,
+    heavy: Vec<u64>,
+    sums: Vec<u64>,
+    bounds: Vec<u32>,
+    /// First vertex of each cell (kept cells only).
+    firsts: Vec<u32>,
+    /// Each cell as brick × cells a brick + its place in the brick.
+    cells: Vec<u32>,
+    boxes: bool,
+}
+
+impl Chunk {
+    /// A chunk of a box of `bricks` bricks, with room for `capacity` cells (address space
+    /// only: the pages of a buffer this large are its own mapping and count once touched,
+    /// where growing by doubling would copy the sums and leave the smaller copies behind).
+    fn new(bricks: usize, capacity: usize, boxes: bool) -> Self {
+        Chunk {
+            top: vec![UNUSED; bricks],
+            pool: Vec::new(),
+            heavy: Vec::with_capacity(capacity),
+            sums: Vec::with_capacity(capacity * grid_sums::SLOTS),
+            bounds: Vec::with_capacity(if boxes { 6 * capacity } else { 0 }),
+            firsts: Vec::new(),
+            cells: Vec::with_capacity(capacity),
+            boxes,
+        }
+    }
+
+    /// The id of cell `slot` of brick `brick`, numbered next (first vertex `first`) when the
+    /// chunk meets it for the first time.
+    #[inline(always)]
+    fn id(&mut self, brick: usize, slot: usize, per_brick: usize, first: u32, keep: bool) -> usize {
+        let t = &mut self.top[brick];
+        if *t == UNUSED {
+            *t = (self.pool.len() / per_brick) as u32;
+            self.pool.resize(self.pool.len() + per_brick, UNUSED);
+        }
+        let id = &mut self.pool[*t as usize * per_brick + slot];
+        if *id == UNUSED {
+            *id = self.heavy.len() as u32;
+            self.heavy.push(0);
+            self.sums.extend([0u64; grid_sums::SLOTS]);
+            if self.boxes {
+                self.bounds.extend(grid_sums::EMPTY_BOX);
+            }
+            if keep {
+                self.firsts.push(first);
+            }
+            self.cells.push((brick * per_brick + slot) as u32);
+        }
+        *id as usize
+    }
+
+    /// Vertex at `p` with heaviest key `key` and sums `add` into cell `id`.
+    #[inline(always)]
+    fn add(&mut self, id: usize, key: u64, add: &[u64; 7], p: &[f32; 3]) {
+        self.heavy[id] = self.heavy[id].max(key);
+        let s = &mut self.sums[id * grid_sums::SLOTS..][..7];
+        for k in 0..7 {
+            s[k] += add[k];
+        }
+        if self.boxes {
+            let b = &mut self.bounds[6 * id..6 * id + 6];
+            for k in 0..3 {
+                let o = grid_sums::ordered(p[k]);
+                b[k] = b[k].min(o);
+                b[3 + k] = b[3 + k].max(o);
+            }
+        }
+    }
+
+    /// Another chunk's cell (heaviest key, sums, box) into cell `id`.
+    fn merge(&mut self, id: usize, key: u64, add: &[u64; 7], bounds: Option<&[u32]>) {
+        self.heavy[id] = self.heavy[id].max(key);
+        let s = &mut self.sums[id * grid_sums::SLOTS..][..7];
+        for k in 0..7 {
+            s[k] += add[k];
+        }
+        if let Some(o) = bounds.filter(|_| self.boxes) {
+            let b = &mut self.bounds[6 * id..6 * id + 6];
+            for k in 0..3 {
+                b[k] = b[k].min(o[k]);
+                b[3 + k] = b[3 + k].max(o[3 + k]);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
