@@ -163,7 +163,14 @@ pub(crate) fn for_each_quadric_chunk(
     };
     for first in (0..n).step_by(chunk) {
         let range = first as u32..(first + chunk).min(n) as u32;
-        f(first, &cluster_quadrics(mesh, cluster_of, range));
+        f(
+            first,
+            &if n <= v / HOLD_SHARE {
+                cluster_quadrics::<true>(mesh, cluster_of, range)
+            } else {
+                cluster_quadrics::<false>(mesh, cluster_of, range)
+            },
+        );
     }
 }
 
@@ -183,6 +190,14 @@ const ADAPTIVE_SHARE: usize = 12;
 /// 50 % target, where the limit is measured.
 const ONE_PASS_SHARE: usize = 8;
 
+/// With at most `1 / HOLD_SHARE` of the vertex count in clusters (8 vertices or more a
+/// cluster), the face passes hold the sum of a cluster whose faces follow one another in
+/// registers (`cluster_quadrics`); with smaller clusters, whose faces are seldom wholly
+/// inside, they add in memory: the face pass on a 1 M-triangle torus with kd clusters, one
+/// thread, core time (`perf stat -e task-clock`, `representative_speed.rs`) at 1 % / 10 % /
+/// 43 % of the vertices: held 11.9 / 20.5 / 48.3 ms, in memory 17.2 / 21.7 / 45.5 ms.
+const HOLD_SHARE: usize = 8;
+
 /// Fewest clusters a chunk of [`for_each_quadric_chunk`] takes (fewer in the unit tests, so
 /// that they cross chunks).
 const MIN_CHUNK: usize = if cfg!(test) { 1 << 10 } else { 1 << 15 };
@@ -191,10 +206,14 @@ const MIN_CHUNK: usize = if cfg!(test) { 1 << 10 } else { 1 << 15 };
 #[path = "representative_speed.rs"]
 mod speed;
 
-/// The quadrics of the clusters of `range` ([`for_each_quadric_chunk`]).
-fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Quadric> {
+/// The quadrics of the clusters of `range` ([`for_each_quadric_chunk`]); `HOLD`: see
+/// [`HOLD_SHARE`].
+fn cluster_quadrics<const HOLD: bool>(
+    mesh: &Mesh,
+    cluster_of: &[u32],
+    range: Range<u32>,
+) -> Vec<Quadric> {
     let (first, n) = (range.start, range.len());
-    let mut q = vec![Quadric::default(); n];
     let blocks = mesh.face_count().div_ceil(blocks::BLOCK);
     if blocks::single_thread() {
         // One core: the same sums with a table only for the clusters that earlier blocks
@@ -202,35 +221,51 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Q
         // its faces in order: the same bits as its partial, which the parallel merge adds to
         // 0); a later block sums into a partial of its own, added at the block's end (so in
         // block order).
-        let mut block_of = vec![u32::MAX; n];
-        let (mut table, mut keys, mut part) = (CellTable::with_capacity(256), vec![], vec![]);
+        let mut sums = OneCore {
+            first,
+            q: vec![Quadric::default(); n],
+            block_of: vec![u32::MAX; n],
+            table: CellTable::with_capacity(256),
+            keys: vec![],
+            part: vec![],
+        };
         for b in 0..blocks {
             let r = b * blocks::BLOCK..((b + 1) * blocks::BLOCK).min(mesh.face_count());
-            each_face_quadric(mesh, cluster_of, &range, r, |c, fq| {
-                let at = &mut block_of[(c - first) as usize];
-                if *at == u32::MAX {
-                    *at = b as u32;
-                }
-                if *at == b as u32 {
-                    q[(c - first) as usize].add(fq);
+            let b = b as u32;
+            // The cluster of the last faces wholly in one cluster, and its slot's running
+            // value, held in registers while faces keep adding to it (the same adds in the
+            // same order: the same bits): each add no longer waits for the store of the one
+            // before. A face across clusters adds into their slots in memory, and leaves the
+            // open one open.
+            let mut open = (u32::MAX, Quadric::default());
+            each_face_quadric(mesh, cluster_of, &range, r, |c, fq, whole| {
+                if HOLD && c == open.0 {
+                    open.1.add(fq);
+                } else if !(HOLD && whole) {
+                    sums.slot(c, b).add(fq);
                 } else {
-                    let id = table.id(u64::from(c)) as usize;
-                    if id == keys.len() {
-                        keys.push(c);
-                        part.push(Quadric::default());
+                    if open.0 != u32::MAX {
+                        *sums.slot(open.0, b) = open.1;
                     }
-                    part[id].add(fq);
+                    let mut v = *sums.slot(c, b);
+                    v.add(fq);
+                    open = (c, v);
                 }
             });
-            for (&c, p) in keys.iter().zip(&part) {
-                q[(c - first) as usize].add(p);
+            if HOLD && open.0 != u32::MAX {
+                *sums.slot(open.0, b) = open.1;
             }
-            if !keys.is_empty() {
-                (table, keys, part) = (CellTable::with_capacity(256), vec![], vec![]);
+            for (&c, p) in sums.keys.iter().zip(&sums.part) {
+                sums.q[(c - first) as usize].add(p);
+            }
+            if !sums.keys.is_empty() {
+                sums.table = CellTable::with_capacity(256);
+                (sums.keys, sums.part) = (vec![], vec![]);
             }
         }
-        return q;
+        return sums.q;
     }
+    let mut q = vec![Quadric::default(); n];
     let merge = |q: &mut Vec<Quadric>, partials: Vec<(Vec<u32>, Vec<Quadric>)>| {
         for (keys, partial) in &partials {
             for (&c, p) in keys.iter().zip(partial) {
@@ -246,7 +281,7 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Q
         let sum = || {
             (wave..(wave + wave_blocks).min(blocks))
                 .into_par_iter()
-                .map(|b| block_quadrics(mesh, cluster_of, &range, b))
+                .map(|b| block_quadrics::<HOLD>(mesh, cluster_of, &range, b))
                 .collect()
         };
         let previous = pending.take();
@@ -263,9 +298,43 @@ fn cluster_quadrics(mesh: &Mesh, cluster_of: &[u32], range: Range<u32>) -> Vec<Q
     q
 }
 
+/// The one-core sums of [`cluster_quadrics`]: the totals of a chunk's clusters, the first
+/// block that touched each, and the current block's partials of the clusters that an earlier
+/// block touched.
+struct OneCore {
+    first: u32,
+    q: Vec<Quadric>,
+    block_of: Vec<u32>,
+    table: CellTable,
+    keys: Vec<u32>,
+    part: Vec<Quadric>,
+}
+
+impl OneCore {
+    /// Where block `b` sums cluster `c`'s faces: its total when `b` is the first block to touch
+    /// it, else its partial for `b`.
+    fn slot(&mut self, c: u32, b: u32) -> &mut Quadric {
+        let i = (c - self.first) as usize;
+        let at = &mut self.block_of[i];
+        if *at == u32::MAX {
+            *at = b;
+        }
+        if *at == b {
+            &mut self.q[i]
+        } else {
+            let id = self.table.id(u64::from(c)) as usize;
+            if id == self.keys.len() {
+                self.keys.push(c);
+                self.part.push(Quadric::default());
+            }
+            &mut self.part[id]
+        }
+    }
+}
+
 /// Block `b`'s partial quadrics: the clusters it touches in the order it meets them, and
 /// each one's sum over the block's faces in face order.
-fn block_quadrics(
+fn block_quadrics<const HOLD: bool>(
     mesh: &Mesh,
     cluster_of: &[u32],
     range: &Range<u32>,
@@ -276,7 +345,14 @@ fn block_quadrics(
     // The last cluster met at each of a few cache places, and its partial.
     let mut recent = [(u32::MAX, 0u32); 64];
     let (mut keys, mut q) = (Vec::new(), Vec::<Quadric>::new());
-    each_face_quadric(mesh, cluster_of, range, r, |c, fq| {
+    // The cluster of the last face wholly in one, its slot and the slot's running value
+    // (see the one-core path of `cluster_quadrics`).
+    let mut open = (u32::MAX, 0u32, Quadric::default());
+    each_face_quadric(mesh, cluster_of, range, r, |c, fq, whole| {
+        if HOLD && c == open.0 {
+            open.2.add(fq);
+            return;
+        }
         let hit = &mut recent[c as usize % recent.len()];
         let slot = if hit.0 == c {
             hit.1
@@ -289,22 +365,35 @@ fn block_quadrics(
             *hit = (c, id);
             id
         };
-        q[slot as usize].add(fq);
+        if !(HOLD && whole) {
+            q[slot as usize].add(fq);
+            return;
+        }
+        if open.0 != u32::MAX {
+            q[open.1 as usize] = open.2;
+        }
+        let mut sum = q[slot as usize];
+        sum.add(fq);
+        open = (c, slot, sum);
     });
+    if HOLD && open.0 != u32::MAX {
+        q[open.1 as usize] = open.2;
+    }
     (keys, q)
 }
 
-/// Calls `f(cluster, the face's quadric)` for every face of `faces`, in order, once for each
-/// distinct cluster of `range` among its corners (Lindstrom's rule: a face's quadric goes to
-/// the cells of its vertices, once per cell); faces without a corner in `range`, or of zero
-/// area, are passed over.
+/// Calls `f(cluster, the face's quadric, whole)` for every face of `faces`, in order, once
+/// for each distinct cluster of `range` among its corners (Lindstrom's rule: a face's quadric
+/// goes to the cells of its vertices, once per cell); faces without a corner in `range`, or of
+/// zero area, are passed over. `whole`: every corner of the face is in `cluster` (told for
+/// triangles only), so that a caller may hold a run of such faces' sum in registers.
 #[inline(always)]
 fn each_face_quadric(
     mesh: &Mesh,
     cluster_of: &[u32],
     range: &Range<u32>,
     faces: Range<usize>,
-    mut f: impl FnMut(u32, &Quadric),
+    mut f: impl FnMut(u32, &Quadric, bool),
 ) {
     if let Some(triangles) = mesh.triangles() {
         each_triangle_quadric(&mesh.positions, &triangles[faces], cluster_of, range, f);
@@ -326,7 +415,7 @@ fn each_face_quadric(
             let c = cluster_of[v as usize];
             if range.contains(&c) && !seen.contains(&c) {
                 seen.push(c);
-                f(c, &fq);
+                f(c, &fq, false);
             }
         }
     }
@@ -347,7 +436,7 @@ fn each_triangle_quadric(
     triangles: &[[u32; 3]],
     cluster_of: &[u32],
     range: &Range<u32>,
-    mut f: impl FnMut(u32, &Quadric),
+    mut f: impl FnMut(u32, &Quadric, bool),
 ) {
     let (first, len) = (range.start, range.end - range.start);
     let inside = |c: u32| c.wrapping_sub(first) < len;
@@ -381,14 +470,15 @@ fn each_triangle_quadric(
             }
             let q = Quadric::plane(normal[i], offset[i], weight[i]);
             let [a, b, c] = clusters[i];
+            let whole = a == b && a == c;
             if inside(a) {
-                f(a, &q);
+                f(a, &q, whole);
             }
             if b != a && inside(b) {
-                f(b, &q);
+                f(b, &q, false);
             }
             if c != a && c != b && inside(c) {
-                f(c, &q);
+                f(c, &q, false);
             }
         }
     }

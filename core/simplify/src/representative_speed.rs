@@ -69,7 +69,8 @@ fn kd_clusters(positions: &[[f32; 3]], leaf: usize) -> (Vec<u32>, usize) {
                 ext(a).total_cmp(&ext(b))
             })
             .unwrap();
-        let mid = ids.len() / 2;
+        // 40 % / 60 %: leaf counts between the powers of two a median gives.
+        let mid = ids.len() * 2 / 5;
         ids.select_nth_unstable_by(mid, |&a, &b| {
             p[a as usize][axis].total_cmp(&p[b as usize][axis])
         });
@@ -84,16 +85,6 @@ fn kd_clusters(positions: &[[f32; 3]], leaf: usize) -> (Vec<u32>, usize) {
     (out, next as usize)
 }
 
-/// This thread's time on a core, in ms (the machine is shared: wall times wander).
-fn cpu_ms() -> f64 {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap_or_default();
-    s.split_whitespace()
-        .next()
-        .and_then(|t| t.parse::<f64>().ok())
-        .unwrap_or(0.0)
-        / 1e6
-}
-
 fn median(mut t: Vec<f64>) -> f64 {
     t.sort_by(f64::total_cmp);
     t[t.len() / 2]
@@ -106,7 +97,8 @@ fn batched_walk_keeps_the_bits() {
     for leaf in [2usize, 9] {
         let (cluster_of, n) = kd_clusters(&mesh.positions, leaf);
         let expected = old::cluster_quadrics(&mesh, &cluster_of, 0..n as u32);
-        for threads in [1usize, 2] {
+        let only = std::env::var("QUADRIC_SPEED_ONLY").is_ok();
+        for threads in [1usize, 2].into_iter().take(if only { 1 } else { 2 }) {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
@@ -128,39 +120,73 @@ fn batched_walk_keeps_the_bits() {
 fn quadric_pass_speed() {
     let mesh = bumpy_torus(1_000_000);
     let v = mesh.vertex_count();
-    for leaf in [3usize, 12, 120] {
+    // QUADRIC_SPEED_LEAF=14 times one partition only.
+    let leaves: Vec<usize> = match std::env::var("QUADRIC_SPEED_LEAF") {
+        Ok(l) => vec![l.parse().unwrap()],
+        Err(_) => vec![3, 14, 140],
+    };
+    for leaf in leaves {
         let (cluster_of, n) = kd_clusters(&mesh.positions, leaf);
-        for threads in [1usize, 2] {
+        let only = std::env::var("QUADRIC_SPEED_ONLY").is_ok();
+        for threads in [1usize, 2].into_iter().take(if only { 1 } else { 2 }) {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap();
             pool.install(|| {
+                // Wall times, interleaved; the least of 15 (this machine is shared: the least
+                // is the run that was not interrupted), and the median.
                 let (mut t_old, mut t_new) = (vec![], vec![]);
-                // One thread: its time on the core; two: the wall time.
-                let now = || if threads == 1 { cpu_ms() } else { wall_ms() };
-                for _ in 0..9 {
-                    let t = now();
+                // QUADRIC_SPEED_ONLY=old|new|none runs one variant (or none: the setup
+                // alone), for `perf stat -e cycles:u`, which a shared machine does not blur.
+                if let Ok(only) = std::env::var("QUADRIC_SPEED_ONLY") {
+                    for _ in 0..15 {
+                        match only.as_str() {
+                            "old" => {
+                                let chunk = (v / ADAPTIVE_SHARE).max(MIN_CHUNK);
+                                for first in (0..n).step_by(chunk) {
+                                    let r = first as u32..(first + chunk).min(n) as u32;
+                                    drop(old::cluster_quadrics(&mesh, &cluster_of, r));
+                                }
+                            }
+                            "new" => for_each_quadric_chunk(
+                                &mesh,
+                                &cluster_of,
+                                n,
+                                ADAPTIVE_SHARE,
+                                |_, q| assert!(!q.is_empty()),
+                            ),
+                            _ => {}
+                        }
+                    }
+                    return;
+                }
+                for _ in 0..15 {
+                    let t = wall_ms();
                     let mut a = vec![];
                     for_each_quadric_chunk(&mesh, &cluster_of, n, ADAPTIVE_SHARE, |_, q| {
                         a.extend_from_slice(q)
                     });
-                    t_new.push(now() - t);
-                    let t = now();
+                    t_new.push(wall_ms() - t);
+                    let t = wall_ms();
                     let mut b = vec![];
                     let chunk = (v / ADAPTIVE_SHARE).max(MIN_CHUNK);
                     for first in (0..n).step_by(chunk) {
                         let r = first as u32..(first + chunk).min(n) as u32;
                         b.extend(old::cluster_quadrics(&mesh, &cluster_of, r));
                     }
-                    t_old.push(now() - t);
+                    t_old.push(wall_ms() - t);
                     assert!(a == b, "different quadrics");
                 }
-                let (o, nw) = (median(t_old), median(t_new));
+                let least = |t: &[f64]| t.iter().cloned().fold(f64::MAX, f64::min);
+                let (o, nw) = (least(&t_old), least(&t_new));
                 println!(
-                    "clusters {n} ({:.1} % of vertices), {threads} thr: old {o:.1} ms, new {nw:.1} ms, new/old {:.3}",
+                    "clusters {n} ({:.1} % of vertices), {threads} thr: old {o:.1} ms, new {nw:.1} ms \
+                     (least), new/old {:.3}; medians {:.1} / {:.1}",
                     100.0 * n as f64 / v as f64,
-                    nw / o
+                    nw / o,
+                    median(t_old.clone()),
+                    median(t_new.clone()),
                 );
             });
         }
@@ -170,6 +196,17 @@ fn quadric_pass_speed() {
 /// The face pass as of 19de70e5.
 mod old {
     use super::*;
+
+    /// `Quadric::add` as of 19de70e5 (one f64 at a time; LLVM pairs them from the second).
+    fn add_old(q: &mut Quadric, other: &Quadric) {
+        for k in 0..6 {
+            q.a[k] += other.a[k];
+        }
+        for k in 0..3 {
+            q.b[k] += other.b[k];
+        }
+        q.c += other.c;
+    }
 
     /// The quadrics of the clusters of `range` ([`for_each_quadric_chunk`]).
     pub(super) fn cluster_quadrics(
@@ -196,18 +233,18 @@ mod old {
                         *at = b as u32;
                     }
                     if *at == b as u32 {
-                        q[(c - first) as usize].add(fq);
+                        add_old(&mut q[(c - first) as usize], fq);
                     } else {
                         let id = table.id(u64::from(c)) as usize;
                         if id == keys.len() {
                             keys.push(c);
                             part.push(Quadric::default());
                         }
-                        part[id].add(fq);
+                        add_old(&mut part[id], fq);
                     }
                 });
                 for (&c, p) in keys.iter().zip(&part) {
-                    q[(c - first) as usize].add(p);
+                    add_old(&mut q[(c - first) as usize], p);
                 }
                 if !keys.is_empty() {
                     (table, keys, part) = (CellTable::with_capacity(256), vec![], vec![]);
@@ -218,7 +255,7 @@ mod old {
         let merge = |q: &mut Vec<Quadric>, partials: Vec<(Vec<u32>, Vec<Quadric>)>| {
             for (keys, partial) in &partials {
                 for (&c, p) in keys.iter().zip(partial) {
-                    q[(c - first) as usize].add(p);
+                    add_old(&mut q[(c - first) as usize], p);
                 }
             }
         };
@@ -273,7 +310,7 @@ mod old {
                 *hit = (c, id);
                 id
             };
-            q[slot as usize].add(fq);
+            add_old(&mut q[slot as usize], fq);
         });
         (keys, q)
     }
