@@ -27,7 +27,9 @@ use rayon::prelude::*;
 /// The grid partition of the vertices with non-zero weight, through the brick table, and the
 /// heaviest vertex of each cluster as `weight bits << 32 | !index` (the largest weight, the
 /// first met among equals: pass S's first half, taken while the ids are read) and, with
-/// `boxes` (the quadric representative's bound), the box of each cluster's vertices; `None`
+/// the box of each cluster's vertices (the quadric representative's bound) while there are
+/// at most `box_limit` clusters (beyond, none: a later pass takes them once the sums are
+/// freed, so that the boxes do not raise the peak memory); `None`
 /// when the box holds too many bricks for a dense top level (a cell size far below the
 /// mesh's detail), where the caller falls back to `grid_partition.rs`'s hash.
 pub(crate) fn grid_cells(
@@ -37,7 +39,7 @@ pub(crate) fn grid_cells(
     bounds: &Cell,
     size: GridSize,
     keep_cells: bool,
-    boxes: bool,
+    box_limit: usize,
 ) -> Option<(Partition, Sums)> {
     let (grid, dims) = Grid::new(bounds, size);
     let bd: [u64; 3] = dims.map(|d| d.div_ceil(4));
@@ -74,7 +76,11 @@ pub(crate) fn grid_cells(
         .enumerate()
         .map(|(k, out)| {
             let first = k * len;
-            let mut c = Chunk::new(bricks as usize, if k == 0 { n } else { out.len() }, boxes);
+            let mut c = Chunk::new(
+                bricks as usize,
+                if k == 0 { n } else { out.len() },
+                box_limit,
+            );
             for (i, o) in out.iter_mut().enumerate() {
                 let v = first + i;
                 if !referenced(v) {
@@ -96,10 +102,13 @@ pub(crate) fn grid_cells(
     // vertices): a cell already met keeps its id and takes the chunk's sums (integers,
     // maxima, minima: the same bits in any order), a new one is numbered next.
     if parts.is_empty() {
-        parts.push(Chunk::new(bricks as usize, 0, boxes));
+        parts.push(Chunk::new(bricks as usize, 0, box_limit));
     }
     let mut rest = parts.split_off(1);
     let mut all = parts.pop().expect("one chunk at least");
+    if rest.iter().any(|c| c.box_limit == 0) {
+        all.drop_boxes();
+    }
     let maps: Vec<Vec<u32>> = rest
         .iter_mut()
         .map(|c| {
@@ -161,24 +170,31 @@ struct Chunk {
     firsts: Vec<u32>,
     /// Each cell as brick × cells a brick + its place in the brick.
     cells: Vec<u32>,
-    boxes: bool,
+    /// Most cells the boxes are taken for (0: none).
+    box_limit: usize,
 }
 
 impl Chunk {
     /// A chunk of a box of `bricks` bricks, with room for `capacity` cells (address space
     /// only: the pages of a buffer this large are its own mapping and count once touched,
     /// where growing by doubling would copy the sums and leave the smaller copies behind).
-    fn new(bricks: usize, capacity: usize, boxes: bool) -> Self {
+    fn new(bricks: usize, capacity: usize, box_limit: usize) -> Self {
         Chunk {
             top: vec![UNUSED; bricks],
             pool: Vec::new(),
             heavy: Vec::with_capacity(capacity),
             sums: Vec::with_capacity(capacity * grid_sums::SLOTS),
-            bounds: Vec::with_capacity(if boxes { 6 * capacity } else { 0 }),
+            bounds: Vec::with_capacity(6 * capacity.min(box_limit)),
             firsts: Vec::new(),
             cells: Vec::with_capacity(capacity),
-            boxes,
+            box_limit,
         }
+    }
+
+    /// No boxes (more cells than the limit).
+    fn drop_boxes(&mut self) {
+        self.box_limit = 0;
+        self.bounds = Vec::new();
     }
 
     /// The id of cell `slot` of brick `brick`, numbered next (first vertex `first`) when the
@@ -195,7 +211,10 @@ impl Chunk {
             *id = self.heavy.len() as u32;
             self.heavy.push(0);
             self.sums.extend([0u64; grid_sums::SLOTS]);
-            if self.boxes {
+            if self.heavy.len() > self.box_limit {
+                self.box_limit = 0;
+                self.bounds = Vec::new();
+            } else {
                 self.bounds.extend(grid_sums::EMPTY_BOX);
             }
             if keep {
@@ -214,7 +233,7 @@ impl Chunk {
         for k in 0..7 {
             s[k] += add[k];
         }
-        if self.boxes {
+        if self.box_limit != 0 {
             let b = &mut self.bounds[6 * id..6 * id + 6];
             for k in 0..3 {
                 let o = grid_sums::ordered(p[k]);
@@ -231,7 +250,7 @@ impl Chunk {
         for k in 0..7 {
             s[k] += add[k];
         }
-        if let Some(o) = bounds.filter(|_| self.boxes) {
+        if let Some(o) = bounds.filter(|_| self.box_limit != 0) {
             let b = &mut self.bounds[6 * id..6 * id + 6];
             for k in 0..3 {
                 b[k] = b[k].min(o[k]);
@@ -274,7 +293,7 @@ mod tests {
                         .build()
                         .unwrap();
                     let got = pool
-                        .install(|| grid_cells(&positions, &weights, k, &bounds, size, true, false))
+                        .install(|| grid_cells(&positions, &weights, k, &bounds, size, true, 0))
                         .unwrap()
                         .0;
                     assert_eq!(got.clusters, want.clusters, "{cells} cells, {threads}");

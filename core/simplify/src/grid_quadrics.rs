@@ -15,7 +15,7 @@
 //! one sums.
 //!
 //! Every cluster's quadric is held at once (80 bytes a cluster), so the pass is taken only
-//! when they fit in the share `representative.rs`'s chunks keep to ([`fits`]); larger
+//! when they fit in the share `representative.rs`'s chunks keep to ([`most_clusters`]); larger
 //! partitions (targets above a sixth of the vertices) take the chunked passes.
 
 use crate::area_vector;
@@ -26,10 +26,10 @@ use crate::representative::GRID_SHARE;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
-/// Whether `clusters` quadrics of a mesh of `vertices` vertices are few enough to be held at
-/// once: the size of one of `representative.rs`'s chunks.
-pub(crate) fn fits(clusters: usize, vertices: usize) -> bool {
-    clusters <= (vertices / GRID_SHARE).max(1 << 15)
+/// The most clusters of a mesh of `vertices` vertices whose quadrics are held at once: the
+/// size of one of `representative.rs`'s chunks.
+pub(crate) fn most_clusters(vertices: usize) -> usize {
+    (vertices / GRID_SHARE).max(1 << 15)
 }
 
 /// A tag's slot for "sums straight into the total" (one core, the cluster's first block).

@@ -18,9 +18,12 @@
 use crate::blocks;
 use crate::grid_frame::Grid;
 use crate::options::Representative;
+use crate::partition::UNUSED;
 use crate::quadric::Quadric;
 use crate::representative;
 use rayon::prelude::*;
+use std::sync::atomic::AtomicU32;
+use std::sync::atomic::Ordering::Relaxed;
 use tessd_mesh::Mesh;
 
 /// u64 slots a cluster's sums take (x low, x high, y low, y high, z low, z high, weight; one
@@ -144,15 +147,16 @@ pub(crate) fn grid_representatives(
         .into_par_iter()
         .map(|c| barycentre(c).map(|x| x as f32))
         .collect();
-    // The box of each cluster's vertices (the minimiser's bound), taken in the cell pass.
-    let boxes = sums.boxes;
-    assert_eq!(
-        boxes.len(),
-        6 * n,
-        "the cell pass takes the boxes for quadrics"
-    );
+    let taken = sums.boxes;
     drop(sums.sums);
     drop(sums.heavy);
+    // The box of each cluster's vertices (the minimiser's bound): taken in the cell pass
+    // where the clusters are few, else now that the sums are freed.
+    let boxes = if taken.len() == 6 * n {
+        taken
+    } else {
+        cluster_boxes(positions, cluster_of, n)
+    };
     let mut solve = |first: usize, quadrics: &[Quadric]| {
         let out = &mut reps[first..first + quadrics.len()];
         // Each barycentre turns into its cluster's representative in place.
@@ -175,6 +179,36 @@ pub(crate) fn grid_representatives(
         ),
     }
     reps
+}
+
+/// The box of each of the `n` clusters of `cluster_of`'s vertices: six [`ordered`] bits a
+/// cluster, low corner then high corner (minima and maxima: the same whichever core takes
+/// them first).
+pub(crate) fn cluster_boxes(positions: &[[f32; 3]], cluster_of: &[u32], n: usize) -> Vec<u32> {
+    let boxes: Vec<AtomicU32> = (0..6 * n)
+        .map(|k| AtomicU32::new(EMPTY_BOX[k % 6]))
+        .collect();
+    let single = blocks::single_thread();
+    blocks::ranges(cluster_of.len()).for_each(|r| {
+        for v in r {
+            let c = cluster_of[v];
+            if c == UNUSED {
+                continue;
+            }
+            let b = &boxes[6 * c as usize..6 * c as usize + 6];
+            for k in 0..3 {
+                let o = ordered(positions[v][k]);
+                if single {
+                    b[k].store(b[k].load(Relaxed).min(o), Relaxed);
+                    b[3 + k].store(b[3 + k].load(Relaxed).max(o), Relaxed);
+                } else {
+                    b[k].fetch_min(o, Relaxed);
+                    b[3 + k].fetch_max(o, Relaxed);
+                }
+            }
+        }
+    });
+    boxes.into_iter().map(AtomicU32::into_inner).collect()
 }
 
 #[cfg(test)]

@@ -281,15 +281,8 @@ fn face_pass_quadrics_and_fates_match_the_separate_passes() {
         // (Up to 150 cells a side: the brick table, not the hash, takes these.)
         for cells in [7, 60, 150] {
             let size = GridSize::CellsPerAxis(cells);
-            let cells_of = crate::grid_cells::grid_cells(
-                &mesh.positions,
-                &w,
-                None,
-                &bounds,
-                size,
-                false,
-                false,
-            );
+            let cells_of =
+                crate::grid_cells::grid_cells(&mesh.positions, &w, None, &bounds, size, false, 0);
             let (p, _) = cells_of.unwrap();
             let n = p.clusters;
             // Even clusters on one line (their faces have zero area), odd ones off it.
@@ -343,6 +336,51 @@ fn face_pass_quadrics_and_fates_match_the_separate_passes() {
                     |e: &crate::elimination::Eliminated| [e.degenerate, e.flattened, e.duplicates];
                 assert_eq!(counts(&got), counts(&want), "{what}");
             }
+        }
+    }
+}
+
+/// The cell pass takes the clusters' boxes while they are at most the limit, the same as the
+/// separate pass over the vertices, on every core count; beyond the limit it takes none.
+#[test]
+fn cell_pass_boxes_match_the_vertex_pass_or_are_left() {
+    let mesh = torus(300, 120);
+    let w = crate::weights::vertex_weights(&mesh, crate::Weighting::LongestEdge);
+    let (bounds, _) = crate::partition::referenced_bounds(&mesh.positions, &w).unwrap();
+    for cells in [5, 60] {
+        let size = GridSize::CellsPerAxis(cells);
+        for threads in [1, 2, 7] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let cells_with = |limit: usize| {
+                pool.install(|| {
+                    crate::grid_cells::grid_cells(
+                        &mesh.positions,
+                        &w,
+                        None,
+                        &bounds,
+                        size,
+                        false,
+                        limit,
+                    )
+                })
+                .unwrap()
+            };
+            let (p, all) = cells_with(usize::MAX);
+            let n = p.clusters;
+            let want = crate::grid_sums::cluster_boxes(&mesh.positions, &p.cluster_of, n);
+            assert_eq!(all.boxes, want, "{cells} cells, {threads} threads");
+            let (_, exact) = cells_with(n);
+            assert_eq!(
+                exact.boxes, want,
+                "{cells} cells, {threads} threads, limit n"
+            );
+            let (_, fewer) = cells_with(n - 1);
+            assert!(fewer.boxes.is_empty(), "{cells} cells, {threads} threads");
+            let (_, none) = cells_with(0);
+            assert!(none.boxes.is_empty());
         }
     }
 }

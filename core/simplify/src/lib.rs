@@ -341,8 +341,11 @@ impl<'a> Prepared<'a> {
                 step(0.15, "cells")?;
                 let keep = options.keep_partition;
                 let positions = &work.positions;
-                // The quadric representative's bounds are taken in the cell pass.
-                let q = options.representative == Representative::Quadric;
+                // The quadric representative's bounds are taken in the cell pass where its
+                // quadrics are summed in the face pass (few clusters: little memory).
+                let quadric = options.representative == Representative::Quadric;
+                let most = grid_quadrics::most_clusters(positions.len());
+                let q = if quadric { most } else { 0 };
                 let cells =
                     grid_cells::grid_cells(positions, weights, classes, bounds, grid, keep, q);
                 match cells {
@@ -354,7 +357,7 @@ impl<'a> Prepared<'a> {
                         let fused = work
                             .triangles()
                             .filter(|_| rep == Representative::Quadric)
-                            .filter(|_| grid_quadrics::fits(p.clusters, positions.len()));
+                            .filter(|_| p.clusters <= most);
                         let mut quadrics = None;
                         if let Some(triangles) = fused {
                             step(0.3, "faces")?;
