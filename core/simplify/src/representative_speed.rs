@@ -90,13 +90,18 @@ fn median(mut t: Vec<f64>) -> f64 {
     t[t.len() / 2]
 }
 
-/// The batched walk gives the previous version's bits, on 1 and 2 threads, across chunks.
+/// The batched walk gives the previous version's bits, on 1 and 2 threads, across chunks and
+/// with its sums held in registers.
 #[test]
 fn batched_walk_keeps_the_bits() {
     let mesh = bumpy_torus(60_000);
-    for leaf in [2usize, 9] {
+    // Clusters of 2 and 9 vertices cross chunks; of 30, the faces' sums are held in registers
+    // (`HOLD_SHARE`). 60 k faces are 4 blocks: later blocks sum into partials.
+    for leaf in [2usize, 9, 30] {
         let (cluster_of, n) = kd_clusters(&mesh.positions, leaf);
         let expected = old::cluster_quadrics(&mesh, &cluster_of, 0..n as u32);
+        let held = n <= mesh.vertex_count() / HOLD_SHARE;
+        assert_eq!(held, leaf == 30, "{n} clusters");
         let only = std::env::var("QUADRIC_SPEED_ONLY").is_ok();
         for threads in [1usize, 2].into_iter().take(if only { 1 } else { 2 }) {
             let pool = rayon::ThreadPoolBuilder::new()
