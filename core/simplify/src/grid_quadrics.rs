@@ -65,25 +65,14 @@ pub(crate) fn faces_and_quadrics(
         let mut tag = vec![u64::MAX; n];
         let (mut keys, mut partials) = (Vec::<u32>::new(), Vec::<Quadric>::new());
         for (b, fates) in fate.chunks_mut(blocks::BLOCK).enumerate() {
-            let stamp = (b as u64) << 32;
-            let part = block_pass(positions, triangles, cluster_of, b, fates, |c, fq| {
-                let t = &mut tag[c as usize];
-                if *t >> 32 == b as u64 && *t != u64::MAX {
-                    match *t as u32 {
-                        DIRECT => q[c as usize].add(fq),
-                        slot => partials[slot as usize].add(fq),
-                    }
-                } else if *t == u64::MAX {
-                    *t = stamp | u64::from(DIRECT);
-                    q[c as usize].add(fq);
-                } else {
-                    *t = stamp | keys.len() as u64;
-                    keys.push(c);
-                    let mut p = Quadric::default();
-                    p.add(fq);
-                    partials.push(p);
-                }
-            });
+            let mut sink = OneCore {
+                tag: &mut tag,
+                q: &mut q,
+                keys: &mut keys,
+                partials: &mut partials,
+                b: b as u64,
+            };
+            let part = block_pass(positions, triangles, cluster_of, b, fates, &mut sink);
             for (&c, p) in keys.iter().zip(&partials) {
                 q[c as usize].add(p);
             }
@@ -102,23 +91,19 @@ pub(crate) fn faces_and_quadrics(
             if tag.len() != n {
                 *tag = vec![0; n];
             }
-            let stamp = (b as u64 + 1) << 32;
-            let (mut keys, mut partials) = (Vec::<u32>::new(), Vec::<Quadric>::new());
+            let mut sink = OneBlock {
+                tag: &mut tag,
+                keys: Vec::new(),
+                partials: Vec::new(),
+                stamp: (b as u64 + 1) << 32,
+            };
             let (counts, written) =
-                block_pass(positions, triangles, cluster_of, b, fates, |c, fq| {
-                    let t = &mut tag[c as usize];
-                    if *t & !0xffff_ffff != stamp {
-                        *t = stamp | keys.len() as u64;
-                        keys.push(c);
-                        partials.push(Quadric::default());
-                    }
-                    partials[*t as u32 as usize].add(fq);
-                });
+                block_pass(positions, triangles, cluster_of, b, fates, &mut sink);
             Part {
                 counts,
                 written,
-                keys,
-                partials,
+                keys: sink.keys,
+                partials: sink.partials,
             }
         };
         let merge = |q: &mut [Quadric], done: Vec<Part>| -> Vec<([u64; 4], Vec<u32>)> {
@@ -158,8 +143,69 @@ pub(crate) fn faces_and_quadrics(
     (Fates::before_areas(fate, counts, written), q)
 }
 
+/// Where a face's quadric goes for one of its clusters (a trait, not a closure, so that it
+/// is inlined into the face loop).
+trait Sink {
+    fn add(&mut self, c: u32, fq: &Quadric);
+}
+
+/// One core, block `b`: a cluster's first block adds into its total, later ones into
+/// partials (`tag`: the last block that touched each cluster, high half, and its partial
+/// there or [`DIRECT`]).
+struct OneCore<'a> {
+    tag: &'a mut [u64],
+    q: &'a mut [Quadric],
+    keys: &'a mut Vec<u32>,
+    partials: &'a mut Vec<Quadric>,
+    b: u64,
+}
+
+impl Sink for OneCore<'_> {
+    #[inline(always)]
+    fn add(&mut self, c: u32, fq: &Quadric) {
+        let t = &mut self.tag[c as usize];
+        if *t == u64::MAX {
+            *t = self.b << 32 | u64::from(DIRECT);
+            self.q[c as usize].add(fq);
+        } else if *t >> 32 == self.b {
+            match *t as u32 {
+                DIRECT => self.q[c as usize].add(fq),
+                slot => self.partials[slot as usize].add(fq),
+            }
+        } else {
+            *t = self.b << 32 | self.keys.len() as u64;
+            self.keys.push(c);
+            let mut p = Quadric::default();
+            p.add(fq);
+            self.partials.push(p);
+        }
+    }
+}
+
+/// One block on one of several cores: every cluster into a partial of the block's (`tag`:
+/// the core's, `stamp` the block + 1 in the high half, the partial in the low half).
+struct OneBlock<'a> {
+    tag: &'a mut [u64],
+    keys: Vec<u32>,
+    partials: Vec<Quadric>,
+    stamp: u64,
+}
+
+impl Sink for OneBlock<'_> {
+    #[inline(always)]
+    fn add(&mut self, c: u32, fq: &Quadric) {
+        let t = &mut self.tag[c as usize];
+        if *t & !0xffff_ffff != self.stamp {
+            *t = self.stamp | self.keys.len() as u64;
+            self.keys.push(c);
+            self.partials.push(Quadric::default());
+        }
+        self.partials[*t as u32 as usize].add(fq);
+    }
+}
+
 /// One block's faces: fates, counts and kept faces as `elimination::fates` gives them for
-/// triangles (without the area test), and `add(cluster, quadric)` for each face of non-zero
+/// triangles (without the area test), and `sink.add(cluster, quadric)` for each face of non-zero
 /// area once per distinct cluster of its corners.
 #[inline(always)]
 fn block_pass(
@@ -168,7 +214,7 @@ fn block_pass(
     cluster_of: &[u32],
     b: usize,
     fates: &mut [Fate],
-    mut add: impl FnMut(u32, &Quadric),
+    sink: &mut impl Sink,
 ) -> ([u64; 4], Vec<u32>) {
     let mut c = [0u64; 4];
     let start = b * blocks::BLOCK;
@@ -185,12 +231,12 @@ fn block_pass(
             c[2] += 1;
         }
         if let Some(fq) = triangle_quadric(positions, *t) {
-            add(v[0], &fq);
+            sink.add(v[0], &fq);
             if v[1] != v[0] {
-                add(v[1], &fq);
+                sink.add(v[1], &fq);
             }
             if v[2] != v[0] && v[2] != v[1] {
-                add(v[2], &fq);
+                sink.add(v[2], &fq);
             }
         }
     }
