@@ -8,14 +8,14 @@
 //!
 //! Cluster ids follow the order in which vertices first meet their cells (the same order as
 //! `grid_partition.rs`, so the same ids). That order is the cells first met in any prefix of
-//! the vertices, in their order, then those of the rest not met before, in theirs. So each
-//! core numbers a contiguous chunk of the vertices on its own, in one sequential pass (its
-//! own brick table, local ids and local sums); a short serial pass over the later chunks'
-//! cells (not their vertices) gives each its global id, adding its sums into the cell's
-//! (integers, maxima and minima: the same bits in any order); and each later chunk's
-//! vertices read their global ids back in parallel. The result is the sequential numbering
-//! exactly, whatever the number of chunks, with no serial step over the vertices (issue 33,
-//! point 1: the design's atomic-minimum numbering took five parallel passes instead).
+//! the vertices, in their order, then those of the rest not met before, in theirs. On one
+//! core that is one sequential pass, which sums too (pass S). On more, each core numbers a
+//! contiguous chunk of the vertices on its own, in one sequential pass (its own brick table
+//! and local ids); a short serial pass over the later chunks' cells (not their vertices)
+//! gives each its global id; and one parallel pass has every vertex read its global id and
+//! add itself into its cluster's sums (integers, maxima and minima: the same bits in any
+//! order). The result is the sequential numbering exactly, whatever the number of chunks,
+//! in two passes over the vertices (the design's atomic-minimum numbering took five).
 
 use crate::blocks;
 use crate::grid_frame::Grid;
@@ -23,6 +23,8 @@ use crate::grid_sums::{self, Sums};
 use crate::options::GridSize;
 use crate::partition::{Cell, Partition, UNUSED};
 use rayon::prelude::*;
+use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, AtomicU64};
 
 /// The grid partition of the vertices with non-zero weight, through the brick table, and the
 /// heaviest vertex of each cluster as `weight bits << 32 | !index` (the largest weight, the
@@ -68,19 +70,17 @@ pub(crate) fn grid_cells(
     let n = positions.len();
     let mut cluster_of = vec![UNUSED; n];
     // One chunk of vertices a core (the ids do not depend on how many: see the module's
-    // note), each numbered on its own.
+    // note), each numbered on its own; on one core the same pass sums.
     let chunks = rayon::current_num_threads().clamp(1, n.div_ceil(blocks::BLOCK).max(1));
-    let len = n.div_ceil(chunks);
+    let single = chunks == 1;
+    let len = n.div_ceil(chunks).max(1);
     let mut parts: Vec<Chunk> = cluster_of
-        .par_chunks_mut(len.max(1))
+        .par_chunks_mut(len)
         .enumerate()
         .map(|(k, out)| {
             let first = k * len;
-            let mut c = Chunk::new(
-                bricks as usize,
-                if k == 0 { n } else { out.len() },
-                box_limit,
-            );
+            let capacity = if k == 0 { n } else { out.len() };
+            let mut c = Chunk::new(bricks as usize, capacity, box_limit, single);
             for (i, o) in out.iter_mut().enumerate() {
                 let v = first + i;
                 if !referenced(v) {
@@ -92,58 +92,117 @@ pub(crate) fn grid_cells(
                 let slot = local_of(cell, v);
                 let id = c.id(brick, slot, per_brick, v as u32, keep_cells);
                 *o = id as u32;
-                let add = grid_sums::contribution(u, weights[v], scale);
-                c.add(id, key(v), &add, p);
+                if single {
+                    let add = grid_sums::contribution(u, weights[v], scale);
+                    c.add(id, key(v), &add, p);
+                }
+            }
+            if k > 0 {
+                // A later chunk's table is done with: its cells list what the merge needs.
+                (c.top, c.pool) = (Vec::new(), Vec::new());
             }
             c
         })
         .collect();
-    // The later chunks' cells into the first's table (a serial pass over cells, not
-    // vertices): a cell already met keeps its id and takes the chunk's sums (integers,
-    // maxima, minima: the same bits in any order), a new one is numbered next.
     if parts.is_empty() {
-        parts.push(Chunk::new(bricks as usize, 0, box_limit));
+        parts.push(Chunk::new(bricks as usize, 0, box_limit, single));
     }
-    let mut rest = parts.split_off(1);
+    let rest = parts.split_off(1);
     let mut all = parts.pop().expect("one chunk at least");
-    if rest.iter().any(|c| c.box_limit == 0) {
-        all.drop_boxes();
+    if single {
+        let firsts = std::mem::take(&mut all.firsts);
+        let sums = Sums {
+            heavy: all.heavy,
+            sums: all.sums,
+            boxes: all.bounds,
+        };
+        let clusters = sums.heavy.len();
+        return Some(finish(cluster_of, clusters, firsts, sums, positions, &grid));
     }
-    let maps: Vec<Vec<u32>> = rest
-        .iter_mut()
-        .map(|c| {
-            (0..c.heavy.len())
+    // The later chunks' cells into the first's table (a serial pass over cells, not
+    // vertices): a cell already met keeps its id, a new one is numbered next.
+    let maps: Vec<Vec<u32>> = std::iter::once(Vec::new())
+        .chain(rest.into_iter().map(|c| {
+            (0..c.cells.len())
                 .map(|l| {
                     let cell = c.cells[l] as usize;
                     let (brick, slot) = (cell / per_brick, cell % per_brick);
                     let first = if keep_cells { c.firsts[l] } else { 0 };
-                    let id = all.id(brick, slot, per_brick, first, keep_cells);
-                    let s = &c.sums[l * grid_sums::SLOTS..][..7];
-                    let add = std::array::from_fn(|k| s[k]);
-                    all.merge(id, c.heavy[l], &add, c.bounds.get(6 * l..6 * l + 6));
-                    id as u32
+                    all.id(brick, slot, per_brick, first, keep_cells) as u32
                 })
                 .collect()
-        })
+        }))
         .collect();
-    drop(rest);
-    // The later chunks' vertices take their global ids.
+    let clusters = all.cells.len();
+    drop((all.top, all.pool, all.cells));
+    // Pass S: every vertex reads its global id and adds itself into the cluster's sums,
+    // maxima and minima (integers: the same whichever core adds first).
+    let atomics = |n: usize, init: &dyn Fn(usize) -> u64| -> Vec<AtomicU64> {
+        (0..n).map(|k| AtomicU64::new(init(k))).collect()
+    };
+    let heavy = atomics(clusters, &|_| 0);
+    let sum = atomics(clusters * grid_sums::SLOTS, &|_| 0);
+    let boxes = if clusters <= box_limit {
+        6 * clusters
+    } else {
+        0
+    };
+    let bounds: Vec<AtomicU32> = (0..boxes)
+        .map(|k| AtomicU32::new(grid_sums::EMPTY_BOX[k % 6]))
+        .collect();
     cluster_of
-        .par_chunks_mut(len.max(1))
-        .skip(1)
+        .par_chunks_mut(len)
         .zip(maps)
-        .for_each(|(out, map)| {
-            for o in out.iter_mut().filter(|o| **o != UNUSED) {
-                *o = map[*o as usize];
+        .enumerate()
+        .for_each(|(k, (out, map))| {
+            for (i, o) in out.iter_mut().enumerate() {
+                if *o == UNUSED {
+                    continue;
+                }
+                if k > 0 {
+                    *o = map[*o as usize];
+                }
+                let (v, id) = (k * len + i, *o as usize);
+                let h = key(v);
+                if h > heavy[id].load(Relaxed) {
+                    heavy[id].fetch_max(h, Relaxed);
+                }
+                let p = &positions[v];
+                let add = grid_sums::contribution(grid.locate(p).1, weights[v], scale);
+                let s = &sum[id * grid_sums::SLOTS..][..7];
+                for k in 0..7 {
+                    s[k].fetch_add(add[k], Relaxed);
+                }
+                if boxes != 0 {
+                    let b = &bounds[6 * id..6 * id + 6];
+                    for k in 0..3 {
+                        let o = grid_sums::ordered(p[k]);
+                        b[k].fetch_min(o, Relaxed);
+                        b[3 + k].fetch_max(o, Relaxed);
+                    }
+                }
             }
         });
-    let clusters = all.heavy.len();
-    let firsts = std::mem::take(&mut all.firsts);
+    let plain = |a: Vec<AtomicU64>| a.into_iter().map(AtomicU64::into_inner).collect();
     let sums = Sums {
-        heavy: all.heavy,
-        sums: all.sums,
-        boxes: all.bounds,
+        heavy: plain(heavy),
+        sums: plain(sum),
+        boxes: bounds.into_iter().map(AtomicU32::into_inner).collect(),
     };
+    Some(finish(
+        cluster_of, clusters, all.firsts, sums, positions, &grid,
+    ))
+}
+
+/// The partition from its ids and the cells' first vertices (their boxes, when kept).
+fn finish(
+    cluster_of: Vec<u32>,
+    clusters: usize,
+    firsts: Vec<u32>,
+    sums: Sums,
+    positions: &[[f32; 3]],
+    grid: &Grid,
+) -> (Partition, Sums) {
     let cells = firsts
         .par_iter()
         .map(|&v| grid.cell_box(grid.locate(&positions[v as usize]).0))
@@ -153,11 +212,11 @@ pub(crate) fn grid_cells(
         clusters,
         cells,
     };
-    Some((partition, sums))
+    (partition, sums)
 }
 
 /// One chunk's cells, numbered as its vertices meet them (bricks taken as they are met too),
-/// with each cell's sums ([`Sums`], by local id).
+/// and on one core each cell's sums ([`Sums`]).
 struct Chunk {
     /// Pool place of each brick of the box that holds a vertex of the chunk.
     top: Vec<u32>,
@@ -168,33 +227,33 @@ struct Chunk {
     bounds: Vec<u32>,
     /// First vertex of each cell (kept cells only).
     firsts: Vec<u32>,
-    /// Each cell as brick × cells a brick + its place in the brick.
+    /// Each cell as brick × cells a brick + its place in the brick (several cores only).
     cells: Vec<u32>,
     /// Most cells the boxes are taken for (0: none).
     box_limit: usize,
+    /// Whether the sums are taken (one core: one pass does all).
+    with_sums: bool,
 }
 
 impl Chunk {
     /// A chunk of a box of `bricks` bricks, with room for `capacity` cells (address space
     /// only: the pages of a buffer this large are its own mapping and count once touched,
     /// where growing by doubling would copy the sums and leave the smaller copies behind).
-    fn new(bricks: usize, capacity: usize, box_limit: usize) -> Self {
+    fn new(bricks: usize, capacity: usize, box_limit: usize, with_sums: bool) -> Self {
+        let room = if with_sums { capacity } else { 0 };
         Chunk {
             top: vec![UNUSED; bricks],
             pool: Vec::new(),
-            heavy: Vec::with_capacity(capacity),
-            sums: Vec::with_capacity(capacity * grid_sums::SLOTS),
-            bounds: Vec::with_capacity(6 * capacity.min(box_limit)),
+            heavy: Vec::with_capacity(room),
+            sums: Vec::with_capacity(room * grid_sums::SLOTS),
+            // (At least 4 MiB: its own mapping, so that its pages go back to the system
+            // when it is dropped past the limit, not to a heap that keeps them.)
+            bounds: Vec::with_capacity((6 * room.min(box_limit)).max(1 << 20)),
             firsts: Vec::new(),
-            cells: Vec::with_capacity(capacity),
-            box_limit,
+            cells: Vec::with_capacity(if with_sums { 0 } else { capacity }),
+            box_limit: if with_sums { box_limit } else { 0 },
+            with_sums,
         }
-    }
-
-    /// No boxes (more cells than the limit).
-    fn drop_boxes(&mut self) {
-        self.box_limit = 0;
-        self.bounds = Vec::new();
     }
 
     /// The id of cell `slot` of brick `brick`, numbered next (first vertex `first`) when the
@@ -208,19 +267,23 @@ impl Chunk {
         }
         let id = &mut self.pool[*t as usize * per_brick + slot];
         if *id == UNUSED {
-            *id = self.heavy.len() as u32;
-            self.heavy.push(0);
-            self.sums.extend([0u64; grid_sums::SLOTS]);
-            if self.heavy.len() > self.box_limit {
-                self.box_limit = 0;
-                self.bounds = Vec::new();
+            if self.with_sums {
+                *id = self.heavy.len() as u32;
+                self.heavy.push(0);
+                self.sums.extend([0u64; grid_sums::SLOTS]);
+                if self.heavy.len() > self.box_limit {
+                    self.box_limit = 0;
+                    self.bounds = Vec::new();
+                } else {
+                    self.bounds.extend(grid_sums::EMPTY_BOX);
+                }
             } else {
-                self.bounds.extend(grid_sums::EMPTY_BOX);
+                *id = self.cells.len() as u32;
+                self.cells.push((brick * per_brick + slot) as u32);
             }
             if keep {
                 self.firsts.push(first);
             }
-            self.cells.push((brick * per_brick + slot) as u32);
         }
         *id as usize
     }
@@ -239,22 +302,6 @@ impl Chunk {
                 let o = grid_sums::ordered(p[k]);
                 b[k] = b[k].min(o);
                 b[3 + k] = b[3 + k].max(o);
-            }
-        }
-    }
-
-    /// Another chunk's cell (heaviest key, sums, box) into cell `id`.
-    fn merge(&mut self, id: usize, key: u64, add: &[u64; 7], bounds: Option<&[u32]>) {
-        self.heavy[id] = self.heavy[id].max(key);
-        let s = &mut self.sums[id * grid_sums::SLOTS..][..7];
-        for k in 0..7 {
-            s[k] += add[k];
-        }
-        if let Some(o) = bounds.filter(|_| self.box_limit != 0) {
-            let b = &mut self.bounds[6 * id..6 * id + 6];
-            for k in 0..3 {
-                b[k] = b[k].min(o[k]);
-                b[3 + k] = b[3 + k].max(o[3 + k]);
             }
         }
     }
