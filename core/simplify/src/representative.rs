@@ -460,8 +460,10 @@ fn each_triangle_quadric(
             clusters[k] = c;
             k += 1;
         }
-        // Every slot, stale ones too: a fixed count the compiler unrolls into paired roots.
-        for (w, l) in weight.iter_mut().zip(&len2) {
+        // The faces kept, rounded up to pairs (the compiler pairs the roots); none when the
+        // batch has no face in `range`, as most batches of a later chunk's pass.
+        let m = k.next_multiple_of(2);
+        for (w, l) in weight[..m].iter_mut().zip(&len2[..m]) {
             *w = 0.5 / l.sqrt();
         }
         for i in 0..k {
