@@ -32,6 +32,7 @@ use crate::kd::{Bounds, Cut, Point, split_points};
 use crate::options::Representative;
 use crate::partition::{Cell, Partition, UNUSED};
 use crate::split_queue::{ByError, SplitQueue};
+use crate::tangent_key;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 
@@ -182,6 +183,9 @@ pub(crate) struct Adaptive<'a> {
     /// (`feature_priority.rs`; the points then carry their normals) instead of their
     /// displacement.
     surface: bool,
+    /// Whether the output's representative is the quadric point: the surface key of a small
+    /// cell is then measured from its tangent planes' quadric point (`tangent_key.rs`).
+    tangent_key: bool,
 }
 
 /// What travels beside each point of a partition (`kd::split_points`): nothing for the quality
@@ -302,6 +306,7 @@ impl<'a> Adaptive<'a> {
             keep_cells,
             cancel,
             surface: false,
+            tangent_key: rep == Representative::Quadric,
         }
     }
 
@@ -391,6 +396,11 @@ impl<'a> Adaptive<'a> {
     /// is). A large cell is measured by blocks on every core (a maximum does not depend on
     /// the order).
     fn key2<A: Aux>(&self, verts: &[Point], aux: &[A]) -> f32 {
+        if self.surface && self.tangent_key && verts.len() <= tangent_key::SMALL_CELL {
+            return tangent_key::key2(verts, |i| {
+                (aux[i].weight(&verts[i], self.weights), aux[i].normal())
+            });
+        }
         let rep = self.representative(verts, aux);
         let (err2, surface2) = if verts.len() > PARALLEL_CELL {
             blocks::map(verts.len(), |r| {
@@ -652,6 +662,7 @@ impl<'a> Adaptive<'a> {
             keep_cells: self.keep_cells,
             cancel: self.cancel,
             surface: normals.is_some(),
+            tangent_key: self.tangent_key,
         };
         let this = &keyed;
         // The leaves live in an arena (`live`, a split cell hands its slot to its left child;

@@ -82,6 +82,7 @@ mod quadric;
 mod representative;
 mod split_queue;
 mod surface_bound;
+mod tangent_key;
 pub mod triangulate;
 pub mod weights;
 
