@@ -10,6 +10,10 @@
 //! cell, the sagitta on a curved one, the gap across a crease, half the thickness of two
 //! sheets. Border vertices count with their whole displacement ([`vertex_normals`]).
 //!
+//! With the quadric representative, cells of up to `tangent_key::SMALL_CELL` points are keyed
+//! from their tangent planes' quadric point instead of the barycentre (`tangent_key.rs`: the
+//! barycentre overrates every cell across a crease, where the quadric point sits on it).
+//!
 //! Used by the complexity goal only (the quality goal's guarantee is on the displacement and
 //! keeps it): the normals of [`vertex_normals`] travel with the vertices through the split
 //! (packed in four bytes, [`PackedNormal`]), and the pass of `Adaptive::finish_eval` that
