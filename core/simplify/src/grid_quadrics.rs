@@ -18,11 +18,10 @@
 //! when they fit in the share `representative.rs`'s chunks keep to ([`most_clusters`]); larger
 //! partitions (targets above a sixth of the vertices) take the chunked passes.
 
-use crate::area_vector;
 use crate::blocks;
 use crate::elimination::{Fate, Fates};
 use crate::quadric::Quadric;
-use crate::representative::GRID_SHARE;
+use crate::representative::{self, GRID_SHARE};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -230,7 +229,7 @@ fn block_pass(
             *slot = Fate::Collapsed;
             c[2] += 1;
         }
-        if let Some(fq) = triangle_quadric(positions, *t) {
+        if let Some(fq) = representative::triangle_quadric(t.map(|i| positions[i as usize])) {
             sink.add(v[0], &fq);
             if v[1] != v[0] {
                 sink.add(v[1], &fq);
@@ -242,19 +241,4 @@ fn block_pass(
     }
     c[1] = 3 * c[0];
     (c, out)
-}
-
-/// The area-weighted plane quadric of triangle `t`, `None` at zero area: the formula of
-/// `representative.rs`'s face quadric (area vector `N`, `(N·x − N·p)² · ½ / |N|`), so the
-/// grid's quadrics are the same bits as the chunked passes'.
-#[inline(always)]
-fn triangle_quadric(positions: &[[f32; 3]], t: [u32; 3]) -> Option<Quadric> {
-    let [a, b, c] = t.map(|i| area_vector::f64_point(positions[i as usize]));
-    let n = area_vector::triangle(a, b, c);
-    let len2 = n.length_squared();
-    if len2 == 0.0 {
-        return None;
-    }
-    let d = -n.dot(a);
-    Some(Quadric::plane(n.to_array(), d, 0.5 / len2.sqrt()))
 }
