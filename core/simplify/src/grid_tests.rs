@@ -8,7 +8,7 @@ use std::collections::{HashMap, HashSet};
 use tessd_mesh::Mesh;
 
 /// A closed, bumpy torus of `nu × nv` quads split into triangles, vertices in row order.
-fn torus(nu: u32, nv: u32) -> Mesh {
+pub(crate) fn torus(nu: u32, nv: u32) -> Mesh {
     let mut m = Mesh::default();
     let tau = std::f64::consts::TAU;
     for i in 0..nu {
