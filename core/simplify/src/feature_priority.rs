@@ -448,160 +448,39 @@ mod tests {
         }
     }
 
-    /// The normals pass before its face spans (dd33ec6): every core walks every face.
-    fn normals_walking_every_face(mesh: &Mesh, weights: &[f32]) -> Vec<PackedNormal> {
-        let n = mesh.vertex_count();
-        let parts = rayon::current_num_threads().clamp(1, n / 4096 + 1);
-        let chunk = n.div_ceil(parts).max(1);
-        let mut out = vec![PackedNormal::NONE; n];
-        out.par_chunks_mut(chunk)
-            .enumerate()
-            .for_each(|(i, out)| old_normals_of_range(mesh, weights, i * chunk, out));
-        out
-    }
-
-    fn old_normals_of_range(mesh: &Mesh, weights: &[f32], lo: usize, out: &mut [PackedNormal]) {
-        let len = out.len();
-        let all = lo == 0 && len == mesh.vertex_count();
-        // Area vectors, then the opposite edges' vectors, of the range's vertices.
-        let mut acc = vec![[[0f32; 3]; 2]; len];
-        let mine = |v: u32| (v as usize).wrapping_sub(lo);
-        for face in mesh.faces() {
-            if !all && !face.iter().any(|&v| mine(v) < len) {
-                continue;
-            }
-            let m = face.len();
-            let p = |i: usize| mesh.positions[face[i % m] as usize];
-            // Newell's area vector (twice the area), exact for triangles.
-            let mut a = [0f32; 3];
-            for i in 0..m {
-                let (u, v) = (p(i), p(i + 1));
-                a[0] += (u[1] - v[1]) * (u[2] + v[2]);
-                a[1] += (u[2] - v[2]) * (u[0] + v[0]);
-                a[2] += (u[0] - v[0]) * (u[1] + v[1]);
-            }
-            for (i, &v) in face.iter().enumerate() {
-                let Some(s) = acc.get_mut(mine(v)) else {
-                    continue;
-                };
-                let (prev, next) = (p(i + m - 1), p(i + 1));
-                (0..3).for_each(|k| s[0][k] += a[k]);
-                (0..3).for_each(|k| s[1][k] += next[k] - prev[k]);
-            }
-        }
-        for ((n, [s, e]), &w) in out.iter_mut().zip(&acc).zip(&weights[lo..lo + len]) {
-            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
-            // The opposite edges of a closed fan cancel up to rounding: a few ulps of the
-            // longest edge; a border's chord is at least an edge long.
-            let border = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() > 1e-3 * w;
-            *n = if len > 0.0 && len.is_finite() && !border {
-                PackedNormal::pack([s[0] / len, s[1] / len, s[2] / len])
-            } else {
-                PackedNormal::NONE
-            };
-        }
-    }
-
     /// `cargo test --release -p tessd-simplify --lib normals_time -- --ignored --nocapture`:
-    /// the pass before and after its face spans on a 4 M-triangle grid (2 M vertices) at 1
-    /// and 2 threads, interleaved, medians of 7.
+    /// the pass on a 4 M-triangle grid (2 M vertices) at 1 and 2 threads, and its face spans
+    /// alone, medians of 7 (the pass before the spans, which every core walked whole, is
+    /// dd33ec6's, timed beside this one in 006afdc4's message).
     #[test]
     #[ignore]
     fn normals_time() {
         let m = bumpy_grid(1415, false);
         let w = crate::weights::vertex_weights(&m, crate::options::Weighting::LongestEdge);
         let serial = serial_normals(&m, &w);
+        let median_ms = |f: &dyn Fn()| {
+            let mut t: Vec<f64> = (0..7)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    f();
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .collect();
+            t.sort_by(f64::total_cmp);
+            t[3]
+        };
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            let (mut before, mut after) = (Vec::new(), Vec::new());
-            for round in 0..7 {
-                for old in [round % 2 == 0, round % 2 == 1] {
-                    let t = std::time::Instant::now();
-                    let n = if old {
-                        pool.install(|| normals_walking_every_face(&m, &w))
-                    } else {
-                        pool.install(|| vertex_normals(&m, &w))
-                    };
-                    let ms = t.elapsed().as_secs_f64() * 1e3;
-                    if old {
-                        before.push(ms)
-                    } else {
-                        after.push(ms)
-                    }
-                    assert!(n == serial);
-                }
-            }
-            before.sort_by(f64::total_cmp);
-            after.sort_by(f64::total_cmp);
-            println!(
-                "{threads} threads, {} faces: before {:.1} ms, after {:.1} ms (medians of 7)",
-                m.face_count(),
-                before[3],
-                after[3]
-            );
+            let ms = median_ms(&|| assert!(pool.install(|| vertex_normals(&m, &w)) == serial));
+            println!("{threads} threads, {} faces: {ms:.1} ms", m.face_count());
         }
-        // Each core's share of the 2-thread pass, timed alone on this thread (what a shared
-        // machine's clock cannot show in the parallel run): its spans and range, then its walk.
-        let half = m.vertex_count().div_ceil(2 * VERTEX_RANGE) * VERTEX_RANGE;
-        let (mut before, mut after) = (vec![Vec::new(); 2], vec![Vec::new(); 2]);
-        for round in 0..7 {
-            for part in 0..2 {
-                let lo = part * half;
-                let hi = (lo + half).min(m.vertex_count());
-                for old in [round % 2 == 0, round % 2 == 1] {
-                    let mut out = vec![PackedNormal::NONE; hi - lo];
-                    let t = std::time::Instant::now();
-                    if old {
-                        old_normals_of_range(&m, &w, lo, &mut out);
-                    } else {
-                        // All the spans (a core computes half of them), then this half's
-                        // ranges one after another.
-                        let spans = face_spans(&m);
-                        let faces = m.face_count();
-                        for (i, out) in out.chunks_mut(VERTEX_RANGE).enumerate() {
-                            let lo = lo + i * VERTEX_RANGE;
-                            let hi = lo + out.len();
-                            let blocks = spans
-                                .iter()
-                                .enumerate()
-                                .filter(|&(_, &(a, b))| (a as usize) < hi && b as usize >= lo)
-                                .map(|(b, _)| b * SPAN_FACES..((b + 1) * SPAN_FACES).min(faces));
-                            normals_of_range(&m, &w, lo, out, blocks);
-                        }
-                    }
-                    let ms = t.elapsed().as_secs_f64() * 1e3;
-                    if old {
-                        before[part].push(ms)
-                    } else {
-                        after[part].push(ms)
-                    }
-                    assert!(out == serial[lo..hi]);
-                }
-            }
-        }
-        for part in 0..2 {
-            before[part].sort_by(f64::total_cmp);
-            after[part].sort_by(f64::total_cmp);
-        }
-        let spans_ms = {
-            let mut t = (0..7)
-                .map(|_| {
-                    let t = std::time::Instant::now();
-                    std::hint::black_box(face_spans(&m));
-                    t.elapsed().as_secs_f64() * 1e3
-                })
-                .collect::<Vec<_>>();
-            t.sort_by(f64::total_cmp);
-            t[3]
-        };
-        println!(
-            "one core's half of 2 threads: before {:.1} / {:.1} ms, after {:.1} / {:.1} ms \
-             (spans of all faces on one core {spans_ms:.1} ms, half of it per core)",
-            before[0][3], before[1][3], after[0][3], after[1][3]
-        );
+        let spans = median_ms(&|| {
+            std::hint::black_box(face_spans(&m));
+        });
+        println!("face spans alone: {spans:.1} ms");
     }
 
     #[test]
