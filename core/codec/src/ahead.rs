@@ -20,9 +20,10 @@
 //! against `c`'s split plane, gives the predicted half and a margin), and whether `u` holds more
 //! than one level-`k` cell (then both halves are likely non-empty).
 
+use crate::coding::{Coding, margin_context};
 use crate::complex::{Complex, POINT, Vertex};
 use crate::error::CodecError;
-use crate::kd_coder::{Coding, half, kd_key, margin_context};
+use crate::kd_cell::{half, kd_key};
 use crate::symbols::{Family, context};
 
 /// The kd-cells of one level: corners in kd order, their kd keys, prefix sums of their doubled

@@ -15,7 +15,8 @@ use crate::complex::{Complex, POINT, Simplex, Vertex};
 use crate::entropy::{Counts, Models, SymbolReader};
 use crate::error::CodecError;
 use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
-use crate::kd_coder::{self, Limits, Span, kd_key};
+use crate::kd_cell::kd_key;
+use crate::kd_coder::{self, Limits, Span};
 use crate::nsp_tree::Node;
 use crate::positional_io;
 

@@ -12,15 +12,15 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use rustc_hash::{FxHashMap, FxHashSet};
 
-use crate::complex::{Complex, POINT, Simplex, Vertex};
+use crate::cell_complex::{compact, leaf_complex, union};
+use crate::complex::{Complex, POINT};
 use crate::entropy::{self, Counts};
 use crate::error::CodecError;
 use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
-use crate::kd_coder::{self, kd_key};
+use crate::kd_coder;
 use crate::nsp_tree::Params;
-use crate::partition::{self, POINT_MARK, Partition};
+use crate::partition::{self, Partition};
 use crate::quantize::Quantizer;
 use crate::source::{MeshSource, Slices};
 use crate::symbols::Symbol;
@@ -143,7 +143,7 @@ impl Coder<'_> {
             self.params.precision(node.depth)
         };
         let (mut cx, mut alive, owned) = if leaf {
-            self.leaf_complex(i)?
+            leaf_complex(self.part, &self.params, i)?
         } else {
             let parts = node
                 .children
@@ -185,120 +185,6 @@ impl Coder<'_> {
         }
         Ok(compact(&cx, &alive))
     }
-
-    /// The complex of leaf `i` from its raw index entries: one vertex per grid point, each
-    /// oriented triangle once, isolated points that no triangle of the leaf uses. Also the
-    /// points and triangles the leaf owns (its own grid points; triangles whose first vertex in
-    /// kd order is its own), the entries read and the simplices it owns.
-    #[allow(clippy::type_complexity)]
-    fn leaf_complex(
-        &self,
-        i: usize,
-    ) -> Result<(Complex, Vec<u32>, Option<(u64, u64, u64, u64)>), CodecError> {
-        let bits = self.params.bits;
-        let full = 3 * bits as usize;
-        let node = &self.part.nodes[i];
-        let entries = self.part.leaf(i)?;
-        let mut cx = Complex::default();
-        let mut ids: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-        let id = |ids: &mut FxHashMap<[u32; 3], u32>, cx: &mut Complex, q: [u32; 3]| {
-            *ids.entry(q).or_insert_with(|| {
-                cx.add_vertex(Vertex {
-                    corner: q,
-                    level: full as u8,
-                })
-            })
-        };
-        let mut simplices: FxHashSet<Simplex> = FxHashSet::default();
-        let mut points: Vec<[u32; 3]> = Vec::new();
-        let mut owned_triangles = 0;
-        let inside = |q: [u32; 3]| self.params.cell_at(node.depth, q) == node.cell;
-        for e in &entries {
-            if e[1] == POINT_MARK {
-                points.push(self.part.points.get(e[0]));
-                continue;
-            }
-            let q = e.map(|x| self.part.points.get(x));
-            let s = Simplex::triangle(
-                id(&mut ids, &mut cx, q[0]),
-                id(&mut ids, &mut cx, q[1]),
-                id(&mut ids, &mut cx, q[2]),
-            );
-            if simplices.insert(s) {
-                let first = q.iter().min_by_key(|c| kd_key(**c, full, bits)).unwrap();
-                owned_triangles += u64::from(inside(*first));
-            }
-        }
-        let mut point_simplices = 0;
-        for q in points {
-            if !ids.contains_key(&q) {
-                let v = id(&mut ids, &mut cx, q);
-                simplices.insert(Simplex::point(v));
-                point_simplices += 1;
-            }
-        }
-        let owned_points = ids.keys().filter(|&&q| inside(q)).count() as u64;
-        let mut sorted: Vec<Simplex> = simplices.into_iter().collect();
-        sorted.sort_unstable();
-        // every simplex is owned by one leaf: points by their own, triangles by their first
-        // vertex's
-        let owned_simplices = owned_triangles + point_simplices;
-        for s in sorted {
-            cx.add(s);
-        }
-        let mut alive: Vec<u32> = (0..cx.vertices.len() as u32).collect();
-        alive.sort_by_key(|&v| kd_key(cx.vertices[v as usize].corner, full, bits));
-        Ok((
-            cx,
-            alive,
-            Some((
-                owned_points,
-                owned_triangles,
-                entries.len() as u64,
-                owned_simplices,
-            )),
-        ))
-    }
-}
-
-/// Merges the children's complexes into their parent's (§5.2d): vertices with the same cell are
-/// one, duplicated simplices disappear.
-fn union(parts: Vec<(Complex, Vec<u32>)>, level: usize, bits: u32) -> (Complex, Vec<u32>) {
-    let mut cx = Complex::default();
-    let mut by_corner: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-    let mut seen: FxHashSet<Simplex> = FxHashSet::default();
-    for (part, alive) in &parts {
-        let mut map = vec![u32::MAX; part.vertices.len()];
-        for &v in alive {
-            let vx = part.vertices[v as usize];
-            map[v as usize] = *by_corner
-                .entry(vx.corner)
-                .or_insert_with(|| cx.add_vertex(vx));
-        }
-        for s in part.live_simplices() {
-            let s = s.map(|x| map[x as usize]);
-            if seen.insert(s) {
-                cx.add(s);
-            }
-        }
-    }
-    let mut alive: Vec<u32> = (0..cx.vertices.len() as u32).collect();
-    alive.sort_by_key(|&v| kd_key(cx.vertices[v as usize].corner, level, bits));
-    (cx, alive)
-}
-
-/// A fresh complex holding only the live part of `cx` (ids in `alive` order).
-fn compact(cx: &Complex, alive: &[u32]) -> (Complex, Vec<u32>) {
-    let mut out = Complex::default();
-    let mut map = vec![u32::MAX; cx.vertices.len()];
-    for &v in alive {
-        map[v as usize] = out.add_vertex(cx.vertices[v as usize]);
-    }
-    for s in cx.live_simplices() {
-        out.add(s.map(|x| map[x as usize]));
-    }
-    let alive = (0..alive.len() as u32).collect();
-    (out, alive)
 }
 
 /// Compresses a triangle mesh held in memory into `out` (a `.tsc` stream).
@@ -383,19 +269,19 @@ pub fn compress_source<W: Write + Seek>(
         let r = |e| CodecError::io("reading the temporary code file", e);
         temp.seek(SeekFrom::Start(at)).map_err(r)?;
         temp.read_exact(&mut deflated).map_err(r)?;
-        let mut raw = Vec::with_capacity(2 * count as usize);
+        let mut raw = Vec::with_capacity(4 * count as usize);
         flate2::read::DeflateDecoder::new(&deflated[..])
             .read_to_end(&mut raw)
             .map_err(r)?;
-        if raw.len() != 2 * count as usize {
+        if raw.len() != 4 * count as usize {
             return Err(CodecError::io(
                 "reading the temporary code file",
                 std::io::Error::other("a cell's symbols came back short"),
             ));
         }
         let symbols: Vec<Symbol> = raw
-            .chunks_exact(2)
-            .map(|b| Symbol(u16::from_le_bytes([b[0], b[1]])))
+            .chunks_exact(4)
+            .map(|b| Symbol(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
             .collect();
         let chunk = entropy::encode(&symbols, &models);
         out.write_all(&chunk).map_err(w)?;

@@ -11,7 +11,12 @@
 //! | nSP-tree: cells, precisions, duplication | [`nsp_tree`] | §5.1 |
 //! | out-of-core partition: RWP points, tree by passes, RWI | [`partition`] | §5.1, §5.2a |
 //! | the complex on the kd-tree's leaves | [`complex`] | §3, §5.2a |
+//! | a cell's complex: a leaf's, children's union | `cell_complex` | §5.2a, §5.2d |
+//! | kd cells: keys, halves, sides | [`kd_cell`] | §3 |
 //! | kd split / merge codes, interleaved | [`kd_coder`] | §3, §5.2b |
+//! | a split's context (neighbours' centroid) | `split_context` | §3, §5.3 |
+//! | connectivity codes of a split and their contexts | `connectivity` | §3, §5.3 |
+//! | values ↔ halves and preimage masks | `coding` | §3 |
 //! | symbols and their contexts | [`symbols`] | §5.3 |
 //! | range coding with per-level tables | [`entropy`] | §5.2c, §5.3 |
 //! | file layout, index at the end | [`format`](mod@format) | §5.1, §5.3 |
@@ -22,12 +27,16 @@
 //! | geometry ahead of connectivity (`--ahead`) | [`ahead`] | §6.4 |
 
 pub mod ahead;
+mod cell_complex;
+mod coding;
 pub mod complex;
+mod connectivity;
 pub mod decode;
 pub mod encode;
 pub mod entropy;
 pub mod error;
 pub mod format;
+pub mod kd_cell;
 pub mod kd_coder;
 pub mod nsp_tree;
 pub mod partition;
@@ -35,6 +44,7 @@ pub mod ply_out;
 mod positional_io;
 pub mod quantize;
 pub mod source;
+mod split_context;
 pub mod symbols;
 mod varint;
 pub mod view;

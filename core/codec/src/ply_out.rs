@@ -13,7 +13,7 @@ use rustc_hash::FxHashMap;
 use crate::complex::{Complex, POINT};
 use crate::decode::Tsc;
 use crate::error::CodecError;
-use crate::kd_coder::kd_key;
+use crate::kd_cell::kd_key;
 use crate::positional_io;
 
 /// What [`Tsc::write_ply`] wrote.

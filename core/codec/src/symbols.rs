@@ -106,15 +106,16 @@ pub fn family_of(ctx: usize) -> Family {
     *ALL.iter().rev().find(|f| f.first_slot() <= slot).unwrap()
 }
 
-/// A symbol as stored in the semi-coded temporary stream (§5.2c): context and value in 16 bits.
+/// A symbol as stored in the semi-coded temporary stream (§5.2c): context (28 bits) and value
+/// (4 bits) in 32 bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Symbol(pub u16);
+pub struct Symbol(pub u32);
 
 impl Symbol {
     /// Packs a value in context `ctx`.
     pub fn new(ctx: usize, value: u8) -> Self {
         debug_assert!((value as usize) < family_of(ctx).alphabet());
-        Symbol(((ctx as u16) << 4) | value as u16)
+        Symbol(((ctx as u32) << 4) | value as u32)
     }
 
     /// The symbol's context.
@@ -134,8 +135,8 @@ mod tests {
 
     #[test]
     fn contexts_are_distinct_and_fit_a_symbol() {
-        // a symbol keeps its context in 12 bits
-        const { assert!(CONTEXTS <= 1 << 12) };
+        // a symbol keeps its context in 28 bits
+        const { assert!(CONTEXTS <= 1 << 28) };
         let mut seen = std::collections::HashSet::new();
         for f in ALL {
             for sub in 0..f.subs() {
