@@ -17,7 +17,7 @@ use crate::cell_complex::{compact, leaf_complex, union};
 use crate::complex::{Complex, POINT};
 use crate::entropy::{self, Counts};
 use crate::error::CodecError;
-use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
+use crate::format::{self, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_coder;
 use crate::nsp_tree::Params;
 use crate::partition::{self, Partition};
@@ -257,10 +257,11 @@ pub fn compress_source<W: Write + Seek>(
     let tables = counts.to_bytes();
     let models = counts.models();
     let w = |e| CodecError::io("writing the compressed file", e);
-    let start = out.stream_position().map_err(w)?;
-    out.write_all(&[0u8; HEADER_LEN]).map_err(w)?;
+    // the head first, the trailer (counts and index) last: no seeking back (format.rs)
+    let head = format::head_bytes(&part.grid, &params);
+    out.write_all(&head).map_err(w)?;
     out.write_all(&tables).map_err(w)?;
-    let mut pos = (HEADER_LEN + tables.len()) as u64;
+    let mut pos = (head.len() + tables.len()) as u64;
     let mut temp = spill.reader()?;
     let mut deflated = Vec::new();
     // chunks in pre-order, each read back from the temporary file and range-coded
@@ -289,8 +290,6 @@ pub fn compress_source<W: Write + Seek>(
         node.len = chunk.len() as u64;
         pos += chunk.len() as u64;
     }
-    let index = format::index_to_bytes(&nodes);
-    out.write_all(&index).map_err(w)?;
     let header = Header {
         grid: part.grid,
         params,
@@ -299,13 +298,13 @@ pub fn compress_source<W: Write + Seek>(
         input_triangles: part.input_triangles,
         vertices: gathered.points,
         triangles: gathered.triangles,
-        tables: (HEADER_LEN as u64, tables.len() as u64),
-        index: (pos, index.len() as u64),
+        head_len: head.len() as u64,
+        tables: (head.len() as u64, tables.len() as u64),
+        index: (pos, 0),
     };
-    let end = pos + index.len() as u64;
-    out.seek(SeekFrom::Start(start)).map_err(w)?;
-    out.write_all(&header.to_bytes()).map_err(w)?;
-    out.seek(SeekFrom::Start(start + end)).map_err(w)?;
+    let trailer = header.trailer_bytes(&nodes);
+    out.write_all(&trailer).map_err(w)?;
+    let end = pos + trailer.len() as u64;
     let t3 = Instant::now();
     progress(1.0);
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;

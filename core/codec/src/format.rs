@@ -1,16 +1,23 @@
-//! The `.tsc` file layout (paper 003 §5.1 "Ecriture de l'en-tête", §5.3 "Ecriture finale"):
+//! The `.tsc` file layout, version 2 (paper 003 §5.1 "Ecriture de l'en-tête", §5.3 "Ecriture
+//! finale"):
 //!
 //! ```text
-//! header (fixed 128 bytes)  magic, version, grid (origin, step, p), n, p_r, m (geometry ahead), N_min, counts,
-//!                           offsets of the tables and of the index
-//! probability tables        one per (family, kd level) context, as counts
-//! code chunks               one range-coded chunk per nSP-cell
-//! index                     the nSP-tree in pre-order: child mask, chunk offset and length,
-//!                           the cell's final size (a decoder's bound)
+//! head      written first, known before any code: magic, version (u16 at bytes 4..6), the packed
+//!           parameters (p, n, p_r, m), the grid (origin, step: each an f32 where that is exact,
+//!           else an f64), N_min as a varint                              31 bytes on the bunny
+//! tables    probability tables, as counts (while the coder has them)
+//! chunks    one range-coded chunk per nSP-cell
+//! trailer   written last: flags, the counts, the tables' length, then the nSP-tree in
+//!           pre-order: child mask, chunk offset (its distance from where the previous chunk
+//!           ended: 0 when the chunks follow each other) and length, the cell's final size
+//!           (a decoder's bound), all varints
+//! tail      the trailer's length, u32 LE
 //! ```
 //!
-//! The index sits at the end, as in the paper, so the encoder can write every chunk before it
-//! knows the tree's final layout, and a reader can reach any cell's chunk directly.
+//! The index sits at the end, as in the paper, so the encoder writes every chunk before it knows
+//! the tree's final layout, never seeks back, and a reader still reaches any cell's chunk directly.
+//! Version 1 had a fixed 128-byte header with u64 counts and offsets and an index with u64 child
+//! masks and absolute offsets (issue 34 item 6: 128 + 726 bytes on the bunny).
 
 use crate::error::CodecError;
 use crate::nsp_tree::{Node, Params};
@@ -20,16 +27,19 @@ use crate::varint;
 /// First bytes of every `.tsc` file.
 pub const MAGIC: [u8; 4] = *b"TSC\x1a";
 /// Format version this crate writes and reads.
-pub const VERSION: u16 = 1;
-/// Size of the fixed header.
-pub const HEADER_LEN: usize = 128;
+pub const VERSION: u16 = 2;
+/// The longest head: magic, version, packed parameters, grid mask, four f64s and a 10-byte
+/// varint.
+pub const MAX_HEAD_LEN: usize = 9 + 32 + 10;
+/// Bytes of the tail (the trailer's length).
+pub const TAIL_LEN: usize = 4;
 
 /// The header's flag: the fully coarsened root holds a triangle.
 pub const ROOT_TRIANGLE: u16 = 1;
 /// The header's flag: the fully coarsened root holds an isolated point.
 pub const ROOT_POINT: u16 = 2;
 
-/// Everything the decoder needs before the first code (§5.1).
+/// Everything the decoder needs before the first code (§5.1), from the head and the trailer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Header {
     /// The quantisation grid.
@@ -46,182 +56,276 @@ pub struct Header {
     pub vertices: u64,
     /// Distinct oriented triangles after quantisation.
     pub triangles: u64,
+    /// Length of the head ([`head_bytes`]): where the tables start.
+    pub head_len: u64,
     /// Offset and length of the probability tables.
     pub tables: (u64, u64),
-    /// Offset and length of the index.
+    /// Offset and length of the trailer, tail included (the index is its end).
     pub index: (u64, u64),
 }
 
-impl Header {
-    /// The fixed-size encoding.
-    pub fn to_bytes(&self) -> [u8; HEADER_LEN] {
-        let mut b = Vec::with_capacity(HEADER_LEN);
-        b.extend_from_slice(&MAGIC);
-        b.extend_from_slice(&VERSION.to_le_bytes());
-        b.extend_from_slice(&self.flags.to_le_bytes());
-        for o in self.grid.origin {
-            b.extend_from_slice(&o.to_le_bytes());
+/// Packs `p - 1` (5 bits), `p_r` (5), `n == 4` (1) and `m` (3) into the head's u16.
+fn pack(params: &Params) -> u16 {
+    (params.bits.saturating_sub(1) & 31) as u16
+        | ((params.root_bits & 31) as u16) << 5
+        | ((params.cell_split == 4) as u16) << 10
+        | ((params.ahead & 7) as u16) << 11
+}
+
+/// The head, written before the first chunk: everything here is known once the grid is.
+pub fn head_bytes(grid: &Quantizer, params: &Params) -> Vec<u8> {
+    let mut b = Vec::with_capacity(MAX_HEAD_LEN);
+    b.extend_from_slice(&MAGIC);
+    b.extend_from_slice(&VERSION.to_le_bytes());
+    b.extend_from_slice(&pack(params).to_le_bytes());
+    let values = [grid.origin[0], grid.origin[1], grid.origin[2], grid.step];
+    // an f32 only where it gives back the same f64: the grid stays exact (lossless at p bits)
+    let narrow = |x: f64| (x as f32) as f64 == x;
+    let mask = (0..4).fold(0u8, |m, i| m | (narrow(values[i]) as u8) << i);
+    b.push(mask);
+    for (i, x) in values.into_iter().enumerate() {
+        if mask & (1 << i) != 0 {
+            b.extend_from_slice(&(x as f32).to_le_bytes());
+        } else {
+            b.extend_from_slice(&x.to_le_bytes());
         }
-        b.extend_from_slice(&self.grid.step.to_le_bytes());
-        b.extend_from_slice(&[
-            self.params.bits as u8,
-            self.params.cell_split as u8,
-            self.params.root_bits as u8,
-            self.params.ahead as u8,
-        ]);
-        b.extend_from_slice(&(self.params.min_cell.min(u32::MAX as u64) as u32).to_le_bytes());
+    }
+    varint::put(&mut b, params.min_cell);
+    b
+}
+
+/// Reads the head: the grid, the parameters and the head's length. The version is checked
+/// before anything else, so that an old or truncated file still names its version.
+fn read_head(b: &[u8]) -> Result<(Quantizer, Params, u64), CodecError> {
+    let m = b.len().min(4);
+    if b[..m] != MAGIC[..m] {
+        return Err(CodecError::corrupt(0, "not a .tsc file (bad magic)"));
+    }
+    if b.len() < 6 {
+        return Err(CodecError::corrupt(
+            b.len() as u64,
+            format!(
+                "the file is {} bytes, shorter than magic and version",
+                b.len()
+            ),
+        ));
+    }
+    let version = u16::from_le_bytes([b[4], b[5]]);
+    if version != VERSION {
+        let who = if version < VERSION {
+            "an older tessd"
+        } else {
+            "a newer tessd"
+        };
+        return Err(CodecError::corrupt(
+            4,
+            format!(
+                "written by format version {version} ({who}); this reader reads version \
+                 {VERSION}: compress the mesh again"
+            ),
+        ));
+    }
+    let short = |at: usize| {
+        CodecError::corrupt(
+            b.len() as u64,
+            format!(
+                "the file is {} bytes, shorter than its head ({at} bytes or more)",
+                b.len()
+            ),
+        )
+    };
+    if b.len() < 9 {
+        return Err(short(9));
+    }
+    let packed = u16::from_le_bytes([b[6], b[7]]);
+    let mask = b[8];
+    if packed >> 14 != 0 || mask >> 4 != 0 {
+        return Err(CodecError::corrupt(
+            6,
+            "unknown bits in the packed parameters",
+        ));
+    }
+    let mut at = 9usize;
+    let mut values = [0f64; 4];
+    for (i, x) in values.iter_mut().enumerate() {
+        let w = if mask & (1 << i) != 0 { 4 } else { 8 };
+        let Some(v) = b.get(at..at + w) else {
+            return Err(short(at + w));
+        };
+        *x = if w == 4 {
+            f32::from_le_bytes(v.try_into().unwrap()) as f64
+        } else {
+            f64::from_le_bytes(v.try_into().unwrap())
+        };
+        at += w;
+    }
+    let (origin, step) = ([values[0], values[1], values[2]], values[3]);
+    if origin.iter().any(|x| !x.is_finite()) || !(step.is_finite() && step > 0.0) {
+        return Err(CodecError::corrupt(
+            9,
+            "the grid's origin or step is not a finite positive number",
+        ));
+    }
+    let min_cell = varint::get(b, &mut at, 0)?;
+    let params = Params {
+        bits: (packed & 31) as u32 + 1,
+        root_bits: (packed >> 5 & 31) as u32,
+        cell_split: if packed >> 10 & 1 != 0 { 4 } else { 2 },
+        ahead: (packed >> 11 & 7) as u32,
+        min_cell,
+    };
+    params
+        .validate()
+        .map_err(|e| CodecError::corrupt(6, e.to_string()))?;
+    let grid = Quantizer {
+        origin,
+        step,
+        bits: params.bits,
+    };
+    Ok((grid, params, at as u64))
+}
+
+impl Header {
+    /// The trailer and the tail, written after the last chunk: the flags and counts known only
+    /// once every cell is coded, then the index of `nodes` (pre-order). `self.tables` must be
+    /// set; `self.index` is not read.
+    pub fn trailer_bytes(&self, nodes: &[Node]) -> Vec<u8> {
+        let mut out = Vec::new();
         for v in [
+            self.flags as u64,
             self.input_vertices,
             self.input_triangles,
             self.vertices,
             self.triangles,
-            self.tables.0,
             self.tables.1,
-            self.index.0,
-            self.index.1,
         ] {
-            b.extend_from_slice(&v.to_le_bytes());
+            varint::put(&mut out, v);
         }
-        b.resize(HEADER_LEN, 0);
-        b.try_into().unwrap()
-    }
-
-    /// Reads and checks a header; `file_len` bounds the offsets it may hold.
-    pub fn from_bytes(b: &[u8], file_len: u64) -> Result<Self, CodecError> {
-        if b.len() < HEADER_LEN {
-            return Err(CodecError::corrupt(
-                b.len() as u64,
-                format!(
-                    "the file is {} bytes, shorter than the {HEADER_LEN}-byte header",
-                    b.len()
-                ),
-            ));
-        }
-        if b[0..4] != MAGIC {
-            return Err(CodecError::corrupt(0, "not a .tsc file (bad magic)"));
-        }
-        let u16_at = |o: usize| u16::from_le_bytes([b[o], b[o + 1]]);
-        let f64_at = |o: usize| f64::from_le_bytes(b[o..o + 8].try_into().unwrap());
-        let u64_at = |o: usize| u64::from_le_bytes(b[o..o + 8].try_into().unwrap());
-        let version = u16_at(4);
-        if version != VERSION {
-            return Err(CodecError::corrupt(
-                4,
-                format!("format version {version}, this reader knows {VERSION}"),
-            ));
-        }
-        let flags = u16_at(6);
-        let origin = [f64_at(8), f64_at(16), f64_at(24)];
-        let step = f64_at(32);
-        if origin.iter().any(|x| !x.is_finite()) || !(step.is_finite() && step > 0.0) {
-            return Err(CodecError::corrupt(
-                8,
-                "the grid's origin or step is not a finite positive number",
-            ));
-        }
-        let params = Params {
-            bits: b[40] as u32,
-            cell_split: b[41] as u32,
-            root_bits: b[42] as u32,
-            ahead: b[43] as u32,
-            min_cell: u32::from_le_bytes(b[44..48].try_into().unwrap()) as u64,
-        };
-        params
-            .validate()
-            .map_err(|e| CodecError::corrupt(40, e.to_string()))?;
-        let v = |i: usize| u64_at(48 + 8 * i);
-        let header = Header {
-            grid: Quantizer {
-                origin,
-                step,
-                bits: params.bits,
-            },
-            params,
-            flags,
-            input_vertices: v(0),
-            input_triangles: v(1),
-            vertices: v(2),
-            triangles: v(3),
-            tables: (v(4), v(5)),
-            index: (v(6), v(7)),
-        };
-        for (name, (o, l), at) in [
-            ("tables", header.tables, 80u64),
-            ("index", header.index, 96),
-        ] {
-            if o.checked_add(l).is_none_or(|end| end > file_len) || o < HEADER_LEN as u64 {
-                return Err(CodecError::corrupt(
-                    at,
-                    format!("the {name} ({l} bytes at {o}) lie outside the {file_len}-byte file"),
-                ));
+        varint::put(&mut out, nodes.len() as u64);
+        let mut expected = self.tables.0 + self.tables.1;
+        for n in nodes {
+            // zigzag: a chunk may sit before the previous one's end in another writer's order
+            let gap = n.offset.wrapping_sub(expected) as i64;
+            let zigzag = ((gap << 1) ^ (gap >> 63)) as u64;
+            for x in [n.child_mask, zigzag, n.len, n.end_vertices, n.end_simplices] {
+                varint::put(&mut out, x);
             }
+            expected = n.offset + n.len;
         }
-        Ok(header)
+        let len = u32::try_from(out.len()).expect("an index under 4 GiB");
+        out.extend_from_slice(&len.to_le_bytes());
+        out
     }
 }
 
-/// The index: every node in pre-order.
-pub fn index_to_bytes(nodes: &[Node]) -> Vec<u8> {
-    let mut out = Vec::new();
-    varint::put(&mut out, nodes.len() as u64);
-    for n in nodes {
-        out.extend_from_slice(&n.child_mask.to_le_bytes());
-        for x in [n.offset, n.len, n.end_vertices, n.end_simplices] {
-            varint::put(&mut out, x);
-        }
+/// Reads and checks a file's head, trailer and index; `read(offset, len)` returns that many
+/// bytes of the `file_len`-byte file.
+pub fn read<B: AsRef<[u8]>>(
+    file_len: u64,
+    mut read: impl FnMut(u64, u64) -> Result<B, CodecError>,
+) -> Result<(Header, Vec<Node>), CodecError> {
+    let head = read(0, file_len.min(MAX_HEAD_LEN as u64))?;
+    let (grid, params, head_len) = read_head(head.as_ref())?;
+    if file_len < head_len + TAIL_LEN as u64 {
+        return Err(CodecError::corrupt(
+            file_len,
+            format!("the file is {file_len} bytes, too short for its head and tail"),
+        ));
     }
-    out
+    let tail_at = file_len - TAIL_LEN as u64;
+    let tail = read(tail_at, TAIL_LEN as u64)?;
+    let trailer_len = u32::from_le_bytes(tail.as_ref().try_into().unwrap()) as u64;
+    if trailer_len > tail_at - head_len {
+        return Err(CodecError::corrupt(
+            tail_at,
+            format!("a trailer of {trailer_len} bytes in a {file_len}-byte file"),
+        ));
+    }
+    let base = tail_at - trailer_len;
+    let trailer = read(base, trailer_len)?;
+    let b = trailer.as_ref();
+    let mut at = 0usize;
+    let mut f = [0u64; 6];
+    for x in &mut f {
+        *x = varint::get(b, &mut at, base)?;
+    }
+    if f[0] > (ROOT_TRIANGLE | ROOT_POINT) as u64 {
+        return Err(CodecError::corrupt(base, format!("unknown flags {}", f[0])));
+    }
+    if f[5] > base - head_len {
+        return Err(CodecError::corrupt(
+            base,
+            format!("{} bytes of tables in a {file_len}-byte file", f[5]),
+        ));
+    }
+    let header = Header {
+        grid,
+        params,
+        flags: f[0] as u16,
+        input_vertices: f[1],
+        input_triangles: f[2],
+        vertices: f[3],
+        triangles: f[4],
+        head_len,
+        tables: (head_len, f[5]),
+        index: (base, trailer_len + TAIL_LEN as u64),
+    };
+    let nodes = index_from_bytes(b, &mut at, base, &params, (head_len + f[5], base))?;
+    if at != b.len() {
+        return Err(CodecError::corrupt(
+            base + at as u64,
+            format!("{} bytes after the index", b.len() - at),
+        ));
+    }
+    Ok((header, nodes))
 }
 
-/// Reads the index at file offset `base`, checking every chunk lies within `chunks` (the byte
-/// range between the tables and the index) and the tree's shape.
-pub fn index_from_bytes(
+/// Reads the index at `b[*at..]` (file offset `base`), checking every chunk lies within
+/// `chunks` (the byte range between the tables and the trailer) and the tree's shape.
+fn index_from_bytes(
     b: &[u8],
+    at: &mut usize,
     base: u64,
     params: &Params,
     chunks: (u64, u64),
 ) -> Result<Vec<Node>, CodecError> {
-    let mut at = 0usize;
-    let count = varint::get(b, &mut at, base)?;
-    if count > (b.len() as u64) / 12 + 1 {
+    let count = varint::get(b, at, base)?;
+    // an entry takes five bytes or more
+    if count > (b.len() as u64) / 5 + 1 {
         return Err(CodecError::corrupt(
             base,
             format!("an index of {count} cells in {} bytes", b.len()),
         ));
     }
     let mut nodes: Vec<Node> = Vec::with_capacity(count as usize);
+    let mut expected = chunks.0;
     for i in 0..count {
-        let here = base + at as u64;
-        let Some(mask) = b.get(at..at + 8) else {
-            return Err(CodecError::corrupt(
-                here,
-                format!("truncated index entry of cell {i}"),
-            ));
-        };
-        let child_mask = u64::from_le_bytes(mask.try_into().unwrap());
-        at += 8;
-        let mut f = [0u64; 4];
+        let here = base + *at as u64;
+        let mut f = [0u64; 5];
         for x in &mut f {
-            *x = varint::get(b, &mut at, base)?;
+            *x = varint::get(b, at, base)?;
         }
-        if f[0] < chunks.0 || f[0].checked_add(f[1]).is_none_or(|e| e > chunks.1) {
+        let gap = ((f[1] >> 1) as i64) ^ -((f[1] & 1) as i64);
+        let offset = expected.wrapping_add(gap as u64);
+        if offset < chunks.0 || offset.checked_add(f[2]).is_none_or(|e| e > chunks.1) {
             return Err(CodecError::corrupt(
                 here,
                 format!(
                     "cell {i}'s code chunk ({} bytes at {}) lies outside the chunk area",
-                    f[1], f[0]
+                    f[2], offset as i64
                 ),
             ));
         }
+        expected = offset + f[2];
         nodes.push(Node {
             depth: 0,
             cell: [0; 3],
-            child_mask,
+            child_mask: f[0],
             children: Vec::new(),
-            offset: f[0],
-            len: f[1],
-            end_vertices: f[2],
-            end_simplices: f[3],
+            offset,
+            len: f[2],
+            end_vertices: f[3],
+            end_simplices: f[4],
         });
     }
     // rebuild the tree from the pre-order list and the masks
