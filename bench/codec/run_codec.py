@@ -5,7 +5,7 @@ kd-tree coder in an nSP-tree, paper 003) vs Draco (levels 10 and 7) and meshopti
 
     run_codec.py run [--data DIR] [--meshes NAME,...] [--bits 12,16] [--work DIR]
                      [--jsonl bench/results/codec_raw.jsonl] [--out bench/results]
-                     [--tessd-args "--cell-split 4 --min-cell 8000 --root-bits 7"]
+                     [--tessd-args "--cell-split 4 --min-cell 50000 --root-bits 7"]
                      [--rd-mesh stanford_bunny] [--rd-bits 12] [--budget 1.0] [--peers-only]
     run_codec.py rd --tsc FILE.tsc --mesh ORIGINAL [--bits P] [--min-bits 4]
                     [--draco-bits 4-16] [--csv OUT.csv] [--png OUT.png] [--jsonl ...]
@@ -66,7 +66,7 @@ import numpy as np  # noqa: E402
 import peers  # noqa: E402
 from report_common import machine  # noqa: E402
 
-DEFAULT_TESSD_ARGS = "--cell-split 4 --min-cell 8000 --root-bits 7"
+DEFAULT_TESSD_ARGS = "--cell-split 4 --min-cell 50000 --root-bits 7"
 MESH_EXT = (".obj", ".ply", ".off", ".stl")
 NOT_BUILT = "tessd binary not built yet"
 

@@ -1,9 +1,9 @@
 //! Building the nSP-tree out of core (paper 003 §5.1): the points are read once for the cubic
 //! box and once to quantise them (held at 6 bytes a point up to 16 bits, the RWP of the paper);
 //! the tree grows one level per pass over the triangles, a cell being split when at least
-//! `N_min` top simplices belong to it; then every top simplex is written to the region of each
-//! leaf it belongs to in a raw index file (the paper's RWI), so that a leaf is later read back
-//! with one sequential read.
+//! `N_min` top simplices belong to it and its children would not be tiny (`worth_splitting`);
+//! then every top simplex is written to the region of each leaf it belongs to in a raw index
+//! file (the paper's RWI), so that a leaf is later read back with one sequential read.
 //!
 //! Only the points, the tree and one small write buffer per leaf are in memory: the triangles
 //! stay on disk, in the input file and the RWI.
@@ -232,6 +232,20 @@ pub fn build(
         }
         let mut children: Vec<(u64, u64)> = child_counts.into_iter().collect();
         children.sort_unstable();
+        let parent_of = |c: u64| {
+            let cell = [
+                (c & 0x1f_ffff) as u32,
+                ((c >> 21) & 0x1f_ffff) as u32,
+                (c >> 42) as u32,
+            ];
+            parents[&code(cell.map(|x| x / params.cell_split))]
+        };
+        // the split is made only when its children are not tiny (see `worth_splitting`)
+        let mut made: FxHashMap<usize, (u64, u64)> = FxHashMap::default();
+        for &(c, cnt) in &children {
+            let e = made.entry(parent_of(c)).or_insert((0, 0));
+            *e = (e.0 + cnt, e.1 + 1);
+        }
         let mut next = Vec::new();
         for (c, cnt) in children {
             let cell = [
@@ -239,7 +253,11 @@ pub fn build(
                 ((c >> 21) & 0x1f_ffff) as u32,
                 (c >> 42) as u32,
             ];
-            let parent = parents[&code(cell.map(|x| x / params.cell_split))];
+            let parent = parent_of(c);
+            let (sum, nonempty) = made[&parent];
+            if !worth_splitting(&params, sum, nonempty) {
+                continue;
+            }
             let id = arena.nodes.len();
             arena.nodes.push(Node {
                 depth: depth + 1,
@@ -388,6 +406,23 @@ pub fn build(
         referenced,
     })
 }
+
+/// Whether a cell whose split would make `nonempty` children holding `sum` simplices in all
+/// (border simplices counted in each child they touch) is split: only when those children hold
+/// on average at least `N_min / CHILD_SHARE` simplices. A split into tiny cells costs bits (every
+/// border vertex is refined again in each child holding one of its simplices: 2.3 b/v on the
+/// bunny at `N_min` = 8 000) and buys little memory; a cell holding `N_min` or more whose children
+/// would be tiny stays a leaf, so a leaf holds fewer than `n³ · N_min / CHILD_SHARE` simplices
+/// (the out-of-core bound) unless it is at full precision.
+pub fn worth_splitting(params: &Params, sum: u64, nonempty: u64) -> bool {
+    sum >= nonempty * (params.min_cell / CHILD_SHARE).max(1)
+}
+
+/// `N_min` over the fewest simplices a split's children must hold on average. Measured at 12
+/// bits with `N_min` = 50 000 (issue 34 item 2): the bunny 43 cells -> 1 (the bare `N_min` rule
+/// splits its 70 564-simplex root into 42 children of 1 700 on average), the 1.1 M-triangle torus
+/// 318 -> 33 cells, 12.81 -> 12.09 b/v; 4 gives the same trees on the shared meshes.
+pub const CHILD_SHARE: u64 = 8;
 
 /// Position of `node` among its parent's children.
 fn position(params: &Params, node: &Node) -> usize {

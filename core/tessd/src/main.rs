@@ -203,8 +203,9 @@ enum Command {
         /// nSP-tree subdivisions per axis (2 or 4).
         #[arg(long, default_value_t = 4)]
         cell_split: u32,
-        /// Fewest triangles an nSP-cell must hold to be subdivided.
-        #[arg(long, default_value_t = 8000)]
+        /// Fewest triangles an nSP-cell must hold to be subdivided; its children must also hold
+        /// an eighth of it on average (tiny cells cost bits at their borders).
+        #[arg(long, default_value_t = tessd_codec::Params::default().min_cell)]
         min_cell: u64,
         /// Precision in bits the root cell reaches before it is subdivided.
         #[arg(long, default_value_t = 7)]

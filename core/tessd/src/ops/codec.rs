@@ -50,7 +50,8 @@ fn u32_param(request: &Request, key: &str, default: u32) -> Result<u32, OpError>
 
 /// `codec.compress`: params `input` (a mesh file, or `positions` / `face_indices` arrays),
 /// `output` (the `.tsc` file, written atomically), `bits` (12), `cell_split` (4), `min_cell`
-/// (8000), `root_bits` (7), `ahead` (0: bits of geometry ahead of the connectivity, §6.4).
+/// (50 000, and a split's children must hold an eighth of it on average), `root_bits` (7),
+/// `ahead` (0: bits of geometry ahead of the connectivity, §6.4).
 ///
 /// # Errors
 /// `invalid_request` for parameters out of range or no output; `invalid_mesh` for a mesh the
