@@ -8,14 +8,14 @@
 
 use std::sync::Arc;
 
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::FxHashMap;
 
 use crate::ahead::Geometry;
 use crate::complex::{Complex, POINT, Simplex, Vertex};
 use crate::entropy::{Counts, Models, SymbolReader};
 use crate::error::CodecError;
-use crate::format::{self, Header, ROOT_POINT, ROOT_TRIANGLE};
-use crate::kd_cell::kd_key;
+use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
+use crate::kd_cell::{key_prefix, morton_key};
 use crate::kd_coder::{self, Limits, Span};
 use crate::nsp_tree::Node;
 use crate::positional_io;
@@ -131,12 +131,16 @@ impl Tsc {
 
     fn from_storage(bytes: Storage) -> Result<Self, CodecError> {
         let len = bytes.len();
-        let (header, nodes) = format::read(len, |o, l| bytes.read(o, l))?;
+        let head = bytes.read(0, len.min(HEADER_LEN as u64))?;
+        let header = Header::from_bytes(&head, len)?;
         let (to, tl) = header.tables;
         let counts = Counts::from_bytes(&bytes.read(to, tl)?, to)?;
+        let (io, il) = header.index;
+        let nodes =
+            format::index_from_bytes(&bytes.read(io, il)?, io, &header.params, (to + tl, io))?;
         if nodes.is_empty() != (header.vertices == 0) {
             return Err(CodecError::corrupt(
-                header.index.0,
+                96,
                 "the index and the vertex count disagree on emptiness",
             ));
         }
@@ -183,7 +187,7 @@ impl Tsc {
 
     /// Bytes every decode reads: header, tables, index.
     fn fixed_bytes(&self) -> u64 {
-        self.header.head_len + self.header.tables.1 + self.header.index.1
+        HEADER_LEN as u64 + self.header.tables.1 + self.header.index.1
     }
 
     /// Decodes every cell up to `max_bits` bits per coordinate (the file's `p` when `None`).
@@ -325,14 +329,20 @@ fn rename(s: Simplex, map: &[u32]) -> Simplex {
     s.map(|x| map[x as usize])
 }
 
-/// The union of the cells' complexes, duplicates along borders removed.
+/// The union of the cells' complexes, duplicates along borders removed: every cell's vertices
+/// and simplices are appended as they come (a vertex once per cell that holds it), then one sort
+/// on cached kd keys welds equal corners and puts the vertices in kd order, and one sort of the
+/// renamed simplices removes the duplicates (no hash maps: issue 34's flat decoder).
 #[derive(Default)]
 struct Assembly {
+    /// Per vertex occurrence (a vertex of one cell), in arrival order: its full kd key and its
+    /// arrival number (the first arrival of a corner is the one kept).
+    keys: Vec<(u64, u32)>,
     corners: Vec<[u32; 3]>,
-    /// Where each vertex is drawn, in grid units.
+    /// Where each occurrence is drawn, in grid units.
     positions: Vec<[f64; 3]>,
-    by_corner: FxHashMap<[u32; 3], u32>,
-    simplices: FxHashSet<Simplex>,
+    /// Simplices over occurrence numbers.
+    simplices: Vec<Simplex>,
 }
 
 impl Assembly {
@@ -340,37 +350,61 @@ impl Assembly {
         let mut map = vec![u32::MAX; cx.vertices.len()];
         for v in cx.used_vertices() {
             let vx = cx.vertices[v as usize];
-            map[v as usize] = *self.by_corner.entry(vx.corner).or_insert_with(|| {
-                self.corners.push(vx.corner);
-                self.positions
-                    .push(geometry.map_or_else(|| vx.centre(p), |g| g.position(&vx, p)));
-                (self.corners.len() - 1) as u32
-            });
+            let n = self.corners.len() as u32;
+            map[v as usize] = n;
+            self.keys.push((morton_key(vx.corner, p), n));
+            self.corners.push(vx.corner);
+            self.positions
+                .push(geometry.map_or_else(|| vx.centre(p), |g| g.position(&vx, p)));
         }
-        for s in cx.live_simplices() {
-            self.simplices.insert(rename(s, &map));
-        }
+        self.simplices
+            .extend(cx.live_simplices().map(|s| rename(s, &map)));
     }
 
     fn finish(self, tsc: &Tsc, bits: u32, bytes_read: u64, cells: u64) -> Decoded {
         let p = tsc.header.params.bits;
         let full = bits == p;
         let level = 3 * bits as usize;
-        let mut order: Vec<u32> = (0..self.corners.len() as u32).collect();
-        order.sort_by_key(|&v| kd_key(self.corners[v as usize], level, p));
+        let Assembly {
+            mut keys,
+            corners: all_corners,
+            positions: all_positions,
+            simplices: all_simplices,
+        } = self;
+        // weld: equal corners have equal full keys; the first arrival stands for them all
+        keys.sort_unstable();
+        let mut first: Vec<u32> = Vec::new();
+        let mut weld = vec![0u32; keys.len()];
+        for (i, &(key, n)) in keys.iter().enumerate() {
+            if i == 0 || keys[i - 1].0 != key {
+                first.push(n);
+            }
+            weld[n as usize] = (first.len() - 1) as u32;
+        }
+        // kd order at the decoded level, ties in arrival order
+        let mut order: Vec<u32> = (0..first.len() as u32).collect();
+        if !full {
+            order.sort_unstable_by_key(|&u| {
+                let n = first[u as usize];
+                (key_prefix(morton_key(all_corners[n as usize], p), level), n)
+            });
+        }
         let mut rank = vec![0u32; order.len()];
-        for (r, &v) in order.iter().enumerate() {
-            rank[v as usize] = r as u32;
+        for (r, &u) in order.iter().enumerate() {
+            rank[u as usize] = r as u32;
+        }
+        for w in weld.iter_mut() {
+            *w = rank[*w as usize];
         }
         let mut triangles: Vec<[u32; 3]> = Vec::new();
         let mut isolated: Vec<u32> = Vec::new();
         let mut used = vec![false; order.len()];
-        let mut simplices: Vec<Simplex> = self
-            .simplices
+        let mut simplices: Vec<Simplex> = all_simplices
             .into_iter()
-            .map(|s| rename(s, &rank))
+            .map(|s| rename(s, &weld))
             .collect();
         simplices.sort_unstable();
+        simplices.dedup();
         for s in simplices {
             if s.kind == POINT {
                 if full {
@@ -392,16 +426,11 @@ impl Assembly {
         for (i, &r) in keep.iter().enumerate() {
             new_id[r as usize] = i as u32;
         }
-        let corners: Vec<[u32; 3]> = keep
-            .iter()
-            .map(|&r| self.corners[order[r as usize] as usize])
-            .collect();
+        let arrival = |r: u32| first[order[r as usize] as usize] as usize;
+        let corners: Vec<[u32; 3]> = keep.iter().map(|&r| all_corners[arrival(r)]).collect();
         let positions = keep
             .iter()
-            .map(|&r| {
-                let v = order[r as usize] as usize;
-                tsc.header.grid.position(self.positions[v])
-            })
+            .map(|&r| tsc.header.grid.position(all_positions[arrival(r)]))
             .collect();
         Decoded {
             bits,
