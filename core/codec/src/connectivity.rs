@@ -9,8 +9,8 @@ use crate::coding::Coding;
 use crate::complex::{Complex, POINT, Simplex};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
-use crate::kd_cell::{half, high_side};
-use crate::symbols::{Family, Symbol, context};
+use crate::kd_cell::half;
+use crate::symbols::{Family, Symbol, context, context_banded};
 
 /// The order in which the simplices holding `v` are coded: points, then triangles holding `v`
 /// once, twice, three times; among those, by the corners of their other vertices in turn order.
@@ -45,6 +45,43 @@ fn orientation_evidence(once: &[Simplex], v1: u32, v2: u32, x: u32) -> i32 {
         }
     }
     (e12 - e21).signum()
+}
+
+/// The sub-context and predicted child (`true` = high) of a once-held triangle `(v, a, b)` from
+/// the links `a` and `b` have (bit 0: to the low child, bit 1: to the high one, by triangles
+/// decoded before), whether each is a pivot (the third vertex of a coarse `(v, v, x)`: around
+/// `v`, the fan of triangles switches from one child to the other at the pivots), and `mid`, the
+/// midpoint of `a` and `b` from the split plane in quarters of a child's side (negative below).
+///
+/// The predicted child is the first single link, else the midpoint's side; the sub-context is the
+/// unordered pair of the vertices' states (link relative to the prediction: none, it, the other,
+/// both; pivot or not) times six bands of the midpoint's distance on the prediction's side.
+fn once_context(a: (u8, bool), b: (u8, bool), mid: i64) -> (usize, bool) {
+    let flip = match (a.0, b.0) {
+        (1 | 2, _) => a.0 == 2,
+        (_, 1 | 2) => b.0 == 2,
+        _ => mid >= 0,
+    };
+    let state = |(l, pivot): (u8, bool)| {
+        let rel = match l {
+            0 => 0,
+            3 => 3,
+            l => 1 + usize::from((l == 2) != flip),
+        };
+        rel * 2 + usize::from(pivot)
+    };
+    let (x, y) = (state(a), state(b));
+    let (x, y) = (x.max(y), x.min(y));
+    let m = if flip { mid } else { -1 - mid };
+    let band = match m {
+        ..=-5 => 0,
+        -4..=-3 => 1,
+        -2..=-1 => 2,
+        0..=1 => 3,
+        2..=3 => 4,
+        _ => 5,
+    };
+    ((x * (x + 1) / 2 + y) * 6 + band, flip)
 }
 
 /// Where the preimage masks of a split come from: the encoder knows them, the decoder reads them.
@@ -96,7 +133,6 @@ pub(crate) fn code_connectivity(
     let mut sorted: Vec<Simplex> = coarse.to_vec();
     sorted.sort_by_key(|c| order_key(cx, c, v));
     let corner = cx.vertices[v as usize].corner;
-    let side = |x: u32| high_side(&cx.vertices[x as usize], corner, level, bits);
     let mut out = Vec::with_capacity(sorted.len());
     // breadth-first order of the once-held triangles
     let once_coarse: Vec<usize> = (0..sorted.len())
@@ -146,10 +182,24 @@ pub(crate) fn code_connectivity(
         };
         out.push((*c, masks.mask(c, coding)?));
     }
-    // once-held triangles, predicted from the links their other vertices already have and from
-    // the sides of the split plane they lie on
+    // once-held triangles, predicted from the links their other vertices already have, whether
+    // those are pivots, and where their midpoint lies from the split plane
+    let pivots: Vec<u32> = sorted
+        .iter()
+        .filter(|c| c.kind != POINT && c.multiplicity(v) == 2)
+        .map(|c| *c.v.iter().find(|&&x| x != v).unwrap())
+        .collect();
+    let ax = level % 3;
+    let plane2 = 2 * (corner[ax] as i64 + half(level, bits) as i64);
+    // a vertex's centre from the split plane along its axis, in half grid units
+    let offset = |x: u32| {
+        let w = &cx.vertices[x as usize];
+        2 * w.corner[ax] as i64 + w.extent(ax, bits) as i64 - 1 - plane2
+    };
+    let band = (level / 3).clamp(4, 7) - 4;
     let mut link: FxHashMap<u32, u8> = FxHashMap::default();
     let mut once: Vec<Simplex> = Vec::new();
+    let mut any_both = false;
     for i in bfs {
         let c = sorted[i];
         let (a, b) = others(&c);
@@ -157,36 +207,14 @@ pub(crate) fn code_connectivity(
             link.get(&a).copied().unwrap_or(0),
             link.get(&b).copied().unwrap_or(0),
         );
-        let e = la | lb;
-        let (sa, sb) = (side(a), side(b));
-        // predicted child: the linked one, else the side of the first vertex
-        let flip = if e == 1 || e == 2 { e == 2 } else { sa };
-        let same = sa == sb;
-        let geometry_agrees = sa == flip;
-        // both other vertices a whole cell or more away from the split plane
-        let far = |x: u32| {
-            let w = &cx.vertices[x as usize];
-            let ax = level % 3;
-            let plane = corner[ax] as u64 + half(level, bits) as u64;
-            let (lo_w, hi_w) = (
-                w.corner[ax] as u64,
-                w.corner[ax] as u64 + w.extent(ax, bits),
-            );
-            hi_w + half(level, bits) as u64 <= plane || lo_w >= plane + half(level, bits) as u64
-        };
-        let remote = usize::from(far(a) && far(b));
-        let sub = match e {
-            0 => usize::from(same) * 2 + remote,
-            3 => 4 + usize::from(same) * 2 + remote,
-            _ => {
-                8 + usize::from(la == lb) * 4 + usize::from(same) * 2 + usize::from(geometry_agrees)
-            }
-        };
+        // the midpoint of a and b from the plane, in quarters of a child's side
+        let mid = (offset(a) + offset(b)).div_euclid(half(level, bits) as i64);
+        let (sub, flip) = once_context((la, pivots.contains(&a)), (lb, pivots.contains(&b)), mid);
         let family = Family::TriangleOnce;
         let mask = masks.mask(
             &c,
             Coding {
-                ctx: context(family, sub, level),
+                ctx: context_banded(family, sub, band),
                 family,
                 flip,
             },
@@ -200,9 +228,15 @@ pub(crate) fn code_connectivity(
         if mask & 2 != 0 {
             once.push(Simplex::triangle(v2, a, b));
         }
+        any_both |= mask == 3;
         out.push((c, mask));
     }
-    // twice-held triangles: the third vertex's links and the orientation of the once-held ones
+    // twice-held triangles: the third vertex's links and the orientation of the once-held ones,
+    // whether `(v, v, v)` exists (then the cell held a collapsed triangle) and whether a
+    // once-held triangle went to both children
+    let vvv = sorted
+        .iter()
+        .any(|c| c.kind != POINT && c.multiplicity(v) == 3);
     let (mut collapsed_low, mut collapsed_high) = (false, false);
     for c in sorted
         .iter()
@@ -214,7 +248,9 @@ pub(crate) fn code_connectivity(
         let flip = lx == 2 || (lx != 1 && ev < 0);
         let ev = if flip { -ev } else { ev };
         let lx = if lx == 2 { 1 } else { lx.min(3) };
-        let sub = [0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize;
+        let sub = ([0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize) * 4
+            + usize::from(vvv) * 2
+            + usize::from(any_both);
         let family = Family::Twice;
         let mask = masks.mask(
             c,
@@ -233,7 +269,8 @@ pub(crate) fn code_connectivity(
         .filter(|c| c.kind != POINT && c.multiplicity(v) == 3)
     {
         let family = Family::Thrice;
-        let sub = usize::from(collapsed_low) * 2 + usize::from(collapsed_high);
+        let sub = (usize::from(collapsed_low) * 2 + usize::from(collapsed_high)) * 2
+            + usize::from(any_both);
         out.push((
             *c,
             masks.mask(
@@ -246,5 +283,7 @@ pub(crate) fn code_connectivity(
             )?,
         ));
     }
+    #[cfg(test)]
+    crate::connectivity_study::record(cx, v, level, bits, &out);
     Ok(out)
 }

@@ -31,6 +31,8 @@ mod cell_complex;
 mod coding;
 pub mod complex;
 mod connectivity;
+#[cfg(test)]
+mod connectivity_study;
 pub mod decode;
 pub mod encode;
 pub mod entropy;

@@ -20,14 +20,16 @@ pub enum Family {
     Split = 0,
     /// Where a triangle holding the split vertex once goes: 0 = the predicted child, 1 = the
     /// other, 2 = both. Sub-context: which children its other vertices are already linked to by
-    /// decoded triangles (none, one, both) and on which sides of the split plane they lie.
+    /// decoded triangles, whether they are pivots, and the midpoint's side and distance from the
+    /// split plane; the level in four bands of precision.
     TriangleOnce = 1,
     /// The preimages of a triangle holding the split vertex twice, as a mask of four candidates
-    /// minus one. Sub-context: the links of its third vertex and the orientation its neighbours
-    /// imply.
+    /// minus one. Sub-context: the links of its third vertex, the orientation its neighbours
+    /// imply, whether `(v, v, v)` exists and whether a once-held triangle went to both children.
     Twice = 2,
     /// The preimages of a triangle made of the split vertex alone (mask of four, minus one).
-    /// Sub-context: whether either child already holds a collapsed edge.
+    /// Sub-context: whether either child already holds a collapsed edge, and whether a
+    /// once-held triangle went to both children.
     Thrice = 3,
     /// Where an isolated point goes: 0 = low child, 1 = high child, 2 = both.
     Point = 4,
@@ -63,9 +65,9 @@ impl Family {
     pub const fn subs(self) -> usize {
         match self {
             Family::Split => 14,
-            Family::TriangleOnce => 16,
-            Family::Twice => 9,
-            Family::Thrice => 4,
+            Family::TriangleOnce => 216,
+            Family::Twice => 36,
+            Family::Thrice => 8,
             Family::Point => 1,
             Family::Ahead => 14,
         }
@@ -98,6 +100,12 @@ pub fn context(family: Family, sub: usize, level: usize) -> usize {
         level / 3
     };
     (family.first_slot() + sub) * MAX_LEVELS + level
+}
+
+/// The context of a symbol whose caller bands the level itself (the once-held triangles: four
+/// bands of precision, see `connectivity`); `band` < [`MAX_LEVELS`].
+pub fn context_banded(family: Family, sub: usize, band: usize) -> usize {
+    (family.first_slot() + sub) * MAX_LEVELS + band
 }
 
 /// The family of context `ctx`.

@@ -1,0 +1,504 @@
+//! A study of the connectivity contexts (tests only): every split's coarse simplices and their
+//! masks are recorded while a mesh compresses, then candidate context designs are costed on the
+//! records with adaptive binary models (the Krichevsky–Trofimov estimator per context), the way
+//! an adaptive coder pays for its contexts, learning included. Run:
+//! `cargo test --release -p tessd-codec connectivity_study -- --ignored --nocapture`.
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+
+use crate::complex::{Complex, POINT, Simplex, Vertex};
+use crate::kd_cell::half;
+
+/// One split as the encoder coded it.
+#[derive(Clone, Debug)]
+pub(crate) struct Split {
+    level: usize,
+    bits: u32,
+    v: u32,
+    corner: [u32; 3],
+    coded: Vec<(Simplex, u8)>,
+    /// The other vertices of the coarse simplices, as the decoder holds them.
+    verts: Vec<(u32, Vertex)>,
+}
+
+thread_local! {
+    static RESET: RefCell<bool> = const { RefCell::new(false) };
+    static RECORD: RefCell<Option<Vec<Split>>> = const { RefCell::new(None) };
+}
+
+/// Records a split when recording is on (called by `code_connectivity`).
+pub(crate) fn record(cx: &Complex, v: u32, level: usize, bits: u32, coded: &[(Simplex, u8)]) {
+    RECORD.with(|r| {
+        if let Some(rec) = r.borrow_mut().as_mut() {
+            let mut verts: Vec<(u32, Vertex)> = Vec::new();
+            for (s, _) in coded {
+                for &x in &s.v {
+                    if x != v && !verts.iter().any(|&(y, _)| y == x) {
+                        verts.push((x, cx.vertices[x as usize]));
+                    }
+                }
+            }
+            rec.push(Split {
+                level,
+                bits,
+                v,
+                corner: cx.vertices[v as usize].corner,
+                coded: coded.to_vec(),
+                verts,
+            });
+        }
+    });
+}
+
+/// Adaptive binary costs by (family, context).
+#[derive(Default)]
+struct Cost {
+    counts: HashMap<(u8, u64), [u32; 2]>,
+    bits: [f64; 6],
+    /// bits and symbols by (family, tag) for diagnostics
+    tagged: std::collections::BTreeMap<(u8, String), (f64, u64)>,
+    tag: String,
+}
+
+impl Cost {
+    fn bit(&mut self, fam: u8, ctx: u64, b: bool) {
+        let c = self.counts.entry((fam, ctx)).or_insert([0, 0]);
+        let p = (c[b as usize] as f64 + 0.4) / ((c[0] + c[1]) as f64 + 0.8);
+        self.bits[fam as usize] -= p.log2();
+        c[b as usize] += 1;
+        self.tagged.entry((fam, self.tag.clone())).or_default().0 -= p.log2();
+    }
+
+    /// A three-valued symbol: "both?", then "which".
+    fn three(&mut self, fam: u8, ctx: u64, value: u8) {
+        self.bit(fam, ctx * 2, value == 2);
+        if value != 2 {
+            self.bit(fam, ctx * 2 + 1, value == 1);
+        }
+    }
+
+    /// A mask of four candidates (1..=15): its bits in turn, each in the context of those before.
+    fn mask(&mut self, fam: u8, ctx: u64, mask: u8) {
+        let mut prefix = 1u64;
+        for i in 0..4 {
+            let b = mask >> i & 1 != 0;
+            // the last bit is forced when the others are all zero
+            if !(i == 3 && prefix == 8) {
+                self.bit(fam, ctx * 16 + prefix, b);
+            }
+            prefix = prefix * 2 + b as u64;
+        }
+    }
+}
+
+/// Geometry of one split, in half-grid units along the split axis.
+struct Geo<'a> {
+    s: &'a Split,
+    ax: usize,
+    plane2: i64,
+    h2: i64,
+}
+
+impl Geo<'_> {
+    fn vert(&self, x: u32) -> Vertex {
+        self.s.verts.iter().find(|&&(y, _)| y == x).unwrap().1
+    }
+    /// Centre's signed offset from the plane, half-grid units.
+    fn off(&self, x: u32) -> i64 {
+        let w = self.vert(x);
+        2 * w.corner[self.ax] as i64 + w.extent(self.ax, self.s.bits) as i64 - 1 - self.plane2
+    }
+    fn corner_side(&self, x: u32) -> bool {
+        2 * self.vert(x).corner[self.ax] as i64 >= self.plane2
+    }
+}
+
+fn others(c: &Simplex, v: u32) -> (u32, u32) {
+    let i = c.v.iter().position(|&x| x == v).unwrap();
+    (c.v[(i + 1) % 3], c.v[(i + 2) % 3])
+}
+
+/// The value of a once-held mask given the predicted child (`flip` = high).
+fn once_value(mask: u8, flip: bool) -> u8 {
+    match mask {
+        3 => 2,
+        m => u8::from((m == 2) != flip),
+    }
+}
+
+fn swap_children(mask: u8) -> u8 {
+    ((mask & 1) << 3) | ((mask & 8) >> 3) | ((mask & 2) << 1) | ((mask & 4) >> 1)
+}
+
+/// Everything a design may look at for one once-held triangle, from the decoder's state.
+#[derive(Clone, Copy, Debug)]
+struct OnceFeat {
+    la: u8,
+    lb: u8,
+    pa: bool,
+    pb: bool,
+    sa: bool,
+    sb: bool,
+    /// midpoint offset of a and b from the plane, in units of the child's half side / 4
+    mid: i64,
+    far: bool,
+    level: usize,
+    n_once: usize,
+}
+
+/// Runs the once/twice/thrice codes of one split through `design`.
+#[allow(clippy::type_complexity)]
+fn run(
+    s: &Split,
+    cost: &mut Cost,
+    once_ctx: &dyn Fn(&OnceFeat) -> (u64, bool),
+    twice_ctx: &dyn Fn(&TwiceFeat) -> (u64, bool),
+    thrice_ctx: &dyn Fn(&ThriceFeat) -> u64,
+) {
+    let ax = s.level % 3;
+    let h = half(s.level, s.bits) as i64;
+    let g = Geo {
+        s,
+        ax,
+        plane2: 2 * (s.corner[ax] as i64 + h),
+        h2: 2 * h,
+    };
+    let v = s.v;
+    let mut once: Vec<(Simplex, u8)> = Vec::new();
+    let mut twice: Vec<(Simplex, u8)> = Vec::new();
+    let mut thrice: Vec<(Simplex, u8)> = Vec::new();
+    for &(c, m) in &s.coded {
+        if c.kind == POINT {
+            cost.three(4, s.level as u64 / 3, once_value(m, false));
+            continue;
+        }
+        match c.multiplicity(v) {
+            1 => once.push((c, m)),
+            2 => twice.push((c, m)),
+            _ => thrice.push((c, m)),
+        }
+    }
+    let pivots: Vec<u32> = twice
+        .iter()
+        .map(|(c, _)| *c.v.iter().find(|&&x| x != v).unwrap())
+        .collect();
+    let mut link: HashMap<u32, u8> = HashMap::new();
+    let mut fine: Vec<Simplex> = Vec::new();
+    let v2 = u32::MAX;
+    let mut any_both = false;
+    for &(c, m) in &once {
+        let (a, b) = others(&c, v);
+        let la = link.get(&a).copied().unwrap_or(0);
+        let lb = link.get(&b).copied().unwrap_or(0);
+        let far = |x: u32| g.off(x).abs() >= g.h2 + g.vert(x).extent(ax, s.bits) as i64;
+        let f = OnceFeat {
+            la,
+            lb,
+            pa: pivots.contains(&a),
+            pb: pivots.contains(&b),
+            sa: g.corner_side(a),
+            sb: g.corner_side(b),
+            mid: ((g.off(a) + g.off(b)) * 4).div_euclid(2 * g.h2),
+            far: far(a) && far(b),
+            level: s.level,
+            n_once: once.len(),
+        };
+        let (ctx, flip) = once_ctx(&f);
+        cost.tag = format!(
+            "p{:02} e{}{} piv{}{} mid{:+}",
+            s.level / 3,
+            la.max(lb),
+            la.min(lb),
+            u8::from(f.pa),
+            u8::from(f.pb),
+            f.mid.clamp(-5, 5)
+        );
+        cost.three(1, ctx, once_value(m, flip));
+        cost.tagged.entry((9, cost.tag.clone())).or_default().1 += 1;
+        *link.entry(a).or_insert(0) |= m;
+        *link.entry(b).or_insert(0) |= m;
+        any_both |= m == 3;
+        if m & 1 != 0 {
+            fine.push(Simplex::triangle(v, a, b));
+        }
+        if m & 2 != 0 {
+            fine.push(Simplex::triangle(v2, a, b));
+        }
+    }
+    let (mut cl, mut ch) = (false, false);
+    for &(c, m) in &twice {
+        let x = *c.v.iter().find(|&&x| x != v).unwrap();
+        let f = TwiceFeat {
+            lx: link.get(&x).copied().unwrap_or(0),
+            ev: orientation_evidence(&fine, v, v2, x),
+            vvv: !thrice.is_empty(),
+            any_both,
+            level: s.level,
+            n_once: once.len(),
+            n_twice: twice.len(),
+        };
+        let (ctx, flip) = twice_ctx(&f);
+        cost.mask(2, ctx, if flip { swap_children(m) } else { m });
+        cl |= m & 1 != 0;
+        ch |= m & 8 != 0;
+    }
+    for &(_, m) in &thrice {
+        let f = ThriceFeat {
+            cl,
+            ch,
+            any_both,
+            level: s.level,
+            n_twice: twice.len(),
+        };
+        cost.mask(3, thrice_ctx(&f), m);
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TwiceFeat {
+    lx: u8,
+    ev: i32,
+    vvv: bool,
+    any_both: bool,
+    level: usize,
+    n_once: usize,
+    n_twice: usize,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct ThriceFeat {
+    cl: bool,
+    ch: bool,
+    any_both: bool,
+    level: usize,
+    n_twice: usize,
+}
+
+fn orientation_evidence(once: &[Simplex], v1: u32, v2: u32, x: u32) -> i32 {
+    let (mut e12, mut e21) = (0i32, 0i32);
+    for t in once.iter().filter(|t| t.v.contains(&x)) {
+        for i in 0..3 {
+            let (a, b) = (t.v[i], t.v[(i + 1) % 3]);
+            if (a == x && b == v2) || (a == v1 && b == x) {
+                e12 += 1;
+            }
+            if (a == x && b == v1) || (a == v2 && b == x) {
+                e21 += 1;
+            }
+        }
+    }
+    (e12 - e21).signum()
+}
+
+fn today_once(f: &OnceFeat) -> (u64, bool) {
+    let e = f.la | f.lb;
+    let flip = if e == 1 || e == 2 { e == 2 } else { f.sa };
+    let same = f.sa == f.sb;
+    let geometry_agrees = f.sa == flip;
+    let remote = usize::from(f.far);
+    let sub = match e {
+        0 => usize::from(same) * 2 + remote,
+        3 => 4 + usize::from(same) * 2 + remote,
+        _ => {
+            8 + usize::from(f.la == f.lb) * 4 + usize::from(same) * 2 + usize::from(geometry_agrees)
+        }
+    };
+    ((sub * 64 + f.level / 3) as u64, flip)
+}
+
+fn today_twice(f: &TwiceFeat) -> (u64, bool) {
+    let flip = f.lx == 2 || (f.lx != 1 && f.ev < 0);
+    let ev = if flip { -f.ev } else { f.ev };
+    let lx = if f.lx == 2 { 1 } else { f.lx.min(3) };
+    let sub = [0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize;
+    ((sub * 64 + f.level / 3) as u64, flip)
+}
+
+fn today_thrice(f: &ThriceFeat) -> u64 {
+    ((usize::from(f.cl) * 2 + usize::from(f.ch)) * 64 + f.level / 3) as u64
+}
+
+/// The first single link decides the predicted child, else the midpoint's side.
+fn pred(f: &OnceFeat) -> bool {
+    if f.la == 1 || f.la == 2 {
+        f.la == 2
+    } else if f.lb == 1 || f.lb == 2 {
+        f.lb == 2
+    } else {
+        f.mid >= 0
+    }
+}
+
+/// A link relative to the predicted child: none, it, the other, both.
+fn rel(l: u8, flip: bool) -> u64 {
+    match l {
+        0 => 0,
+        3 => 3,
+        l => 1 + u64::from((l == 2) != flip),
+    }
+}
+
+fn mid_band(f: &OnceFeat, flip: bool) -> u64 {
+    let m = if flip { f.mid } else { -1 - f.mid };
+    match m {
+        ..=-5 => 0,
+        -4..=-3 => 1,
+        -2..=-1 => 2,
+        0..=1 => 3,
+        2..=3 => 4,
+        _ => 5,
+    }
+}
+
+fn rich(f: &OnceFeat, lvl: u64) -> (u64, bool) {
+    let flip = pred(f);
+    let x = (rel(f.la, flip), u64::from(f.pa));
+    let y = (rel(f.lb, flip), u64::from(f.pb));
+    let (x, y) = if x >= y { (x, y) } else { (y, x) };
+    let sub = ((x.0 * 2 + x.1) * 8 + y.0 * 2 + y.1) * 6 + mid_band(f, flip);
+    (sub * 64 + lvl, flip)
+}
+
+fn load(path: &str, bits: u32, min_cell: u64) -> (Vec<Split>, f64) {
+    let params = crate::Params {
+        bits,
+        min_cell,
+        ..crate::Params::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut src = crate::source::open(std::path::Path::new(path)).expect("a mesh");
+        RECORD.with(|r| *r.borrow_mut() = Some(Vec::new()));
+        let mut out = std::io::Cursor::new(Vec::new());
+        let rep = crate::compress_source(&mut *src, params, &mut out, &|_| true).unwrap();
+        let mut rec = RECORD.with(|r| r.borrow_mut().take().unwrap());
+        rec.reverse();
+        (rec, rep.vertices as f64)
+    })
+}
+
+type Design<'a> = (
+    &'a str,
+    &'a dyn Fn(&OnceFeat) -> (u64, bool),
+    &'a dyn Fn(&TwiceFeat) -> (u64, bool),
+    &'a dyn Fn(&ThriceFeat) -> u64,
+);
+
+fn report(name: &str, splits: &[Split], nv: f64, designs: &[Design], diag: bool) {
+    for (dn, o, t, th) in designs {
+        let mut cost = Cost::default();
+        let mut last = 0;
+        for s in splits {
+            if RESET.with(|r| *r.borrow()) && s.level < last {
+                cost.counts.clear();
+            }
+            last = s.level;
+            run(s, &mut cost, *o, *t, *th);
+        }
+        let b = cost.bits.map(|x| x / nv);
+        println!(
+            "{name:<28} {dn:<16} once {:6.3} twice {:6.3} thrice {:6.3} point {:5.3} conn {:6.3}  ctx {}",
+            b[1],
+            b[2],
+            b[3],
+            b[4],
+            b[1] + b[2] + b[3] + b[4],
+            cost.counts.len()
+        );
+        if diag {
+            // group the tags by one field at a time
+            for field in 0..4 {
+                let mut by: std::collections::BTreeMap<String, (f64, u64)> = Default::default();
+                for ((fam, tag), &(b, _)) in &cost.tagged {
+                    if *fam != 1 {
+                        continue;
+                    }
+                    let n = cost.tagged.get(&(9, tag.clone())).map_or(0, |x| x.1);
+                    let key = tag.split(' ').nth(field).unwrap().to_string();
+                    let e = by.entry(key).or_default();
+                    e.0 += b;
+                    e.1 += n;
+                }
+                for (k, (b, n)) in by {
+                    println!(
+                        "    {k:<8} {:7.3} b/v {:8} sym {:6.3} b/sym",
+                        b / nv,
+                        n,
+                        b / n as f64
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+#[ignore]
+fn connectivity_study() {
+    let m = "/work/shared/data/mesh";
+    let reset = std::env::var("RESET").is_ok();
+    RESET.with(|r| *r.borrow_mut() = reset);
+    let meshes = [
+        (format!("{m}/bun_zipper.ply"), 8000),
+        (format!("{m}/bun_zipper.ply"), 80000),
+        (format!("{m}/fandisk.obj"), 8000),
+        (format!("{m}/spot_triangulated.obj"), 8000),
+    ];
+    // once-held: level/3 as today, four bands of precision (kept), and with the star's size
+    let o1 = |f: &OnceFeat| rich(f, f.level as u64 / 3);
+    let o2 = |f: &OnceFeat| rich(f, (f.level / 3).clamp(4, 7) as u64);
+    let o3 = |f: &OnceFeat| {
+        rich(
+            f,
+            (f.level / 3).clamp(4, 7) as u64 * 4 + f.n_once.min(15) as u64 / 4,
+        )
+    };
+    // twice-held: today's, with (v, v, v) and "some once-held was both", level banded
+    let t1 = |f: &TwiceFeat| {
+        let (c, flip) = today_twice(f);
+        (c * 4 + u64::from(f.vvv) * 2 + u64::from(f.any_both), flip)
+    };
+    let t2 = |f: &TwiceFeat| {
+        let (c, flip) = today_twice(&TwiceFeat { level: 0, ..*f });
+        let band = (f.level / 3).clamp(4, 7) as u64;
+        (
+            c * 64 + band * 4 + u64::from(f.vvv) * 2 + u64::from(f.any_both),
+            flip,
+        )
+    };
+    let t3 = |f: &TwiceFeat| {
+        let (c, flip) = t2(f);
+        (
+            c * 4 + f.n_twice.min(7) as u64 / 2 + if f.n_once > 2 * f.n_twice { 4 } else { 0 },
+            flip,
+        )
+    };
+    let h1 = |f: &ThriceFeat| today_thrice(f) * 2 + u64::from(f.any_both);
+    let h2 = |f: &ThriceFeat| {
+        let band = (f.level / 3).clamp(4, 7) as u64;
+        ((u64::from(f.cl) * 2 + u64::from(f.ch)) * 2 + u64::from(f.any_both)) * 4 + band
+    };
+    let h3 = |f: &ThriceFeat| h2(f) * 4 + f.n_twice.min(7) as u64 / 2;
+    let designs: Vec<Design> = vec![
+        ("today", &today_once, &today_twice, &today_thrice),
+        ("once p", &o1, &today_twice, &today_thrice),
+        ("once p4-7", &o2, &t1, &h1),
+        ("+n t2 h2", &o3, &t2, &h2),
+        ("t3 h3", &o2, &t3, &h3),
+    ];
+    for (path, mc) in &meshes {
+        let (splits, nv) = load(path, 12, *mc);
+        let name = format!("{}/{mc}", path.rsplit('/').next().unwrap());
+        report(
+            &name,
+            &splits,
+            nv,
+            &designs,
+            mc == &8000 && path.contains("bun"),
+        );
+    }
+}
