@@ -5,7 +5,10 @@
 # `meshopt` wheel; raw, + zstd, + deflate), on every mesh of $TESSD_SHARED_DATA/mesh at p = 12
 # and 16 bits per coordinate, all on the same quantised mesh (cubic bbox, step = side/(2^p - 1)),
 # with a lossless check of every decoder's output; plus the rate–distortion curves of the bunny
-# (`tessd decompress --max-bits B`, B = 4..12, against Draco at 4..16 quantisation bits).
+# (`tessd decompress --max-bits B`, B = 4..12, against Draco at 4..16 quantisation bits); and
+# issue 34's goal rows (bench/codec/goals.py: every goal reported even where missed, the bunny's
+# bit budget before (v1, bench/results/codec_budget_before.json) and now, one-core speed on a
+# 1.1 M-triangle torus).
 #
 #   bash bench/run_codec.sh [extra `run_codec.py run` options, e.g. --meshes stanford_bunny --bits 12]
 #   TESSD_BIN=/path/to/tessd bash bench/run_codec.sh      # another binary (then nothing is built)
@@ -42,6 +45,10 @@ PY="${BENCH_PYTHON:-$PWD/.venv-bench/bin/python}"
 if [ -z "${TESSD_BIN:-}" ]; then
     cargo build --release -q -p tessd
     TESSD_BIN=target/release/tessd
+fi
+# the one-core speed rows' ~1.1 M-triangle torus (bench/codec/goals.py), generated if missing
+if [ ! -f /work/data34/torus1m.ply ] && [ -z "${CODEC_SPEED_MESH:-}" ]; then
+    cargo build --release -q -p tessd-bench-simplify
 fi
 [ -x "$TESSD_BIN" ] || { echo "run_codec: tessd binary not built yet: $TESSD_BIN" >&2; exit 1; }
 mkdir -p "$RESULTS" "$WORK"
