@@ -14,7 +14,7 @@ use crate::ahead::Geometry;
 use crate::complex::{Complex, POINT, Simplex, Vertex};
 use crate::entropy::{Counts, Models, SymbolReader};
 use crate::error::CodecError;
-use crate::format::{self, HEADER_LEN, Header, ROOT_POINT, ROOT_TRIANGLE};
+use crate::format::{self, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_cell::{key_prefix, morton_key};
 use crate::kd_coder::{self, Limits, Span};
 use crate::nsp_tree::Node;
@@ -131,16 +131,12 @@ impl Tsc {
 
     fn from_storage(bytes: Storage) -> Result<Self, CodecError> {
         let len = bytes.len();
-        let head = bytes.read(0, len.min(HEADER_LEN as u64))?;
-        let header = Header::from_bytes(&head, len)?;
+        let (header, nodes) = format::read(len, |o, l| bytes.read(o, l))?;
         let (to, tl) = header.tables;
         let counts = Counts::from_bytes(&bytes.read(to, tl)?, to)?;
-        let (io, il) = header.index;
-        let nodes =
-            format::index_from_bytes(&bytes.read(io, il)?, io, &header.params, (to + tl, io))?;
         if nodes.is_empty() != (header.vertices == 0) {
             return Err(CodecError::corrupt(
-                96,
+                header.index.0,
                 "the index and the vertex count disagree on emptiness",
             ));
         }
@@ -187,7 +183,7 @@ impl Tsc {
 
     /// Bytes every decode reads: header, tables, index.
     fn fixed_bytes(&self) -> u64 {
-        HEADER_LEN as u64 + self.header.tables.1 + self.header.index.1
+        self.header.head_len + self.header.tables.1 + self.header.index.1
     }
 
     /// Decodes every cell up to `max_bits` bits per coordinate (the file's `p` when `None`).
