@@ -12,7 +12,7 @@ use rustc_hash::FxHashMap;
 
 use crate::ahead::Geometry;
 use crate::complex::{Complex, POINT, Simplex, Vertex};
-use crate::entropy::{Counts, Models, SymbolReader};
+use crate::entropy::SymbolReader;
 use crate::error::CodecError;
 use crate::format::{self, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_cell::{key_prefix, morton_key};
@@ -26,7 +26,6 @@ pub struct Tsc {
     pub header: Header,
     /// The nSP-tree, pre-order.
     pub nodes: Vec<Node>,
-    pub(crate) models: Arc<Models>,
     pub(crate) bytes: Storage,
 }
 
@@ -132,8 +131,6 @@ impl Tsc {
     fn from_storage(bytes: Storage) -> Result<Self, CodecError> {
         let len = bytes.len();
         let (header, nodes) = format::read(len, |o, l| bytes.read(o, l))?;
-        let (to, tl) = header.tables;
-        let counts = Counts::from_bytes(&bytes.read(to, tl)?, to)?;
         if nodes.is_empty() != (header.vertices == 0) {
             return Err(CodecError::corrupt(
                 header.index.0,
@@ -143,7 +140,6 @@ impl Tsc {
         Ok(Tsc {
             header,
             nodes,
-            models: Arc::new(counts.models()),
             bytes,
         })
     }
@@ -156,11 +152,11 @@ impl Tsc {
     /// A reader over cell `i`'s chunk.
     pub(crate) fn reader(&self, i: usize) -> Result<SymbolReader, CodecError> {
         let node = &self.nodes[i];
-        SymbolReader::new(
-            &self.bytes.read(node.offset, node.len)?,
-            self.models.clone(),
+        // each cell's models start fresh: its chunk alone is enough (entropy.rs)
+        Ok(SymbolReader::new(
+            self.bytes.read(node.offset, node.len)?,
             node.offset,
-        )
+        ))
     }
 
     /// The cell where grid point `q` stops on its way down from the root: the first cell `stop`

@@ -1,11 +1,15 @@
 //! Compression (paper 003 §5): partition the mesh into the nSP-tree out of core
 //! ([`crate::partition`]), run the kd coder in every cell in post-order — a cell's complex merged
 //! into its parent's with duplicates removed (§5.2d), sibling subtrees on different cores
-//! (§5.4) — keep every cell's symbols in a semi-coded temporary file (§5.2c), then write the
-//! final file: header, probability tables, one range-coded chunk per cell, index (§5.3).
+//! (§5.4) — and range-code each cell's symbols as soon as they are known, in the cell's own
+//! thread, with models that start fresh per cell ([`crate::entropy`]). The paper keeps every
+//! cell's symbols in a semi-coded temporary file (§5.2c) until the whole file's tables are
+//! known; with adaptive models there are no tables, so only the finished chunks wait: in memory,
+//! or past [`HELD_BYTES`] in a temporary file. Then the final file (§5.3): head, every chunk in
+//! pre-order, trailer (index).
 //!
-//! The output is the same whatever the number of threads: the tables are sums, and the chunks
-//! are written in pre-order from the temporary file.
+//! The output is the same whatever the number of threads: a chunk depends on its cell alone,
+//! and the chunks are written in pre-order.
 
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::sync::Mutex;
@@ -15,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::cell_complex::{compact, leaf_complex, union};
 use crate::complex::{Complex, POINT};
-use crate::entropy::{self, Counts};
+use crate::entropy;
 use crate::error::CodecError;
 use crate::format::{self, Header, ROOT_POINT, ROOT_TRIANGLE};
 use crate::kd_coder;
@@ -23,7 +27,6 @@ use crate::nsp_tree::Params;
 use crate::partition::{self, Partition};
 use crate::quantize::Quantizer;
 use crate::source::{MeshSource, Slices};
-use crate::symbols::Symbol;
 
 /// What a compression did, for the CLI and the benchmark.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,7 +48,9 @@ pub struct CompressReport {
     /// Simplex copies beyond one per distinct simplex: border duplication (§5.1), and repeated
     /// triangles of the input.
     pub duplicated_simplices: u64,
-    /// Bits spent on each symbol family ([`crate::symbols::Family`] order): geometry first.
+    /// Bits spent on each symbol family ([`crate::symbols::Family`] order): geometry first. The
+    /// real code lengths: `−log2 p` summed over every binary decision coded (the chunks are
+    /// these totals rounded up to bytes).
     pub family_bits: [f64; crate::symbols::FAMILIES],
     /// Symbols of each family.
     pub family_symbols: [u64; crate::symbols::FAMILIES],
@@ -54,16 +59,26 @@ pub struct CompressReport {
     pub steps_ms: [f64; 3],
 }
 
-/// The semi-coded temporary file (§5.2c): every cell's symbols in completion order, each cell
-/// deflated on its own (fast level: the contexts repeat, a cell shrinks several times), so that
-/// a mesh of hundreds of millions of triangles does not need tens of gigabytes of scratch disk.
+/// Finished chunks held in memory up to this many bytes; later ones wait in a temporary file.
+pub const HELD_BYTES: u64 = 64 << 20;
+
+/// Where a finished chunk waits for the final write.
+#[derive(Clone, Debug, Default)]
+enum Chunk {
+    /// Not coded yet (only while the post-order pass runs).
+    #[default]
+    Pending,
+    /// In memory.
+    Held(Vec<u8>),
+    /// In the temporary file: offset and length.
+    Spilled(u64, u64),
+}
+
+/// The temporary file of chunks past [`HELD_BYTES`], in completion order.
 struct Spill {
     file: std::io::BufWriter<std::fs::File>,
     written: u64,
 }
-
-/// Where a cell's symbols are in the spill: byte offset, deflated length, symbol count.
-type Span = (u64, u64, u64);
 
 impl Spill {
     fn new() -> Result<Self, CodecError> {
@@ -75,14 +90,14 @@ impl Spill {
         })
     }
 
-    /// Appends `symbols` (deflated by the caller's thread: see [`deflate`]).
-    fn put(&mut self, deflated: &[u8], symbols: u64) -> Result<Span, CodecError> {
+    /// Appends a chunk; returns where it is.
+    fn put(&mut self, chunk: &[u8]) -> Result<Chunk, CodecError> {
         let at = self.written;
         self.file
-            .write_all(deflated)
+            .write_all(chunk)
             .map_err(|e| CodecError::io("writing the temporary code file", e))?;
-        self.written += deflated.len() as u64;
-        Ok((at, deflated.len() as u64, symbols))
+        self.written += chunk.len() as u64;
+        Ok(Chunk::Spilled(at, chunk.len() as u64))
     }
 
     fn reader(self) -> Result<std::fs::File, CodecError> {
@@ -96,21 +111,19 @@ impl Spill {
     }
 }
 
-/// A cell's symbols, deflated for the spill.
-fn deflate(symbols: &[Symbol]) -> Vec<u8> {
-    let bytes: Vec<u8> = symbols.iter().flat_map(|s| s.0.to_le_bytes()).collect();
-    let mut z = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::fast());
-    z.write_all(&bytes).expect("writing to memory");
-    z.finish().expect("writing to memory")
-}
-
 /// What the post-order pass gathers, shared by the threads.
 #[derive(Default)]
 struct Gathered {
-    counts: Counts,
-    /// Per node: span in the temporary file, final vertex and simplex counts.
-    spans: Vec<Span>,
+    /// Per node: its chunk, final vertex and simplex counts.
+    chunks: Vec<Chunk>,
     ends: Vec<(u64, u64)>,
+    /// Bytes of the chunks held in memory.
+    held: u64,
+    /// The temporary file, once a chunk goes past [`HELD_BYTES`].
+    spill: Option<Spill>,
+    /// Bits and symbols per family (sums of multiples of `2^-16`: exact in any order).
+    family_bits: [f64; crate::symbols::FAMILIES],
+    family_symbols: [u64; crate::symbols::FAMILIES],
     /// Distinct points and triangles owned by the leaves, simplex copies coded, simplices
     /// owned.
     points: u64,
@@ -125,7 +138,7 @@ struct Gathered {
 struct Coder<'a> {
     params: Params,
     part: &'a Partition,
-    shared: Mutex<(Gathered, Spill)>,
+    shared: Mutex<Gathered>,
     total_entries: u64,
     progress: &'a (dyn Fn(f64) -> bool + Sync),
 }
@@ -162,14 +175,24 @@ impl Coder<'_> {
             3 * end as usize,
             self.params.advance(),
         );
-        let mut counts = Counts::default();
-        counts.add(&symbols);
-        let deflated = deflate(&symbols);
+        let code = entropy::encode(&symbols);
         drop(symbols);
         let mut guard = self.shared.lock().unwrap_or_else(|e| e.into_inner());
-        let (g, spill) = &mut *guard;
-        g.counts.merge(&counts);
-        g.spans[i] = spill.put(&deflated, counts.total())?;
+        let g = &mut *guard;
+        for f in 0..crate::symbols::FAMILIES {
+            g.family_bits[f] += code.family_bits[f];
+            g.family_symbols[f] += code.family_symbols[f];
+        }
+        let len = code.bytes.len() as u64;
+        g.chunks[i] = if g.held + len <= HELD_BYTES {
+            g.held += len;
+            Chunk::Held(code.bytes)
+        } else {
+            if g.spill.is_none() {
+                g.spill = Some(Spill::new()?);
+            }
+            g.spill.as_mut().expect("made above").put(&code.bytes)?
+        };
         g.ends[i] = end_counts;
         if let Some((points, triangles, copies, owned)) = owned {
             g.points += points;
@@ -222,14 +245,11 @@ pub fn compress_source<W: Write + Seek>(
     let coder = Coder {
         params,
         part: &part,
-        shared: Mutex::new((
-            Gathered {
-                spans: vec![(0, 0, 0); n],
-                ends: vec![(0, 0); n],
-                ..Gathered::default()
-            },
-            Spill::new()?,
-        )),
+        shared: Mutex::new(Gathered {
+            chunks: vec![Chunk::Pending; n],
+            ends: vec![(0, 0); n],
+            ..Gathered::default()
+        }),
         total_entries: part.regions.iter().map(|r| r.1).sum(),
         progress,
     };
@@ -244,51 +264,39 @@ pub fn compress_source<W: Write + Seek>(
             };
         }
     }
-    let (gathered, spill) = coder.shared.into_inner().unwrap_or_else(|e| e.into_inner());
+    let mut gathered = coder.shared.into_inner().unwrap_or_else(|e| e.into_inner());
     let t2 = Instant::now();
     let mut nodes = part.nodes.clone();
     for (node, &(v, s)) in nodes.iter_mut().zip(&gathered.ends) {
         node.end_vertices = v;
         node.end_simplices = s;
     }
-    let family_bits = gathered.counts.family_bits();
-    let family_symbols = gathered.counts.family_symbols();
-    let counts = gathered.counts.quantised();
-    let tables = counts.to_bytes();
-    let models = counts.models();
     let w = |e| CodecError::io("writing the compressed file", e);
     // the head first, the trailer (counts and index) last: no seeking back (format.rs)
     let head = format::head_bytes(&part.grid, &params);
     out.write_all(&head).map_err(w)?;
-    out.write_all(&tables).map_err(w)?;
-    let mut pos = (head.len() + tables.len()) as u64;
-    let mut temp = spill.reader()?;
-    let mut deflated = Vec::new();
-    // chunks in pre-order, each read back from the temporary file and range-coded
-    for (node, &(at, len, count)) in nodes.iter_mut().zip(&gathered.spans) {
-        deflated.resize(len as usize, 0);
-        let r = |e| CodecError::io("reading the temporary code file", e);
-        temp.seek(SeekFrom::Start(at)).map_err(r)?;
-        temp.read_exact(&mut deflated).map_err(r)?;
-        let mut raw = Vec::with_capacity(4 * count as usize);
-        flate2::read::DeflateDecoder::new(&deflated[..])
-            .read_to_end(&mut raw)
-            .map_err(r)?;
-        if raw.len() != 4 * count as usize {
-            return Err(CodecError::io(
-                "reading the temporary code file",
-                std::io::Error::other("a cell's symbols came back short"),
-            ));
-        }
-        let symbols: Vec<Symbol> = raw
-            .chunks_exact(4)
-            .map(|b| Symbol(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
-            .collect();
-        let chunk = entropy::encode(&symbols, &models);
-        out.write_all(&chunk).map_err(w)?;
+    let mut pos = head.len() as u64;
+    let mut temp = gathered.spill.take().map(Spill::reader).transpose()?;
+    let mut buf = Vec::new();
+    // chunks in pre-order, from memory or the temporary file
+    for (node, chunk) in nodes.iter_mut().zip(std::mem::take(&mut gathered.chunks)) {
+        let bytes = match chunk {
+            Chunk::Pending => Vec::new(),
+            Chunk::Held(bytes) => bytes,
+            Chunk::Spilled(at, len) => {
+                let r = |e| CodecError::io("reading the temporary code file", e);
+                let f = temp.as_mut().expect("a spilled chunk has a file");
+                buf.resize(len as usize, 0);
+                f.seek(SeekFrom::Start(at)).map_err(r)?;
+                f.read_exact(&mut buf).map_err(r)?;
+                std::mem::take(&mut buf)
+            }
+        };
+        out.write_all(&bytes).map_err(w)?;
         node.offset = pos;
-        node.len = chunk.len() as u64;
-        pos += chunk.len() as u64;
+        node.len = bytes.len() as u64;
+        pos += bytes.len() as u64;
+        buf = bytes;
     }
     let header = Header {
         grid: part.grid,
@@ -299,7 +307,7 @@ pub fn compress_source<W: Write + Seek>(
         vertices: gathered.points,
         triangles: gathered.triangles,
         head_len: head.len() as u64,
-        tables: (head.len() as u64, tables.len() as u64),
+        tables: (head.len() as u64, 0),
         index: (pos, 0),
     };
     let trailer = header.trailer_bytes(&nodes);
@@ -317,8 +325,8 @@ pub fn compress_source<W: Write + Seek>(
         grid: part.grid,
         nsp_cells: n as u64,
         duplicated_simplices: gathered.copies.saturating_sub(gathered.owned),
-        family_bits,
-        family_symbols,
+        family_bits: gathered.family_bits,
+        family_symbols: gathered.family_symbols,
         steps_ms: [ms(t0, t1), ms(t1, t2), ms(t2, t3)],
     })
 }

@@ -18,7 +18,9 @@
 //! | connectivity codes of a split and their contexts | `connectivity` | §3, §5.3 |
 //! | values ↔ halves and preimage masks | `coding` | §3 |
 //! | symbols and their contexts | [`symbols`] | §5.3 |
-//! | range coding with per-level tables | [`entropy`] | §5.2c, §5.3 |
+//! | adaptive binary models, fresh per cell | `adaptive` | §5.3 |
+//! | the binary range coder | `binary_coder` | §5.3 |
+//! | symbols as binary decisions, one pass per cell | [`entropy`] | §5.2c, §5.3 |
 //! | file layout, index at the end | [`format`](mod@format) | §5.1, §5.3 |
 //! | compression pipeline, multi-core | [`encode`] | §5.2, §5.4 |
 //! | decoding | [`decode`] | §6.1 |
@@ -26,7 +28,9 @@
 //! | view-dependent refinement, borders between precisions | [`view`] | §6.2, §6.3 |
 //! | geometry ahead of connectivity (`--ahead`) | [`ahead`] | §6.4 |
 
+mod adaptive;
 pub mod ahead;
+mod binary_coder;
 mod cell_complex;
 mod coding;
 pub mod complex;

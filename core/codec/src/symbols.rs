@@ -108,6 +108,12 @@ pub fn context_banded(family: Family, sub: usize, band: usize) -> usize {
     (family.first_slot() + sub) * MAX_LEVELS + band
 }
 
+/// The same family and sub-context one level (or band) coarser than `ctx`, if any: where an
+/// adaptive model of `ctx` starts from ([`crate::entropy`]).
+pub fn coarser(ctx: usize) -> Option<usize> {
+    (!ctx.is_multiple_of(MAX_LEVELS)).then(|| ctx - 1)
+}
+
 /// The family of context `ctx`.
 pub fn family_of(ctx: usize) -> Family {
     let slot = ctx / MAX_LEVELS;
