@@ -1,9 +1,11 @@
 //! Building the nSP-tree out of core (paper 003 §5.1): the points are read once for the cubic
 //! box and once to quantise them (held at 6 bytes a point up to 16 bits, the RWP of the paper);
-//! the tree grows one level per pass over the triangles, a cell being split when at least
-//! `N_min` top simplices belong to it and its children would not be tiny (`worth_splitting`);
-//! then every top simplex is written to the region of each leaf it belongs to in a raw index
-//! file (the paper's RWI), so that a leaf is later read back with one sequential read.
+//! the tree grows one level per pass over the triangles (the root's level taken in the pass that
+//! counts the triangles), a cell being split when at least `N_min` top simplices belong to it
+//! and its children would not be tiny (`worth_splitting`); then one more pass writes every top
+//! simplex to the region of each leaf it belongs to in a raw index file (the paper's RWI), sized
+//! from the counts the level passes made, so that a leaf is later read back with one sequential
+//! read.
 //!
 //! Only the points, the tree and one small write buffer per leaf are in memory: the triangles
 //! stay on disk, in the input file and the RWI.
@@ -169,19 +171,27 @@ pub fn build(
     })
     .map_err(mesh_error)?;
     progress(0.1)?;
-    // pass 3: triangle count and the referenced vertices
+    // pass 3: triangle count, the referenced vertices, and the root's children's counts (the
+    // first level's pass, taken here: whether the root is split is known only after it)
     let mut referenced = vec![0u64; (n as usize).div_ceil(64)];
     let mut triangles = 0u64;
+    let root_parents: FxHashMap<u64, usize> = [(code([0; 3]), 0)].into_iter().collect();
+    let mut root_children: FxHashMap<u64, u64> = FxHashMap::default();
+    let root_may_split = n > 0 && params.precision(0).1 < params.bits;
     src.triangles(&mut |t| {
         for x in t {
             referenced[x as usize / 64] |= 1 << (x % 64);
         }
         triangles += 1;
+        if root_may_split {
+            count_children(&params, &points, 0, &root_parents, &t, &mut root_children);
+        }
     })
     .map_err(mesh_error)?;
     let isolated: Vec<u32> = (0..n as u32)
         .filter(|&i| referenced[i as usize / 64] & (1 << (i % 64)) == 0)
         .collect();
+    let mut root_children = Some(root_children);
     // the tree, one level per pass
     let mut arena = Arena {
         nodes: vec![Node::default()],
@@ -211,24 +221,16 @@ pub fn build(
             .map(|&i| (code(arena.nodes[i].cell), i))
             .collect();
         let mut child_counts: FxHashMap<u64, u64> = FxHashMap::default();
-        let mut count = |vertices: &mut dyn Iterator<Item = u32>| {
-            let cells: Vec<[u32; 3]> = vertices
-                .map(|x| params.cell_at(depth + 1, points.get(x)))
-                .collect();
-            for (k, c) in cells.iter().enumerate() {
-                if cells[..k].contains(c) {
-                    continue;
-                }
-                let parent = c.map(|x| x / params.cell_split);
-                if parents.contains_key(&code(parent)) {
-                    *child_counts.entry(code(*c)).or_insert(0) += 1;
-                }
-            }
-        };
-        src.triangles(&mut |t| count(&mut t.into_iter()))
-            .map_err(mesh_error)?;
+        match root_children.take() {
+            Some(counted) if depth == 0 => child_counts = counted,
+            _ => src
+                .triangles(&mut |t| {
+                    count_children(&params, &points, depth, &parents, &t, &mut child_counts)
+                })
+                .map_err(mesh_error)?,
+        }
         for &i in &isolated {
-            count(&mut std::iter::once(i));
+            count_children(&params, &points, depth, &parents, &[i], &mut child_counts);
         }
         let mut children: Vec<(u64, u64)> = child_counts.into_iter().collect();
         children.sort_unstable();
@@ -321,28 +323,20 @@ pub fn build(
         }
         i
     };
-    // pass: entries per leaf, then pass: write them (the RWI)
-    let mut sizes = vec![0u64; nodes.len()];
-    if !nodes.is_empty() {
-        let mut tally = |vs: &[u32]| {
-            for leaf in distinct3(std::array::from_fn(|k| {
-                leaf_of(points.get(vs[k.min(vs.len() - 1)]))
-            })) {
-                sizes[leaf] += 1;
-            }
-        };
-        src.triangles(&mut |t| tally(&t)).map_err(mesh_error)?;
-        for &i in &isolated {
-            tally(&[i]);
-        }
-    }
-    progress(0.4)?;
+    // entries per leaf: a leaf's simplices are those with a vertex in it, which its level's pass
+    // counted (no pass of their own); then one pass writes them (the RWI)
     let mut regions = vec![(0u64, 0u64); nodes.len()];
     let mut at = 0u64;
-    for (r, &s) in regions.iter_mut().zip(&sizes) {
-        *r = (at, s);
+    for (k, &i) in order.iter().enumerate() {
+        let s = if nodes[k].children.is_empty() {
+            arena.counts[i]
+        } else {
+            0
+        };
+        regions[k] = (at, s);
         at += s;
     }
+    progress(0.4)?;
     let rwi = tempfile::tempfile().map_err(|e| CodecError::io("creating the raw index file", e))?;
     rwi.set_len(at * 12)
         .map_err(|e| CodecError::io("sizing the raw index file", e))?;
@@ -423,6 +417,30 @@ pub fn worth_splitting(params: &Params, sum: u64, nonempty: u64) -> bool {
 /// splits its 70 564-simplex root into 42 children of 1 700 on average), the 1.1 M-triangle torus
 /// 318 -> 33 cells, 12.81 -> 12.09 b/v; 4 gives the same trees on the shared meshes.
 pub const CHILD_SHARE: u64 = 8;
+
+/// Adds simplex `vertices` to the counts of the cells at `depth + 1` it belongs to (each once)
+/// whose parent is in `parents`.
+fn count_children(
+    params: &Params,
+    points: &Points,
+    depth: u32,
+    parents: &FxHashMap<u64, usize>,
+    vertices: &[u32],
+    counts: &mut FxHashMap<u64, u64>,
+) {
+    let mut cells = [[0u32; 3]; 3];
+    for (k, &x) in vertices.iter().enumerate() {
+        let c = params.cell_at(depth + 1, points.get(x));
+        cells[k] = c;
+        if cells[..k].contains(&c) {
+            continue;
+        }
+        let parent = c.map(|x| x / params.cell_split);
+        if parents.contains_key(&code(parent)) {
+            *counts.entry(code(c)).or_insert(0) += 1;
+        }
+    }
+}
 
 /// Position of `node` among its parent's children.
 fn position(params: &Params, node: &Node) -> usize {

@@ -62,3 +62,82 @@ fn a_large_surface_splits_into_bounded_cells() {
         );
     }
 }
+
+/// Counts the passes over the triangles.
+struct Counting<'a> {
+    inner: tessd_codec::source::Slices<'a>,
+    triangle_passes: usize,
+}
+
+impl tessd_codec::source::MeshSource for Counting<'_> {
+    fn vertex_count(&self) -> u64 {
+        self.inner.vertex_count()
+    }
+    fn vertices(&mut self, f: &mut dyn FnMut([f32; 3])) -> Result<(), tessd_mesh::MeshError> {
+        self.inner.vertices(f)
+    }
+    fn triangles(&mut self, f: &mut dyn FnMut([u32; 3])) -> Result<(), tessd_mesh::MeshError> {
+        self.triangle_passes += 1;
+        self.inner.triangles(f)
+    }
+}
+
+#[test]
+fn each_leaf_region_holds_exactly_its_simplices_in_one_pass_per_level_and_one_to_write() {
+    use tessd_codec::partition::{POINT_MARK, build};
+    let (mut p, t) = bunny();
+    // a few unreferenced points, as the bunny has: they are simplices too
+    p.extend([[0.0, 0.1, 0.0], [-0.05, 0.15, 0.02]]);
+    let params = Params {
+        min_cell: 1000,
+        ..Params::default()
+    };
+    let mut src = Counting {
+        inner: tessd_codec::source::Slices {
+            positions: &p,
+            triangles: &t,
+        },
+        triangle_passes: 0,
+    };
+    let part = build(&mut src, params, &|_| true).unwrap();
+    let depth = part.nodes.iter().map(|n| n.depth).max().unwrap();
+    assert!(depth >= 2, "a tree of depth {depth}");
+    // the count pass takes the root's level; the last level splits nothing; then the write
+    assert_eq!(src.triangle_passes, depth as usize + 1);
+    // the leaf holding a grid point, down from the root
+    let leaf_of = |q: [u32; 3]| {
+        let mut i = 0;
+        loop {
+            let n = &part.nodes[i];
+            match params.child_of(n.depth, n.cell, q) {
+                Some(pos) if n.child_mask & (1 << pos) != 0 => {
+                    i = n.children[(n.child_mask & ((1u64 << pos) - 1)).count_ones() as usize]
+                }
+                _ => return i,
+            }
+        }
+    };
+    let mut expected = vec![Vec::new(); part.nodes.len()];
+    let mut used = vec![false; p.len()];
+    for tri in &t {
+        let mut leaves: Vec<usize> = tri.iter().map(|&x| leaf_of(part.points.get(x))).collect();
+        leaves.dedup();
+        leaves.sort_unstable();
+        leaves.dedup();
+        for l in leaves {
+            expected[l].push(*tri);
+        }
+        tri.iter().for_each(|&x| used[x as usize] = true);
+    }
+    for (i, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
+        let i = i as u32;
+        expected[leaf_of(part.points.get(i))].push([i, POINT_MARK, POINT_MARK]);
+    }
+    for (i, want) in expected.iter_mut().enumerate() {
+        let mut got = part.leaf(i).unwrap();
+        assert_eq!(got.len() as u64, part.regions[i].1);
+        got.sort_unstable();
+        want.sort_unstable();
+        assert_eq!(&got, want, "cell {i}");
+    }
+}
