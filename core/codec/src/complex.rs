@@ -94,9 +94,9 @@ pub struct Complex {
     pub vertices: Vec<Vertex>,
     /// Simplex slots; `None` once removed.
     pub simplices: Vec<Option<Simplex>>,
-    /// Per vertex, the slots of simplices that held it at some point, each once (slots are never
-    /// reused, so a live slot listed here still holds the vertex; dead ones are dropped lazily by
-    /// [`Complex::incident`]).
+    /// Per vertex, the slots of the live simplices holding it, each once, in slot order (slots
+    /// are never reused; [`Complex::remove`] takes a slot out of its vertices' lists at once, so
+    /// that the lists are always clean and readers need no pruning pass).
     incident: Vec<Vec<u32>>,
     /// Live simplices.
     pub live: usize,
@@ -124,28 +124,43 @@ impl Complex {
         }
     }
 
-    /// Removes the simplex in `slot`.
+    /// Removes the simplex in `slot`, and its slot from its vertices' lists.
     pub fn remove(&mut self, slot: u32) {
-        if self.simplices[slot as usize].take().is_some() {
-            self.live -= 1;
+        let Some(s) = self.simplices[slot as usize].take() else {
+            return;
+        };
+        self.live -= 1;
+        let n = if s.kind == POINT { 1 } else { 3 };
+        for (i, &x) in s.v[..n].iter().enumerate() {
+            if !s.v[..i].contains(&x) {
+                let list = &mut self.incident[x as usize];
+                // slots are listed in increasing order and the newest are removed most
+                if let Some(k) = list.iter().rposition(|&t| t == slot) {
+                    list.remove(k);
+                }
+            }
         }
     }
 
-    /// The slots of the live simplices holding `v`, each once (stale entries forgotten).
+    /// The slots of the live simplices holding `v`, each once.
     pub fn incident(&mut self, v: u32) -> &[u32] {
-        self.prune(v);
         &self.incident[v as usize]
     }
 
-    /// Forgets the dead slots listed for `v`.
-    pub fn prune(&mut self, v: u32) {
-        let simplices = &self.simplices;
-        self.incident[v as usize].retain(|&s| simplices[s as usize].is_some());
-    }
+    /// Kept for callers written when the lists were pruned lazily: the lists are always clean
+    /// now, so there is nothing to do.
+    pub fn prune(&mut self, _v: u32) {}
 
-    /// The slots listed for `v`, live once [`Complex::prune`] ran for it.
+    /// The slots of the live simplices holding `v`, each once, in slot order.
     pub fn listed(&self, v: u32) -> &[u32] {
         &self.incident[v as usize]
+    }
+
+    /// Drops the list of a vertex that holds nothing any more and never will (a merged-away
+    /// child), returning its memory.
+    pub fn forget(&mut self, v: u32) {
+        debug_assert!(self.incident[v as usize].is_empty());
+        self.incident[v as usize] = Vec::new();
     }
 
     /// Ids of the vertices that still hold a simplex, in id order.
@@ -164,6 +179,42 @@ impl Complex {
     /// The live simplices.
     pub fn live_simplices(&self) -> impl Iterator<Item = Simplex> + '_ {
         self.simplices.iter().flatten().copied()
+    }
+}
+
+/// The preimage masks of a merge's coarse simplices, sorted by simplex: a merge has a handful,
+/// so a small sorted vector (built by one sort, looked up by binary search) replaces a hash map.
+#[derive(Clone, Debug, Default)]
+pub struct MaskList(pub Vec<(Simplex, u8)>);
+
+impl MaskList {
+    /// Sorts the `(coarse simplex, candidate bit)` pairs pushed so far and merges the pairs of
+    /// one simplex into its mask.
+    pub fn settle(&mut self) {
+        let list = &mut self.0;
+        list.sort_unstable_by_key(|e| e.0);
+        let mut w = 0;
+        for r in 0..list.len() {
+            if w > 0 && list[w - 1].0 == list[r].0 {
+                list[w - 1].1 |= list[r].1;
+            } else {
+                list[w] = list[r];
+                w += 1;
+            }
+        }
+        list.truncate(w);
+    }
+}
+
+impl std::ops::Index<&Simplex> for MaskList {
+    type Output = u8;
+
+    fn index(&self, c: &Simplex) -> &u8 {
+        let i = self
+            .0
+            .binary_search_by(|e| e.0.cmp(c))
+            .expect("a coarse simplex of this merge");
+        &self.0[i].1
     }
 }
 
@@ -210,30 +261,51 @@ pub fn candidate_of(s: &Simplex, v1: u32, v2: u32) -> usize {
 /// The candidate preimages of coarse simplex `c` (holding `v`) when `v` splits into `v1` = `v`
 /// and `v2`, in the numbering of [`candidate_of`].
 pub fn candidates(c: &Simplex, v: u32, v2: u32) -> Vec<Simplex> {
-    let v1 = v;
-    if c.kind == POINT {
-        return vec![Simplex::point(v1), Simplex::point(v2)];
+    candidate_array(c, v, v2).as_slice().to_vec()
+}
+
+/// Two or four candidate preimages, held inline (no allocation per split).
+#[derive(Clone, Copy, Debug)]
+pub struct Candidates {
+    items: [Simplex; 4],
+    len: u8,
+}
+
+impl Candidates {
+    /// The candidates, in the numbering of [`candidate_of`].
+    pub fn as_slice(&self) -> &[Simplex] {
+        &self.items[..self.len as usize]
     }
-    match c.multiplicity(v) {
+}
+
+/// [`candidates`] without an allocation.
+pub fn candidate_array(c: &Simplex, v: u32, v2: u32) -> Candidates {
+    let v1 = v;
+    let two = |a: Simplex, b: Simplex| Candidates {
+        items: [a, b, a, b],
+        len: 2,
+    };
+    if c.kind == POINT {
+        return two(Simplex::point(v1), Simplex::point(v2));
+    }
+    let items = match c.multiplicity(v) {
         1 => {
             let i = c.v.iter().position(|&x| x == v).unwrap();
             let (a, b) = (c.v[(i + 1) % 3], c.v[(i + 2) % 3]);
-            vec![Simplex::triangle(v1, a, b), Simplex::triangle(v2, a, b)]
+            return two(Simplex::triangle(v1, a, b), Simplex::triangle(v2, a, b));
         }
         2 => {
             let x = *c.v.iter().find(|&&x| x != v).unwrap();
-            let pair = [(v1, v1), (v1, v2), (v2, v1), (v2, v2)];
-            pair.iter()
-                .map(|&(a, b)| Simplex::triangle(a, b, x))
-                .collect()
+            [(v1, v1), (v1, v2), (v2, v1), (v2, v2)].map(|(a, b)| Simplex::triangle(a, b, x))
         }
-        _ => vec![
+        _ => [
             Simplex::triangle(v1, v1, v1),
             Simplex::triangle(v2, v2, v2),
             Simplex::triangle(v1, v1, v2),
             Simplex::triangle(v1, v2, v2),
         ],
-    }
+    };
+    Candidates { items, len: 4 }
 }
 
 #[cfg(test)]

@@ -92,7 +92,7 @@ pub(crate) trait Masks {
 
 /// Encoder side: masks from the fine complex, symbols appended.
 pub(crate) struct Known<'a> {
-    pub(crate) masks: FxHashMap<Simplex, u8>,
+    pub(crate) masks: crate::complex::MaskList,
     pub(crate) out: &'a mut Vec<Symbol>,
 }
 

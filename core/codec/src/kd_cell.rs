@@ -1,8 +1,8 @@
-//! The kd-tree's cells (paper 003 §3, GD02): a vertex's key in kd order, the side of a cell's
-//! high half, and which half a vertex lies in. Shared by the coder, its contexts, the geometry
+//! The kd-tree's cells (paper 003 §3, GD02): a vertex's key in kd order and the side of a
+//! cell's high half. Shared by the coder, its contexts, the geometry
 //! ahead and the decoder's assembly.
 
-use crate::complex::{Vertex, axis_bits};
+use crate::complex::axis_bits;
 
 /// Spreads the low 21 bits of `x` to every third bit (bit `i` to bit `3i`).
 fn spread(x: u32) -> u64 {
@@ -52,13 +52,6 @@ pub fn kd_key(corner: [u32; 3], level: usize, bits: u32) -> u64 {
 /// Side of the high half of a split at kd `level`, in grid units.
 pub fn half(level: usize, bits: u32) -> u32 {
     1u32 << (bits - axis_bits(level, level % 3) - 1)
-}
-
-/// Whether `w` lies in the high half-space of the split of a cell at `level` with lower corner
-/// `corner`.
-pub(crate) fn high_side(w: &Vertex, corner: [u32; 3], level: usize, bits: u32) -> bool {
-    let a = level % 3;
-    w.corner[a] >= corner[a] + half(level, bits)
 }
 
 #[cfg(test)]

@@ -23,10 +23,8 @@
 //!   orientation the neighbouring fine triangles imply;
 //! - a triangle made of the vertex alone: whether either child already holds a collapsed edge.
 
-use rustc_hash::FxHashMap;
-
 use crate::ahead::Geometry;
-use crate::complex::{Complex, Simplex, candidate_of, candidates};
+use crate::complex::{Complex, MaskList, Simplex, candidate_array, candidate_of};
 use crate::connectivity::{Known, Read, code_connectivity};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
@@ -63,6 +61,7 @@ pub fn encode(
     // with geometry ahead: the split codes of every level, in kd order
     let mut ahead: Vec<Vec<Symbol>> = vec![Vec::new(); hi - lo];
     let mut conn: Vec<Symbol> = Vec::new();
+    let mut scratch = Scratch::default();
     for level in (lo..hi).rev() {
         let a = level % 3;
         let h = half(level, bits);
@@ -96,7 +95,7 @@ pub fn encode(
                     u8::from(high)
                 }
                 Some(v2) => {
-                    merge(cx, x, v2, level, bits, &mut conn);
+                    merge(cx, x, v2, level, bits, &mut conn, &mut scratch);
                     2
                 }
             };
@@ -152,28 +151,54 @@ pub fn encode(
     out
 }
 
+/// Buffers one cell's merges or splits reuse, so that a split allocates nothing of its own.
+#[derive(Default)]
+struct Scratch {
+    slots: Vec<u32>,
+    coarse: Vec<Simplex>,
+    masks: MaskList,
+}
+
 /// Merges `v2` (high child) into `v1` (low child) and appends the connectivity codes of the
 /// inverse split, in the decoder's order.
-fn merge(cx: &mut Complex, v1: u32, v2: u32, level: usize, bits: u32, out: &mut Vec<Symbol>) {
-    let mut fine_slots = cx.incident(v1).to_vec();
+fn merge(
+    cx: &mut Complex,
+    v1: u32,
+    v2: u32,
+    level: usize,
+    bits: u32,
+    out: &mut Vec<Symbol>,
+    scratch: &mut Scratch,
+) {
+    let fine_slots = &mut scratch.slots;
+    fine_slots.clear();
+    fine_slots.extend_from_slice(cx.incident(v1));
     fine_slots.extend_from_slice(cx.incident(v2));
     fine_slots.sort_unstable();
     fine_slots.dedup();
-    let mut masks: FxHashMap<Simplex, u8> = FxHashMap::default();
-    for &slot in &fine_slots {
+    let mut masks = std::mem::take(&mut scratch.masks);
+    masks.0.clear();
+    for &slot in fine_slots.iter() {
         let s = cx.simplices[slot as usize].expect("incident() lists live simplices");
-        *masks.entry(s.renamed(v2, v1)).or_insert(0) |= 1 << candidate_of(&s, v1, v2);
+        masks
+            .0
+            .push((s.renamed(v2, v1), 1 << candidate_of(&s, v1, v2)));
         cx.remove(slot);
     }
+    masks.settle();
     cx.vertices[v1 as usize].level = level as u8;
     cx.vertices[v2 as usize].level = u8::MAX;
-    let coarse: Vec<Simplex> = masks.keys().copied().collect();
-    for &c in &coarse {
+    cx.forget(v2);
+    let coarse = &mut scratch.coarse;
+    coarse.clear();
+    coarse.extend(masks.0.iter().map(|e| e.0));
+    for &c in coarse.iter() {
         cx.add(c);
     }
     let mut known = Known { masks, out };
-    code_connectivity(cx, &coarse, v1, v2, level, bits, &mut known)
+    code_connectivity(cx, coarse, v1, v2, level, bits, &mut known)
         .expect("the encoder knows every mask");
+    scratch.masks = known.masks;
 }
 
 /// Limits a decoder holds a cell to, so that a corrupt file cannot make it grow without bound.
@@ -227,6 +252,7 @@ pub fn decode(
         }
         *geometry = Some(g);
     }
+    let mut scratch = Scratch::default();
     for level in lo..hi {
         let a = level % 3;
         let h = half(level, bits);
@@ -265,7 +291,7 @@ pub fn decode(
                         ));
                     }
                     let v2 = cx.add_vertex(high);
-                    split_vertex(cx, v, v2, level, bits, reader)?;
+                    split_vertex(cx, v, v2, level, bits, reader, &mut scratch)?;
                     next.push(v);
                     next.push(v2);
                     if cx.live > limits.simplices {
@@ -300,21 +326,26 @@ fn split_vertex(
     level: usize,
     bits: u32,
     reader: &mut SymbolReader,
+    scratch: &mut Scratch,
 ) -> Result<(), CodecError> {
-    let slots = cx.incident(v).to_vec();
-    let coarse: Vec<Simplex> = slots
-        .iter()
-        .map(|&s| cx.simplices[s as usize].expect("live"))
-        .collect();
-    let decoded = code_connectivity(cx, &coarse, v, v2, level, bits, &mut Read { reader })?;
-    for &s in &slots {
+    let Scratch { slots, coarse, .. } = scratch;
+    slots.clear();
+    slots.extend_from_slice(cx.incident(v));
+    coarse.clear();
+    coarse.extend(
+        slots
+            .iter()
+            .map(|&s| cx.simplices[s as usize].expect("live")),
+    );
+    let decoded = code_connectivity(cx, coarse, v, v2, level, bits, &mut Read { reader })?;
+    for &s in slots.iter() {
         cx.remove(s);
     }
     cx.vertices[v as usize].level = level as u8 + 1;
     for (c, mask) in decoded {
-        for (i, f) in candidates(&c, v, v2).into_iter().enumerate() {
+        for (i, f) in candidate_array(&c, v, v2).as_slice().iter().enumerate() {
             if mask & (1 << i) != 0 {
-                cx.add(f);
+                cx.add(*f);
             }
         }
     }
