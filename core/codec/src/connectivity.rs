@@ -3,7 +3,7 @@
 //! both sides compute from the decoder's state. The encoder knows the masks ([`Known`]), the
 //! decoder reads them ([`Read`]).
 
-use rustc_hash::FxHashMap;
+use std::cell::RefCell;
 
 use crate::coding::Coding;
 use crate::complex::{Complex, POINT, Simplex};
@@ -12,39 +12,96 @@ use crate::error::CodecError;
 use crate::kd_cell::half;
 use crate::symbols::{Family, Symbol, context, context_banded};
 
-/// The order in which the simplices holding `v` are coded: points, then triangles holding `v`
-/// once, twice, three times; among those, by the corners of their other vertices in turn order.
-fn order_key(cx: &Complex, s: &Simplex, v: u32) -> (u8, u8, [u32; 3], [u32; 3]) {
-    let k = s.multiplicity(v) as u8;
-    let c = |x: u32| cx.vertices[x as usize].corner;
-    if s.kind == POINT || k == 3 {
-        return (s.kind, k, [0; 3], [0; 3]);
+/// Per-thread buffers of [`code_connectivity`], reused from split to split: the stars are small
+/// and the splits many, so hash maps and fresh vectors per split cost more than the codes.
+/// The other vertices of a star are numbered locally (0, 1, … in order of first appearance) and
+/// every per-vertex state lives in small arrays indexed by that number.
+#[derive(Default)]
+struct Scratch {
+    /// Per vertex id of the complex: the generation that last numbered it, and its number.
+    stamp: Vec<u32>,
+    local: Vec<u32>,
+    generation: u32,
+    /// Per local number: the vertex id; its rank in corner order; whether it is a pivot; its
+    /// links; its orientation evidence; its centre's offset from the split plane.
+    ids: Vec<u32>,
+    rank: Vec<u32>,
+    pivot: Vec<bool>,
+    link: Vec<u8>,
+    evidence: Vec<i32>,
+    offset: Vec<i64>,
+    /// (corner, local number), sorted to give the ranks.
+    by_corner: Vec<([u32; 3], u32)>,
+    /// (order key, index into the coarse simplices), sorted: the coding order.
+    order: Vec<(u64, u32)>,
+    /// The once-held triangles in coding order: local a, local b, index into the coarse list.
+    once: Vec<(u32, u32, u32)>,
+    /// The once-held triangles around each local vertex (offsets into `around`).
+    start: Vec<u32>,
+    around: Vec<u32>,
+    visited: Vec<bool>,
+    bfs: Vec<u32>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::default();
+}
+
+impl Scratch {
+    /// Numbers the other vertices of the star of `v` and ranks them by corner.
+    fn number(&mut self, cx: &Complex, coarse: &[Simplex], v: u32) {
+        if self.stamp.len() < cx.vertices.len() {
+            self.stamp.resize(cx.vertices.len(), 0);
+            self.local.resize(cx.vertices.len(), 0);
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.stamp.fill(0);
+            self.generation = 1;
+        }
+        self.ids.clear();
+        for c in coarse {
+            for &x in &c.v {
+                if x != v && self.stamp[x as usize] != self.generation {
+                    self.stamp[x as usize] = self.generation;
+                    self.local[x as usize] = self.ids.len() as u32;
+                    self.ids.push(x);
+                }
+            }
+        }
+        let n = self.ids.len();
+        self.by_corner.clear();
+        self.by_corner.extend(
+            self.ids
+                .iter()
+                .enumerate()
+                .map(|(l, &x)| (cx.vertices[x as usize].corner, l as u32)),
+        );
+        // corners are distinct among live kd-cells (they do not overlap), so ranks never tie
+        self.by_corner.sort_unstable();
+        self.rank.resize(n, 0);
+        for (r, &(_, l)) in self.by_corner.iter().enumerate() {
+            self.rank[l as usize] = r as u32;
+        }
+        for a in [&mut self.pivot, &mut self.visited] {
+            a.clear();
+            a.resize(n, false);
+        }
+        self.link.clear();
+        self.link.resize(n, 0);
+        self.evidence.clear();
+        self.evidence.resize(n, 0);
     }
-    if k == 1 {
-        let i = s.v.iter().position(|&x| x == v).unwrap();
-        (s.kind, k, c(s.v[(i + 1) % 3]), c(s.v[(i + 2) % 3]))
-    } else {
-        let x = *s.v.iter().find(|&&x| x != v).unwrap();
-        (s.kind, k, c(x), [0; 3])
+
+    fn of(&self, x: u32) -> u32 {
+        self.local[x as usize]
     }
 }
 
-/// Orientation evidence for a triangle holding both children and `x`: +1 when the fine
-/// triangles around predict `(v1, v2, x)`, −1 for `(v2, v1, x)`, 0 when they do not say.
-fn orientation_evidence(once: &[Simplex], v1: u32, v2: u32, x: u32) -> i32 {
-    let (mut e12, mut e21) = (0i32, 0i32);
-    for t in once.iter().filter(|t| t.v.contains(&x)) {
-        for i in 0..3 {
-            let (a, b) = (t.v[i], t.v[(i + 1) % 3]);
-            if (a == x && b == v2) || (a == v1 && b == x) {
-                e12 += 1;
-            }
-            if (a == x && b == v1) || (a == v2 && b == x) {
-                e21 += 1;
-            }
-        }
-    }
-    (e12 - e21).signum()
+/// The vertices after `v` in the turn order of a triangle holding it once.
+fn others(c: &Simplex, v: u32) -> (u32, u32) {
+    let i = c.v.iter().position(|&x| x == v).unwrap();
+    (c.v[(i + 1) % 3], c.v[(i + 2) % 3])
 }
 
 /// The sub-context and predicted child (`true` = high) of a once-held triangle `(v, a, b)` from
@@ -118,9 +175,11 @@ impl Masks for Read<'_> {
 /// The connectivity codes of the split of `v` (low child, keeps the id) and `v2` (§3), over the
 /// coarse complex `cx`: points first, then the triangles holding `v` once in breadth-first order
 /// through their shared vertices (so each is predicted from its decoded neighbours), then those
-/// holding it twice (orientation from the once-held ones), then three times. Returns every
-/// coarse simplex with its preimage mask. Encoder and decoder both run this, so their contexts
-/// cannot drift apart.
+/// holding it twice (orientation from the once-held ones), then three times; within a kind, in
+/// the order of the corners of their other vertices in turn order. Returns every coarse simplex
+/// with its preimage mask. Encoder and decoder both run this, so their contexts cannot drift
+/// apart; every order and context comes from corners and decoded masks, never from vertex ids
+/// (the two sides number vertices differently).
 pub(crate) fn code_connectivity(
     cx: &Complex,
     coarse: &[Simplex],
@@ -130,86 +189,132 @@ pub(crate) fn code_connectivity(
     bits: u32,
     masks: &mut impl Masks,
 ) -> Result<Vec<(Simplex, u8)>, CodecError> {
-    let mut sorted: Vec<Simplex> = coarse.to_vec();
-    sorted.sort_by_key(|c| order_key(cx, c, v));
-    let corner = cx.vertices[v as usize].corner;
-    let mut out = Vec::with_capacity(sorted.len());
-    // breadth-first order of the once-held triangles
-    let once_coarse: Vec<usize> = (0..sorted.len())
-        .filter(|&i| sorted[i].kind != POINT && sorted[i].multiplicity(v) == 1)
-        .collect();
-    let others = |c: &Simplex| {
-        let i = c.v.iter().position(|&x| x == v).unwrap();
-        (c.v[(i + 1) % 3], c.v[(i + 2) % 3])
-    };
-    let mut by_vertex: FxHashMap<u32, Vec<usize>> = FxHashMap::default();
-    for &i in &once_coarse {
-        let (a, b) = others(&sorted[i]);
-        by_vertex.entry(a).or_default().push(i);
-        if b != a {
-            by_vertex.entry(b).or_default().push(i);
+    SCRATCH.with(|s| code_with(&mut s.borrow_mut(), cx, coarse, (v, v2), level, bits, masks))
+}
+
+fn code_with(
+    s: &mut Scratch,
+    cx: &Complex,
+    coarse: &[Simplex],
+    (v, v2): (u32, u32),
+    level: usize,
+    bits: u32,
+    masks: &mut impl Masks,
+) -> Result<Vec<(Simplex, u8)>, CodecError> {
+    s.number(cx, coarse, v);
+    // the coding order: kind, multiplicity, then the ranks of the other vertices in turn order
+    s.order.clear();
+    let mut vvv = false;
+    for (i, c) in coarse.iter().enumerate() {
+        let k = c.multiplicity(v) as u64;
+        let head = ((c.kind as u64) << 2 | k) << 48;
+        let key = if c.kind == POINT || k == 3 {
+            vvv |= c.kind != POINT;
+            head
+        } else if k == 1 {
+            let (a, b) = others(c, v);
+            head | (s.rank[s.of(a) as usize] as u64) << 24 | s.rank[s.of(b) as usize] as u64
+        } else {
+            let x = *c.v.iter().find(|&&x| x != v).unwrap();
+            let l = s.of(x) as usize;
+            s.pivot[l] = true;
+            head | (s.rank[s.of(x) as usize] as u64) << 24
+        };
+        s.order.push((key, i as u32));
+    }
+    s.order.sort_unstable();
+    debug_assert!(s.order.windows(2).all(|w| w[0].0 != w[1].0));
+    let mut out = Vec::with_capacity(coarse.len());
+    // points, and the once-held triangles around each other vertex
+    s.once.clear();
+    for &(key, i) in &s.order {
+        let c = &coarse[i as usize];
+        if c.kind == POINT {
+            let family = Family::Point;
+            let coding = Coding {
+                ctx: context(family, 0, level),
+                family,
+                flip: false,
+            };
+            out.push((*c, masks.mask(c, coding)?));
+        } else if key >> 48 & 3 == 1 {
+            let (a, b) = others(c, v);
+            s.once.push((s.of(a), s.of(b), i));
         }
     }
-    let mut visited = vec![false; sorted.len()];
-    let mut bfs: Vec<usize> = Vec::with_capacity(once_coarse.len());
-    for &start in &once_coarse {
-        if visited[start] {
+    s.start.clear();
+    s.start.resize(s.ids.len() + 1, 0);
+    for &(a, b, _) in &s.once {
+        s.start[a as usize + 1] += 1;
+        if b != a {
+            s.start[b as usize + 1] += 1;
+        }
+    }
+    for l in 0..s.ids.len() {
+        s.start[l + 1] += s.start[l];
+    }
+    s.around.clear();
+    s.around.resize(s.start[s.ids.len()] as usize, 0);
+    {
+        let mut fill: Vec<u32> = s.start[..s.ids.len()].to_vec();
+        for (j, &(a, b, _)) in s.once.iter().enumerate() {
+            s.around[fill[a as usize] as usize] = j as u32;
+            fill[a as usize] += 1;
+            if b != a {
+                s.around[fill[b as usize] as usize] = j as u32;
+                fill[b as usize] += 1;
+            }
+        }
+    }
+    // breadth-first order of the once-held triangles through their shared vertices
+    s.bfs.clear();
+    let mut seen = std::mem::take(&mut s.visited);
+    seen.clear();
+    seen.resize(s.once.len(), false);
+    for first in 0..s.once.len() {
+        if seen[first] {
             continue;
         }
-        visited[start] = true;
-        let mut head = bfs.len();
-        bfs.push(start);
-        while head < bfs.len() {
-            let (a, b) = others(&sorted[bfs[head]]);
+        seen[first] = true;
+        let mut head = s.bfs.len();
+        s.bfs.push(first as u32);
+        while head < s.bfs.len() {
+            let (a, b, _) = s.once[s.bfs[head] as usize];
             head += 1;
             for x in [a, b] {
-                for &j in &by_vertex[&x] {
-                    if !visited[j] {
-                        visited[j] = true;
-                        bfs.push(j);
+                let (from, to) = (s.start[x as usize], s.start[x as usize + 1]);
+                for k in from..to {
+                    let j = s.around[k as usize];
+                    if !seen[j as usize] {
+                        seen[j as usize] = true;
+                        s.bfs.push(j);
                     }
                 }
             }
         }
     }
-    // points
-    for c in sorted.iter().filter(|c| c.kind == POINT) {
-        let family = Family::Point;
-        let coding = Coding {
-            ctx: context(family, 0, level),
-            family,
-            flip: false,
-        };
-        out.push((*c, masks.mask(c, coding)?));
-    }
+    s.visited = seen;
     // once-held triangles, predicted from the links their other vertices already have, whether
     // those are pivots, and where their midpoint lies from the split plane
-    let pivots: Vec<u32> = sorted
-        .iter()
-        .filter(|c| c.kind != POINT && c.multiplicity(v) == 2)
-        .map(|c| *c.v.iter().find(|&&x| x != v).unwrap())
-        .collect();
+    let corner = cx.vertices[v as usize].corner;
     let ax = level % 3;
-    let plane2 = 2 * (corner[ax] as i64 + half(level, bits) as i64);
-    // a vertex's centre from the split plane along its axis, in half grid units
-    let offset = |x: u32| {
+    let h = half(level, bits) as i64;
+    let plane2 = 2 * (corner[ax] as i64 + h);
+    // a vertex's centre from the split plane along the axis, in half grid units
+    s.offset.clear();
+    s.offset.extend(s.ids.iter().map(|&x| {
         let w = &cx.vertices[x as usize];
         2 * w.corner[ax] as i64 + w.extent(ax, bits) as i64 - 1 - plane2
-    };
+    }));
     let band = (level / 3).clamp(4, 7) - 4;
-    let mut link: FxHashMap<u32, u8> = FxHashMap::default();
-    let mut once: Vec<Simplex> = Vec::new();
     let mut any_both = false;
-    for i in bfs {
-        let c = sorted[i];
-        let (a, b) = others(&c);
-        let (la, lb) = (
-            link.get(&a).copied().unwrap_or(0),
-            link.get(&b).copied().unwrap_or(0),
-        );
+    for &j in &s.bfs {
+        let (a, b, i) = s.once[j as usize];
+        let c = coarse[i as usize];
+        let (a, b) = (a as usize, b as usize);
         // the midpoint of a and b from the plane, in quarters of a child's side
-        let mid = (offset(a) + offset(b)).div_euclid(half(level, bits) as i64);
-        let (sub, flip) = once_context((la, pivots.contains(&a)), (lb, pivots.contains(&b)), mid);
+        let mid = (s.offset[a] + s.offset[b]).div_euclid(h);
+        let (sub, flip) = once_context((s.link[a], s.pivot[a]), (s.link[b], s.pivot[b]), mid);
         let family = Family::TriangleOnce;
         let mask = masks.mask(
             &c,
@@ -219,14 +324,18 @@ pub(crate) fn code_connectivity(
                 flip,
             },
         )?;
-        for x in [a, b] {
-            *link.entry(x).or_insert(0) |= mask;
-        }
+        s.link[a] |= mask;
+        s.link[b] |= mask;
+        // orientation evidence for the twice-held triangles (v1 v2 x): the fine triangle
+        // (v1, a, b) has the edges v1→a and b→v1, which predict (v1, v2, a) and (v2, v1, b);
+        // (v2, a, b) the opposite
         if mask & 1 != 0 {
-            once.push(Simplex::triangle(v, a, b));
+            s.evidence[a] += 1;
+            s.evidence[b] -= 1;
         }
         if mask & 2 != 0 {
-            once.push(Simplex::triangle(v2, a, b));
+            s.evidence[a] -= 1;
+            s.evidence[b] += 1;
         }
         any_both |= mask == 3;
         out.push((c, mask));
@@ -234,17 +343,16 @@ pub(crate) fn code_connectivity(
     // twice-held triangles: the third vertex's links and the orientation of the once-held ones,
     // whether `(v, v, v)` exists (then the cell held a collapsed triangle) and whether a
     // once-held triangle went to both children
-    let vvv = sorted
-        .iter()
-        .any(|c| c.kind != POINT && c.multiplicity(v) == 3);
     let (mut collapsed_low, mut collapsed_high) = (false, false);
-    for c in sorted
-        .iter()
-        .filter(|c| c.kind != POINT && c.multiplicity(v) == 2)
-    {
+    for &(key, i) in &s.order {
+        let c = &coarse[i as usize];
+        if c.kind == POINT || key >> 48 & 3 != 2 {
+            continue;
+        }
         let x = *c.v.iter().find(|&&x| x != v).unwrap();
-        let lx = link.get(&x).copied().unwrap_or(0);
-        let ev = orientation_evidence(&once, v, v2, x);
+        let l = s.of(x) as usize;
+        let lx = s.link[l];
+        let ev = s.evidence[l].signum();
         let flip = lx == 2 || (lx != 1 && ev < 0);
         let ev = if flip { -ev } else { ev };
         let lx = if lx == 2 { 1 } else { lx.min(3) };
@@ -264,26 +372,24 @@ pub(crate) fn code_connectivity(
         collapsed_high |= mask & 8 != 0;
         out.push((*c, mask));
     }
-    for c in sorted
-        .iter()
-        .filter(|c| c.kind != POINT && c.multiplicity(v) == 3)
-    {
+    // the triangle made of the vertex alone
+    for &(key, i) in &s.order {
+        let c = &coarse[i as usize];
+        if c.kind == POINT || key >> 48 & 3 != 3 {
+            continue;
+        }
         let family = Family::Thrice;
         let sub = (usize::from(collapsed_low) * 2 + usize::from(collapsed_high)) * 2
             + usize::from(any_both);
-        out.push((
-            *c,
-            masks.mask(
-                c,
-                Coding {
-                    ctx: context(family, sub, level),
-                    family,
-                    flip: false,
-                },
-            )?,
-        ));
+        let coding = Coding {
+            ctx: context(family, sub, level),
+            family,
+            flip: false,
+        };
+        out.push((*c, masks.mask(c, coding)?));
     }
     #[cfg(test)]
     crate::connectivity_study::record(cx, v, level, bits, &out);
+    let _ = v2;
     Ok(out)
 }

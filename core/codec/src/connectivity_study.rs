@@ -145,6 +145,9 @@ struct OnceFeat {
     far: bool,
     level: usize,
     n_once: usize,
+    /// links of a and b from twice-held triangles coded before (twice-first designs)
+    ta: u8,
+    tb: u8,
 }
 
 /// Runs the once/twice/thrice codes of one split through `design`.
@@ -155,6 +158,7 @@ fn run(
     once_ctx: &dyn Fn(&OnceFeat) -> (u64, bool),
     twice_ctx: &dyn Fn(&TwiceFeat) -> (u64, bool),
     thrice_ctx: &dyn Fn(&ThriceFeat) -> u64,
+    twice_first: bool,
 ) {
     let ax = s.level % 3;
     let h = half(s.level, s.bits) as i64;
@@ -187,6 +191,41 @@ fn run(
     let mut fine: Vec<Simplex> = Vec::new();
     let v2 = u32::MAX;
     let mut any_both = false;
+    let (mut cl, mut ch) = (false, false);
+    // links from the twice-held triangles, when they are coded first
+    let mut tlink: HashMap<u32, u8> = HashMap::new();
+    let mut code_twice = |cost: &mut Cost,
+                          link: &HashMap<u32, u8>,
+                          fine: &[Simplex],
+                          any_both: bool,
+                          tlink: &mut HashMap<u32, u8>| {
+        for &(c, m) in &twice {
+            let x = *c.v.iter().find(|&&x| x != v).unwrap();
+            let f = TwiceFeat {
+                lx: link.get(&x).copied().unwrap_or(0),
+                ev: orientation_evidence(fine, v, v2, x),
+                vvv: !thrice.is_empty(),
+                any_both,
+                level: s.level,
+                n_once: once.len(),
+                n_twice: twice.len(),
+                xq: (g.off(x) * 4).div_euclid(g.h2),
+            };
+            let (ctx, flip) = twice_ctx(&f);
+            cost.mask(2, ctx, if flip { swap_children(m) } else { m });
+            cl |= m & 1 != 0;
+            ch |= m & 8 != 0;
+            let t = if m & 6 != 0 {
+                3
+            } else {
+                (m & 1) | ((m >> 2) & 2)
+            };
+            *tlink.entry(x).or_insert(0) |= t;
+        }
+    };
+    if twice_first {
+        code_twice(cost, &link, &fine, false, &mut tlink);
+    }
     for &(c, m) in &once {
         let (a, b) = others(&c, v);
         let la = link.get(&a).copied().unwrap_or(0);
@@ -203,6 +242,8 @@ fn run(
             far: far(a) && far(b),
             level: s.level,
             n_once: once.len(),
+            ta: tlink.get(&a).copied().unwrap_or(0),
+            tb: tlink.get(&b).copied().unwrap_or(0),
         };
         let (ctx, flip) = once_ctx(&f);
         cost.tag = format!(
@@ -226,22 +267,8 @@ fn run(
             fine.push(Simplex::triangle(v2, a, b));
         }
     }
-    let (mut cl, mut ch) = (false, false);
-    for &(c, m) in &twice {
-        let x = *c.v.iter().find(|&&x| x != v).unwrap();
-        let f = TwiceFeat {
-            lx: link.get(&x).copied().unwrap_or(0),
-            ev: orientation_evidence(&fine, v, v2, x),
-            vvv: !thrice.is_empty(),
-            any_both,
-            level: s.level,
-            n_once: once.len(),
-            n_twice: twice.len(),
-        };
-        let (ctx, flip) = twice_ctx(&f);
-        cost.mask(2, ctx, if flip { swap_children(m) } else { m });
-        cl |= m & 1 != 0;
-        ch |= m & 8 != 0;
+    if !twice_first {
+        code_twice(cost, &link, &fine, any_both, &mut tlink);
     }
     for &(_, m) in &thrice {
         let f = ThriceFeat {
@@ -264,6 +291,8 @@ struct TwiceFeat {
     level: usize,
     n_once: usize,
     n_twice: usize,
+    /// the third vertex's centre from the plane, in quarters of a child's side
+    xq: i64,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -383,13 +412,14 @@ fn load(path: &str, bits: u32, min_cell: u64) -> (Vec<Split>, f64) {
 
 type Design<'a> = (
     &'a str,
+    bool,
     &'a dyn Fn(&OnceFeat) -> (u64, bool),
     &'a dyn Fn(&TwiceFeat) -> (u64, bool),
     &'a dyn Fn(&ThriceFeat) -> u64,
 );
 
 fn report(name: &str, splits: &[Split], nv: f64, designs: &[Design], diag: bool) {
-    for (dn, o, t, th) in designs {
+    for (dn, first, o, t, th) in designs {
         let mut cost = Cost::default();
         let mut last = 0;
         for s in splits {
@@ -397,7 +427,7 @@ fn report(name: &str, splits: &[Split], nv: f64, designs: &[Design], diag: bool)
                 cost.counts.clear();
             }
             last = s.level;
-            run(s, &mut cost, *o, *t, *th);
+            run(s, &mut cost, *o, *t, *th, *first);
         }
         let b = cost.bits.map(|x| x / nv);
         println!(
@@ -483,12 +513,57 @@ fn connectivity_study() {
         ((u64::from(f.cl) * 2 + u64::from(f.ch)) * 2 + u64::from(f.any_both)) * 4 + band
     };
     let h3 = |f: &ThriceFeat| h2(f) * 4 + f.n_twice.min(7) as u64 / 2;
+    let xband = |q: i64, flip: bool| {
+        let m = if flip { q } else { -1 - q };
+        match m {
+            ..=-5 => 0,
+            -4..=-1 => 1,
+            0..=3 => 2,
+            _ => 3,
+        }
+    };
+    let t4 = |f: &TwiceFeat| {
+        let flip = f.lx == 2 || (f.lx != 1 && (f.ev < 0 || (f.ev == 0 && f.xq >= 0)));
+        let (c, _) = today_twice(f);
+        (
+            (c * 4 + u64::from(f.vvv) * 2 + u64::from(f.any_both)) * 4 + xband(f.xq, flip),
+            flip,
+        )
+    };
+    // twice first: geometry of x only
+    let tf = |f: &TwiceFeat| {
+        let flip = f.xq >= 0;
+        let band = (f.level / 3).clamp(4, 7) as u64 - 4;
+        (
+            ((band * 2 + u64::from(f.vvv)) * 4 + xband(f.xq, flip)) * 4 + f.n_twice.min(3) as u64,
+            flip,
+        )
+    };
+    let of = |f: &OnceFeat| {
+        let flip = match (f.la, f.lb, f.ta, f.tb) {
+            (1 | 2, _, _, _) => f.la == 2,
+            (_, 1 | 2, _, _) => f.lb == 2,
+            (_, _, 1 | 2, _) => f.ta == 2,
+            (_, _, _, 1 | 2) => f.tb == 2,
+            _ => f.mid >= 0,
+        };
+        let x = rel(f.la, flip) * 4 + rel(f.ta, flip);
+        let y = rel(f.lb, flip) * 4 + rel(f.tb, flip);
+        let (x, y) = (x.max(y), x.min(y));
+        let band = (f.level / 3).clamp(4, 7) as u64 - 4;
+        (
+            ((x * (x + 1) / 2 + y) * 6 + mid_band(f, flip)) * 4 + band,
+            flip,
+        )
+    };
     let designs: Vec<Design> = vec![
-        ("today", &today_once, &today_twice, &today_thrice),
-        ("once p", &o1, &today_twice, &today_thrice),
-        ("once p4-7", &o2, &t1, &h1),
-        ("+n t2 h2", &o3, &t2, &h2),
-        ("t3 h3", &o2, &t3, &h3),
+        ("today", false, &today_once, &today_twice, &today_thrice),
+        ("once p", false, &o1, &t1, &h1),
+        ("once p4-7", false, &o2, &t1, &h1),
+        ("+n t2 h2", false, &o3, &t2, &h2),
+        ("t3 h3", false, &o2, &t3, &h3),
+        ("t4", false, &o2, &t4, &h1),
+        ("twice first", true, &of, &tf, &h1),
     ];
     for (path, mc) in &meshes {
         let (splits, nv) = load(path, 12, *mc);
