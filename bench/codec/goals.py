@@ -29,8 +29,8 @@ BEFORE = Path(__file__).resolve().parents[1] / "results" / "codec_budget_before.
 
 
 def tsc_layout(path):
-    """(head bytes, trailer bytes with its tail, tables bytes) of a version-2 .tsc file (see
-    core/codec/src/format.rs), or None for another version."""
+    """(head bytes, trailer bytes with its tail, tables bytes: none in version 2) of a version-2
+    .tsc file (see core/codec/src/format.rs), or None for another version."""
     b = Path(path).read_bytes()
     if len(b) < 13 or b[:4] != b"TSC\x1a" or struct.unpack_from("<H", b, 4)[0] != 2:
         return None
@@ -40,15 +40,7 @@ def tsc_layout(path):
         at += 1
     head = at + 1
     trailer = struct.unpack_from("<I", b, len(b) - 4)[0]
-    t, vals, v, shift = len(b) - 4 - trailer, [], 0, 0
-    while len(vals) < 6:  # flags, 4 counts, tables length
-        v |= (b[t] & 0x7F) << shift
-        shift += 7
-        if not b[t] & 0x80:
-            vals.append(v)
-            v, shift = 0, 0
-        t += 1
-    return head, trailer + 4, vals[5]
+    return head, trailer + 4, 0
 
 
 def user_time(argv, repeats=3):

@@ -179,7 +179,7 @@ impl Tsc {
 
     /// Bytes every decode reads: header, tables, index.
     fn fixed_bytes(&self) -> u64 {
-        self.header.head_len + self.header.tables.1 + self.header.index.1
+        self.header.head_len + self.header.index.1
     }
 
     /// Decodes every cell up to `max_bits` bits per coordinate (the file's `p` when `None`).

@@ -307,7 +307,6 @@ pub fn compress_source<W: Write + Seek>(
         vertices: gathered.points,
         triangles: gathered.triangles,
         head_len: head.len() as u64,
-        tables: (head.len() as u64, 0),
         index: (pos, 0),
     };
     let trailer = header.trailer_bytes(&nodes);

@@ -4,10 +4,9 @@
 //! ```text
 //! head      written first, known before any code: magic, version (u16 at bytes 4..6), the packed
 //!           parameters (p, n, p_r, m), the grid (origin, step: each an f32 where that is exact,
-//!           else an f64), N_min as a varint                              31 bytes on the bunny
-//! tables    probability tables, as counts (while the coder has them)
+//!           else an f64), N_min as a varint                              32 bytes on the bunny
 //! chunks    one range-coded chunk per nSP-cell
-//! trailer   written last: flags, the counts, the tables' length, then the nSP-tree in
+//! trailer   written last: flags, the counts, then the nSP-tree in
 //!           pre-order: child mask, chunk offset (its distance from where the previous chunk
 //!           ended: 0 when the chunks follow each other) and length, the cell's final size
 //!           (a decoder's bound), all varints
@@ -56,10 +55,8 @@ pub struct Header {
     pub vertices: u64,
     /// Distinct oriented triangles after quantisation.
     pub triangles: u64,
-    /// Length of the head ([`head_bytes`]): where the tables start.
+    /// Length of the head ([`head_bytes`]): where the first chunk starts.
     pub head_len: u64,
-    /// Offset and length of the probability tables.
-    pub tables: (u64, u64),
     /// Offset and length of the trailer, tail included (the index is its end).
     pub index: (u64, u64),
 }
@@ -187,8 +184,8 @@ fn read_head(b: &[u8]) -> Result<(Quantizer, Params, u64), CodecError> {
 
 impl Header {
     /// The trailer and the tail, written after the last chunk: the flags and counts known only
-    /// once every cell is coded, then the index of `nodes` (pre-order). `self.tables` must be
-    /// set; `self.index` is not read.
+    /// once every cell is coded, then the index of `nodes` (pre-order). `self.index` is not
+    /// read.
     pub fn trailer_bytes(&self, nodes: &[Node]) -> Vec<u8> {
         let mut out = Vec::new();
         for v in [
@@ -197,12 +194,11 @@ impl Header {
             self.input_triangles,
             self.vertices,
             self.triangles,
-            self.tables.1,
         ] {
             varint::put(&mut out, v);
         }
         varint::put(&mut out, nodes.len() as u64);
-        let mut expected = self.tables.0 + self.tables.1;
+        let mut expected = self.head_len;
         for n in nodes {
             // zigzag: a chunk may sit before the previous one's end in another writer's order
             let gap = n.offset.wrapping_sub(expected) as i64;
@@ -245,18 +241,12 @@ pub fn read<B: AsRef<[u8]>>(
     let trailer = read(base, trailer_len)?;
     let b = trailer.as_ref();
     let mut at = 0usize;
-    let mut f = [0u64; 6];
+    let mut f = [0u64; 5];
     for x in &mut f {
         *x = varint::get(b, &mut at, base)?;
     }
     if f[0] > (ROOT_TRIANGLE | ROOT_POINT) as u64 {
         return Err(CodecError::corrupt(base, format!("unknown flags {}", f[0])));
-    }
-    if f[5] > base - head_len {
-        return Err(CodecError::corrupt(
-            base,
-            format!("{} bytes of tables in a {file_len}-byte file", f[5]),
-        ));
     }
     let header = Header {
         grid,
@@ -267,10 +257,9 @@ pub fn read<B: AsRef<[u8]>>(
         vertices: f[3],
         triangles: f[4],
         head_len,
-        tables: (head_len, f[5]),
         index: (base, trailer_len + TAIL_LEN as u64),
     };
-    let nodes = index_from_bytes(b, &mut at, base, &params, (head_len + f[5], base))?;
+    let nodes = index_from_bytes(b, &mut at, base, &params, (head_len, base))?;
     if at != b.len() {
         return Err(CodecError::corrupt(
             base + at as u64,
@@ -281,7 +270,7 @@ pub fn read<B: AsRef<[u8]>>(
 }
 
 /// Reads the index at `b[*at..]` (file offset `base`), checking every chunk lies within
-/// `chunks` (the byte range between the tables and the trailer) and the tree's shape.
+/// `chunks` (the byte range between the head and the trailer) and the tree's shape.
 fn index_from_bytes(
     b: &[u8],
     at: &mut usize,
