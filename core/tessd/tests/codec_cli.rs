@@ -148,3 +148,27 @@ fn bad_parameters_and_a_corrupt_file_are_clear_errors_and_leave_nothing() {
         assert_eq!(files, ["a.tsc", "bad.tsc", "d.sock", "d.sock.lock"]);
     }
 }
+
+#[test]
+fn a_version_1_file_is_refused_naming_its_version() {
+    // suzanne at 10 bits, written by the format-1 tessd (core/codec/tests/data)
+    let v1 = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../codec/tests/data/suzanne_v1_p10.tsc");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.ply");
+    let r = tessd()
+        .arg("decompress")
+        .arg(&v1)
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("byte offset 4")
+            && err.contains("written by format version 1 (an older tessd)")
+            && err.contains("compress the mesh again"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
