@@ -231,6 +231,7 @@ def goal_section(rows, by, before_path=BEFORE):
     go = math.exp(statistics.mean(math.log(x) for x in olds)) if olds and all(olds) else None
     L.append(f"| gmean size ÷ Draco-10 over the {len(meshes)} shared meshes, p12 | ≤ 1.4 | {_f(go)} | {_f(g)} | "
              f"{_mark(None if g is None else g <= 1.4)} |")
+    per_mesh = ", ".join(f"{m} {_f(r)}" for m, r in zip(meshes, rs))
     sp0 = before.get("speed_one_core", {})
     if speed and "error" not in speed:
         tris = speed["triangles"]
@@ -252,7 +253,8 @@ def goal_section(rows, by, before_path=BEFORE):
     L.append("Size ratios: tessd's file for the mesh without its unreferenced vertices (Draco drops them; "
              "only where the mesh has some: the bunnies' 1 113) over Draco-10's file on the same quantised "
              "mesh; the *before* column divides the v1 file (with them) by the same Draco file. Geometry and "
-             "connectivity of GD02 from paper 003 (~14 + 3.5 b/v on the bunny).\n")
+             "connectivity of GD02 from paper 003 (~14 + 3.5 b/v on the bunny). Per mesh, now: "
+             + per_mesh + ".\n")
     errs = [r for r in rows if r.get("record") == "goal" and "error" in r]
     for r in errs:
         L.append(f"* goal run {r.get('mesh', r.get('kind'))}: error `{r['error'][-300:]}`")
