@@ -146,13 +146,11 @@ fn mask_decisions(value: u8, mut f: impl FnMut(usize, bool)) {
 
 /// Cost in bits of a decision by its probability, as `2^-16` bits, indexed by the
 /// probability's top 12 bits.
-static COST: LazyLock<Vec<u32>> = LazyLock::new(|| {
-    (0..1u32 << 12)
-        .map(|i| {
-            let p = (i as f64 * 16.0 + 8.0) / 65536.0;
-            (-p.log2() * 65536.0).round() as u32
-        })
-        .collect()
+static COST: LazyLock<[u32; 4096]> = LazyLock::new(|| {
+    std::array::from_fn(|i| {
+        let p = (i as f64 * 16.0 + 8.0) / 65536.0;
+        (-p.log2() * 65536.0).round() as u32
+    })
 });
 
 /// One cell's chunk and what it cost.
@@ -172,6 +170,16 @@ pub fn encode(symbols: &[Symbol]) -> CellCode {
     encode_in(symbols, Contexts::new())
 }
 
+/// Codes one decision with model `m` and adds its cost to `spent`.
+#[inline(always)]
+fn put(coder: &mut Encoder, m: &mut Model, bit: bool, spent: &mut u64, cost: &[u32; 4096]) {
+    let p0 = m.p0();
+    let p = if bit { (1 << PROB_BITS) - p0 } else { p0 };
+    *spent += cost[(p >> 4) as usize & 4095] as u64;
+    coder.encode(bit, p0);
+    m.update(bit);
+}
+
 fn encode_in(symbols: &[Symbol], mut cx: Contexts) -> CellCode {
     let mut coder = Encoder::new(Vec::with_capacity(symbols.len() / 2));
     let cost = &*COST;
@@ -179,23 +187,21 @@ fn encode_in(symbols: &[Symbol], mut cx: Contexts) -> CellCode {
     let mut counts = [0u64; FAMILIES];
     for s in symbols {
         let (first, family) = cx.of(s.context());
-        let models = &mut cx.models[first..];
         let spent = &mut bits[family as usize];
         counts[family as usize] += 1;
-        let mut code = |m: &mut Model, bit: bool| {
-            let p0 = m.p0();
-            let p = if bit { (1 << PROB_BITS) - p0 } else { p0 };
-            *spent += cost[(p >> 4) as usize] as u64;
-            coder.encode(bit, p0);
-            m.update(bit);
-        };
         let v = s.value();
         if is_mask(family) {
-            mask_decisions(v, |node, bit| code(&mut models[node], bit));
+            let models = &mut cx.models[first..first + MASK_MODELS as usize];
+            mask_decisions(v, |node, bit| {
+                put(&mut coder, &mut models[node], bit, spent, cost)
+            });
         } else {
-            code(&mut models[0], v == 2);
+            let [both, which] = &mut cx.models[first..first + 2] else {
+                unreachable!("two models")
+            };
+            put(&mut coder, both, v == 2, spent, cost);
             if v != 2 {
-                code(&mut models[1], v == 1);
+                put(&mut coder, which, v == 1, spent, cost);
             }
         }
     }
@@ -204,6 +210,14 @@ fn encode_in(symbols: &[Symbol], mut cx: Contexts) -> CellCode {
         family_bits: bits.map(|b| b as f64 / 65536.0),
         family_symbols: counts,
     }
+}
+
+/// Decodes one decision with model `m`.
+#[inline(always)]
+fn get(d: &mut Decoder<'_>, m: &mut Model) -> bool {
+    let bit = d.decode(m.p0());
+    m.update(bit);
+    bit
 }
 
 /// Reads one cell's symbols back, in the order the kd coder asks for them.
@@ -236,30 +250,30 @@ impl SymbolReader {
     /// The next value in context `ctx`.
     pub fn next(&mut self, ctx: usize) -> Result<u8, CodecError> {
         let (first, family) = self.contexts.of(ctx);
-        let models = &mut self.contexts.models[first..];
         let d = &mut self.decoder;
-        let mut read = |m: &mut Model| {
-            let bit = d.decode(m.p0());
-            m.update(bit);
-            bit
-        };
         let v = if is_mask(family) {
+            let models = &mut self.contexts.models[first..first + MASK_MODELS as usize];
             let mut node = 1usize;
             let mut word = 0u8;
             for i in 0..4 {
                 let forced = if i == 3 { forced_last(node) } else { None };
                 let bit = match forced {
                     Some(bit) => bit,
-                    None => read(&mut models[node - 1]),
+                    None => get(d, &mut models[node - 1]),
                 };
                 word |= (bit as u8) << i;
                 node = 2 * node + bit as usize;
             }
             word - 1
-        } else if read(&mut models[0]) {
-            2
         } else {
-            u8::from(read(&mut models[1]))
+            let [both, which] = &mut self.contexts.models[first..first + 2] else {
+                unreachable!("two models")
+            };
+            if get(d, both) {
+                2
+            } else {
+                u8::from(get(d, which))
+            }
         };
         if self.decoder.overrun() > 4 {
             return Err(CodecError::corrupt(
