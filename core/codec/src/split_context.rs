@@ -1,70 +1,319 @@
-//! The context of a kd split (paper 003 §3, §5.3): the half the vertex's neighbours' centroid
-//! predicts, the margin of that prediction, and whether the cell holds a collapsed triangle.
-//! Encoder and decoder both run [`split_coding`] on the same complex, so they cannot drift.
+//! The context of a kd split (paper 003 §3, §5.3; GD02 §4): what the decoder's complex says about
+//! where the surface crosses a cell before the cell is split. Encoder and decoder both run
+//! [`split_coding`] on the same complex, so they cannot drift: every input is a position or an
+//! incidence of the coarse complex (never a vertex id, which differs between the two sides), and
+//! all arithmetic is on integers (the same bits on every machine and in any summation order).
+//!
+//! A split codes "only the low half is non-empty", "only the high one", or "both". Which half is
+//! about where the surface passes, "both" about how many points the cell holds. The predictors:
+//! - the **centroid** of the vertex's neighbours (GD02): its side of the split plane is the
+//!   predicted half, its distance from the plane in half-cells the margin;
+//! - the **parallelogram** average over the star (for each triangle `(v, x, y)` of the oriented
+//!   star, `x + y − z` for the triangle `(y, x, z)` across its far edge): where it falls against
+//!   the centroid's side. The centroid sits inside a curved surface and the parallelogram outside
+//!   it; where they agree the half is nearly sure, where they disagree the plane runs between;
+//! - the **tangent plane** of the oriented star (the sum of its triangles' normals, oriented by
+//!   their corner order): whether its normal points along the split axis (|n_a| ≥ 0.7 |n|: then
+//!   the surface crosses the axis once and one half is empty), and if so whether it points
+//!   towards the predicted half (the surface bulges outwards, past the centroid);
+//! - whether the cell holds a **collapsed** triangle (`v v x` or `v v v`: two of the input's
+//!   points fell in this cell, so both halves are likely non-empty);
+//! - the **density**: the neighbours' mean distance in half-cells, in octaves (below 2, 2–4, 4–8,
+//!   8–16, beyond). It stands for the kd level of §5.3's per-level tables, and unlike the level it
+//!   means the same at every precision and on every mesh, so a handful of classes suffice.
 
-use crate::coding::{Coding, margin_context};
-use crate::complex::{Complex, POINT};
+use crate::coding::Coding;
+use crate::complex::{Complex, POINT, Vertex};
 use crate::kd_cell::half;
-use crate::symbols::{Family, context};
+use crate::symbols::{Family, MAX_LEVELS, context};
 
-/// The coding of the split decision of vertex `v` (before its split at `level`): predicted half
-/// from its neighbours' centroid, sub-context from that prediction's margin and from whether the
-/// cell holds a collapsed triangle (then it likely holds several points).
+/// Margin classes of the centroid: none, then its distance from the split plane in half-cells
+/// below 1/8, 1/4, 1/2, 1, 2 and beyond.
+const MARGINS: usize = 7;
+/// Parallelogram classes: none found, agrees with the centroid's side, disagrees.
+const PARALLELOGRAM: usize = 3;
+/// Tangent-plane classes: normal not along the split axis (or none), along it towards the
+/// predicted half, along it away from it.
+const PLANE: usize = 3;
+/// Density classes (octaves of the neighbours' distance in half-cells).
+const DENSITY: usize = 5;
+
+/// Number of [`Family::Split`] sub-contexts: margin × collapsed × parallelogram.
+pub(crate) const SPLIT_SUBS: usize = MARGINS * 2 * PARALLELOGRAM;
+/// Values the level slot of a split context takes: density × tangent plane.
+const SPLIT_LEVELS: usize = DENSITY * PLANE;
+const _: () = assert!(SPLIT_SUBS == Family::Split.subs() && SPLIT_LEVELS <= MAX_LEVELS);
+
+/// A cell's doubled centre along every axis, `2·corner + extent − 1` (exact integers).
+fn doubled(w: &Vertex, bits: u32) -> [i64; 3] {
+    std::array::from_fn(|a| 2 * w.corner[a] as i64 + w.extent(a, bits) as i64 - 1)
+}
+
+/// What the decoder's complex holds around a vertex, summed in integers.
+#[derive(Default)]
+struct Star {
+    /// Neighbour corners counted (a neighbour once per star edge reaching it).
+    count: i64,
+    /// Σ of their doubled centres.
+    sum: [i64; 3],
+    /// Σ over those of the largest coordinate distance from the vertex (doubled units).
+    reach: i64,
+    /// Σ of the oriented triangles' cross products (doubled units, relative to the vertex).
+    normal: [i128; 3],
+    /// Σ of the parallelogram predictions `x + y − z` (doubled) and how many were found.
+    parallelogram: [i64; 3],
+    parallelograms: i64,
+    /// The cell holds a collapsed triangle.
+    collapsed: bool,
+}
+
+/// Adds the parallelogram predictions across the far edge `x → y` of a star triangle
+/// `(v, x, y)`: `x + y − z` for every triangle `(y, x, z)` (the edge's other side, in the
+/// orientation a consistent surface gives it) whose `z` is none of `v, x, y`.
+fn across(cx: &Complex, v: u32, x: u32, y: u32, p: [[i64; 3]; 2], bits: u32, st: &mut Star) {
+    for &slot in cx.listed(x) {
+        // x's list may hold dead slots (pruned when x itself is split or merged)
+        let Some(s) = cx.simplices[slot as usize] else {
+            continue;
+        };
+        if s.kind == POINT {
+            continue;
+        }
+        for r in 0..3 {
+            let z = s.v[(r + 2) % 3];
+            if s.v[r] == y && s.v[(r + 1) % 3] == x && z != v && z != x && z != y {
+                let pz = doubled(&cx.vertices[z as usize], bits);
+                for a in 0..3 {
+                    st.parallelogram[a] += p[0][a] + p[1][a] - pz[a];
+                }
+                st.parallelograms += 1;
+            }
+        }
+    }
+}
+
+/// The star of `v`: its neighbours' centroid and reach, its oriented normal, the parallelograms
+/// across its far edges, and whether it holds a collapsed triangle.
+fn star(cx: &mut Complex, v: u32, bits: u32) -> Star {
+    let pv = doubled(&cx.vertices[v as usize], bits);
+    let mut st = Star::default();
+    let add = |st: &mut Star, p: [i64; 3]| {
+        st.count += 1;
+        let mut far = 0;
+        for a in 0..3 {
+            st.sum[a] += p[a];
+            far = far.max((p[a] - pv[a]).abs());
+        }
+        st.reach += far;
+    };
+    // the far edges of the star's triangles, on the stack while they are few (the usual case)
+    let mut few = [(0u32, 0u32); 24];
+    let mut count = 0;
+    let mut many: Vec<(u32, u32)> = Vec::new();
+    cx.prune(v);
+    for &slot in cx.listed(v) {
+        let s = cx.simplices[slot as usize].expect("pruned");
+        if s.kind == POINT {
+            continue;
+        }
+        let i =
+            s.v.iter()
+                .position(|&x| x == v)
+                .expect("listed simplices hold v");
+        let (x, y) = (s.v[(i + 1) % 3], s.v[(i + 2) % 3]);
+        match (x == v, y == v) {
+            (false, false) => {
+                let p = [
+                    doubled(&cx.vertices[x as usize], bits),
+                    doubled(&cx.vertices[y as usize], bits),
+                ];
+                add(&mut st, p[0]);
+                add(&mut st, p[1]);
+                let (e, f): ([i64; 3], [i64; 3]) = (
+                    std::array::from_fn(|a| p[0][a] - pv[a]),
+                    std::array::from_fn(|a| p[1][a] - pv[a]),
+                );
+                st.normal[0] += e[1] as i128 * f[2] as i128 - e[2] as i128 * f[1] as i128;
+                st.normal[1] += e[2] as i128 * f[0] as i128 - e[0] as i128 * f[2] as i128;
+                st.normal[2] += e[0] as i128 * f[1] as i128 - e[1] as i128 * f[0] as i128;
+                if x != y {
+                    if count < few.len() {
+                        few[count] = (x, y);
+                        count += 1;
+                    } else {
+                        many.push((x, y));
+                    }
+                }
+            }
+            (true, true) => st.collapsed = true,
+            _ => {
+                st.collapsed = true;
+                let x = if x == v { y } else { x };
+                let p = doubled(&cx.vertices[x as usize], bits);
+                add(&mut st, p);
+                add(&mut st, p);
+            }
+        }
+    }
+    for &(x, y) in few[..count].iter().chain(&many) {
+        let p = [
+            doubled(&cx.vertices[x as usize], bits),
+            doubled(&cx.vertices[y as usize], bits),
+        ];
+        across(cx, v, x, y, p, bits, &mut st);
+    }
+    st
+}
+
+/// Whether `n` points along axis `a` (|n_a| ≥ 0.7 |n|), in integers: the components are first
+/// shifted down to 30 bits so that the squares cannot overflow.
+fn along(n: [i128; 3], a: usize) -> bool {
+    let top = n.iter().map(|c| c.unsigned_abs()).max().unwrap_or(0);
+    if top == 0 {
+        return false;
+    }
+    let shift = (128 - top.leading_zeros()).saturating_sub(30);
+    let m: [i128; 3] = std::array::from_fn(|k| n[k] >> shift);
+    let norm: i128 = m.iter().map(|c| c * c).sum();
+    100 * m[a] * m[a] >= 49 * norm
+}
+
+/// The coding of the split decision of vertex `v` (before its split at `level`), from the
+/// predictors of the module doc: the centroid's side is the predicted half (value 0); the
+/// sub-context is margin × collapsed × parallelogram, and the level slot of the context carries
+/// density × tangent plane (§5.3's per-level tables, by what the level stood for).
 pub(crate) fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
     let a = level % 3;
     let corner = cx.vertices[v as usize].corner;
-    let h = half(level, bits) as f64;
-    let mut collapsed = false;
-    // the distinct neighbours, on the stack while they are few (the usual case)
-    let mut few = [0u32; 48];
-    let mut count = 0usize;
-    let mut many: Vec<u32> = Vec::new();
-    cx.prune(v);
-    for &slot in cx.listed(v) {
-        let s = cx.simplices[slot as usize].expect("live");
-        if s.kind != POINT && s.multiplicity(v) >= 2 {
-            collapsed = true;
-        }
-        for &x in &s.v {
-            if x == v || few[..count].contains(&x) {
-                continue;
-            }
-            if count < few.len() {
-                few[count] = x;
-                count += 1;
-            } else {
-                many.push(x);
-            }
-        }
-    }
-    if !many.is_empty() {
-        many.extend_from_slice(&few);
-        many.sort_unstable();
-        many.dedup();
-    }
-    let others: &[u32] = if many.is_empty() {
-        &few[..count]
-    } else {
-        &many
-    };
-    let (margin, high) = if others.is_empty() {
+    let h = half(level, bits) as i64;
+    let st = star(cx, v, bits);
+    // the split plane in doubled units: corner + h − 1/2
+    let plane = 2 * corner[a] as i64 + 2 * h - 1;
+    let (margin, high) = if st.count == 0 {
         (0, false)
     } else {
-        let sum: f64 = others
+        let off = st.sum[a] - st.count * plane;
+        let d = 8 * off.unsigned_abs();
+        let unit = (2 * h * st.count) as u64;
+        let m = 1 + [1u64, 2, 4, 8, 16]
             .iter()
-            .map(|&x| {
-                let w = &cx.vertices[x as usize];
-                w.corner[a] as f64 + (w.extent(a, bits) - 1) as f64 / 2.0
-            })
-            .sum();
-        let mean = sum / others.len() as f64;
-        let d = ((mean - (corner[a] as f64 + h - 0.5)) / h).abs();
-        (margin_context(d), mean > corner[a] as f64 + h - 0.5)
+            .filter(|&&k| d >= k * unit)
+            .count();
+        (m, off > 0)
+    };
+    let parallelogram = if st.parallelograms == 0 {
+        0
+    } else {
+        let up = st.parallelogram[a] - st.parallelograms * plane > 0;
+        1 + usize::from(up != high)
+    };
+    let plane_class = if along(st.normal, a) {
+        1 + usize::from((st.normal[a] > 0) != high)
+    } else {
+        0
+    };
+    // octaves of the mean reach in half-cells (doubled units: 2h per half-cell)
+    let density = if st.count == 0 {
+        0
+    } else {
+        [2i64, 4, 8, 16]
+            .iter()
+            .filter(|&&k| st.reach >= st.count * 2 * h * k)
+            .count()
     };
     let family = Family::Split;
+    let sub = (margin * 2 + usize::from(st.collapsed)) * PARALLELOGRAM + parallelogram;
     Coding {
-        ctx: context(family, usize::from(collapsed) * 7 + margin, level),
+        ctx: context(family, sub, density * PLANE + plane_class),
         family,
         flip: high,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::complex::Simplex;
+
+    /// A fan of four triangles around `v` in the plane z = 8 (oriented counter-clockwise seen
+    /// from +z), each with the triangle across its far edge, all cells at full precision.
+    fn fan(lift: u32) -> (Complex, u32) {
+        let mut cx = Complex::default();
+        let mut at = |x: u32, y: u32, z: u32| {
+            cx.add_vertex(Vertex {
+                corner: [x, y, z],
+                level: 12,
+            })
+        };
+        let v = at(8, 8, 8 + lift);
+        let ring = [at(12, 8, 8), at(8, 12, 8), at(4, 8, 8), at(8, 4, 8)];
+        // the outer vertices across the far edges: a flat square grid
+        let outer = [at(12, 12, 8), at(4, 12, 8), at(4, 4, 8), at(12, 4, 8)];
+        for i in 0..4 {
+            let (x, y) = (ring[i], ring[(i + 1) % 4]);
+            cx.add(Simplex::triangle(v, x, y));
+            cx.add(Simplex::triangle(y, x, outer[i]));
+        }
+        (cx, v)
+    }
+
+    #[test]
+    fn a_flat_fan_has_a_normal_along_z_and_parallelograms_through_its_plane() {
+        let (mut cx, v) = fan(0);
+        let st = star(&mut cx, v, 4);
+        assert_eq!(st.count, 8, "two corners per star triangle");
+        assert!(!st.collapsed);
+        assert!(along(st.normal, 2) && !along(st.normal, 0) && !along(st.normal, 1));
+        assert!(st.normal[2] > 0, "counter-clockwise from +z");
+        assert_eq!(st.parallelograms, 4);
+        // x + y − z over the fan: each lands on v's own cell centre (doubled: 2·8 + 1 − 1)
+        assert_eq!(st.parallelogram, [4 * 16, 4 * 16, 4 * 16]);
+        assert_eq!(st.sum, [8 * 16, 8 * 16, 8 * 16]);
+    }
+
+    #[test]
+    fn a_collapsed_triangle_marks_the_cell() {
+        let (mut cx, v) = fan(0);
+        let w = cx.add_vertex(Vertex {
+            corner: [0, 0, 0],
+            level: 12,
+        });
+        cx.add(Simplex::triangle(v, v, w));
+        let st = star(&mut cx, v, 4);
+        assert!(st.collapsed);
+        assert_eq!(
+            st.count, 10,
+            "the collapsed triangle's other corner counts twice"
+        );
+    }
+
+    #[test]
+    fn the_plane_test_survives_huge_normals() {
+        let big = 1i128 << 100;
+        assert!(along([big, big / 4, -big / 4], 0));
+        assert!(!along([big, big, big], 0));
+        assert!(!along([0, 0, 0], 1));
+    }
+
+    #[test]
+    fn the_split_of_a_lifted_vertex_is_predicted_below_it() {
+        // v's cell at level 11 (z from 10 to 11) lies above the fan's plane z = 8: the centroid
+        // and the parallelograms lie below its split plane (axis z, 11 % 3 = 2), so the
+        // predicted half is the low one, and the normal points away from it (towards +z)
+        let (mut cx, v) = fan(2);
+        cx.vertices[v as usize].level = 11;
+        let c = split_coding(&mut cx, v, 11, 4);
+        assert!(!c.flip);
+        let (sub, slot) = (c.ctx / MAX_LEVELS, c.ctx % MAX_LEVELS);
+        assert_eq!(
+            sub % PARALLELOGRAM,
+            1,
+            "the parallelograms agree with the centroid"
+        );
+        assert_eq!(
+            slot % PLANE,
+            2,
+            "the normal points away from the predicted half"
+        );
     }
 }

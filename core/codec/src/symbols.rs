@@ -15,8 +15,9 @@ pub const MAX_LEVELS: usize = 64;
 #[repr(u8)]
 pub enum Family {
     /// kd-cell subdivision (§3): 0 = only the half the neighbours predict is non-empty, 1 = only
-    /// the other half, 2 = both. Sub-context: the cell holds a collapsed triangle (×7) and how
-    /// far the neighbours' centroid is from the split plane (no neighbours, then six margins).
+    /// the other half, 2 = both. Sub-context (`split_context`): the centroid's margin (7) ×
+    /// collapsed triangle (2) × the star's parallelograms against the centroid (3); the level
+    /// slot holds the neighbours' density (5) × the star's tangent plane (3) instead of the level.
     Split = 0,
     /// Where a triangle holding the split vertex once goes: 0 = the predicted child, 1 = the
     /// other, 2 = both. Sub-context: which children its other vertices are already linked to by
@@ -64,7 +65,7 @@ impl Family {
     /// Number of sub-contexts.
     pub const fn subs(self) -> usize {
         match self {
-            Family::Split => 14,
+            Family::Split => 42, // split_context::SPLIT_SUBS
             Family::TriangleOnce => 216,
             Family::Twice => 36,
             Family::Thrice => 8,
