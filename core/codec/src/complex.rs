@@ -87,6 +87,100 @@ impl Vertex {
     }
 }
 
+/// Slots a vertex's list holds inline, before it moves to [`Incidence::spill`]: on a 1.1 M
+/// triangle torus most lists a merge or split touches hold 4 to 31 slots (a kd-cell's star
+/// holds its degenerate triangles too), and one 64-byte record is one cache line.
+const INLINE: usize = 15;
+
+/// One vertex's list: up to [`INLINE`] slots in place, else (when `len > INLINE`) `slots[0]`
+/// is the index of its list in [`Incidence::spill`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Star {
+    len: u32,
+    slots: [u32; INLINE],
+}
+
+/// Per-vertex lists of simplex slots in one flat array of fixed records (no allocation per
+/// vertex), long lists spilled to reused vectors.
+#[derive(Clone, Debug, Default)]
+struct Incidence {
+    stars: Vec<Star>,
+    spill: Vec<Vec<u32>>,
+    /// Spill vectors no list uses now (emptied, capacity kept).
+    free: Vec<u32>,
+}
+
+impl Incidence {
+    fn list(&self, v: u32) -> &[u32] {
+        let st = &self.stars[v as usize];
+        if st.len as usize <= INLINE {
+            &st.slots[..st.len as usize]
+        } else {
+            &self.spill[st.slots[0] as usize]
+        }
+    }
+
+    /// Empties `v`'s list.
+    fn clear(&mut self, v: u32) {
+        let st = &mut self.stars[v as usize];
+        if st.len as usize > INLINE {
+            self.spill[st.slots[0] as usize].clear();
+            self.free.push(st.slots[0]);
+        }
+        st.len = 0;
+    }
+
+    fn push(&mut self, v: u32, slot: u32) {
+        let st = &mut self.stars[v as usize];
+        let len = st.len as usize;
+        if len < INLINE {
+            st.slots[len] = slot;
+        } else if len == INLINE {
+            let i = match self.free.pop() {
+                Some(i) => i,
+                None => {
+                    self.spill.push(Vec::new());
+                    (self.spill.len() - 1) as u32
+                }
+            };
+            let list = &mut self.spill[i as usize];
+            list.extend_from_slice(&st.slots);
+            list.push(slot);
+            st.slots[0] = i;
+        } else {
+            self.spill[st.slots[0] as usize].push(slot);
+        }
+        st.len += 1;
+    }
+
+    fn remove(&mut self, v: u32, slot: u32) {
+        let st = &mut self.stars[v as usize];
+        let len = st.len as usize;
+        if len <= INLINE {
+            // slots are listed in increasing order and the newest are removed most
+            if let Some(k) = st.slots[..len].iter().rposition(|&t| t == slot) {
+                for j in k..len - 1 {
+                    st.slots[j] = st.slots[j + 1];
+                }
+                st.len -= 1;
+            }
+            return;
+        }
+        let i = st.slots[0];
+        let list = &mut self.spill[i as usize];
+        // long lists (a coarse vertex holds thousands) are found by halving: slots are sorted
+        if let Ok(k) = list.binary_search(&slot) {
+            list.remove(k);
+            st.len -= 1;
+            if st.len as usize == INLINE {
+                st.slots.copy_from_slice(list);
+                list.clear();
+                self.free.push(i);
+            }
+        }
+    }
+}
+
 /// Vertices, live simplices and who touches whom.
 #[derive(Clone, Debug, Default)]
 pub struct Complex {
@@ -97,7 +191,7 @@ pub struct Complex {
     /// Per vertex, the slots of the live simplices holding it, each once, in slot order (slots
     /// are never reused; [`Complex::remove`] takes a slot out of its vertices' lists at once, so
     /// that the lists are always clean and readers need no pruning pass).
-    incident: Vec<Vec<u32>>,
+    incident: Incidence,
     /// Live simplices.
     pub live: usize,
 }
@@ -106,7 +200,7 @@ impl Complex {
     /// Adds a vertex and returns its id.
     pub fn add_vertex(&mut self, v: Vertex) -> u32 {
         self.vertices.push(v);
-        self.incident.push(Vec::new());
+        self.incident.stars.push(Star::default());
         (self.vertices.len() - 1) as u32
     }
 
@@ -119,7 +213,7 @@ impl Complex {
         let n = if s.kind == POINT { 1 } else { 3 };
         for (i, &x) in s.v[..n].iter().enumerate() {
             if !s.v[..i].contains(&x) {
-                self.incident[x as usize].push(slot);
+                self.incident.push(x, slot);
             }
         }
     }
@@ -133,18 +227,26 @@ impl Complex {
         let n = if s.kind == POINT { 1 } else { 3 };
         for (i, &x) in s.v[..n].iter().enumerate() {
             if !s.v[..i].contains(&x) {
-                let list = &mut self.incident[x as usize];
-                // slots are listed in increasing order and the newest are removed most
-                if let Some(k) = list.iter().rposition(|&t| t == slot) {
-                    list.remove(k);
-                }
+                self.incident.remove(x, slot);
             }
+        }
+    }
+
+    /// Removes the simplices in `slots`, which are every simplex holding the vertices `stars`:
+    /// their lists are emptied at once rather than slot by slot (a coarse vertex's list is
+    /// long, and a split or merge removes all of it).
+    pub fn remove_stars(&mut self, slots: &[u32], stars: &[u32]) {
+        for &x in stars {
+            self.incident.clear(x);
+        }
+        for &slot in slots {
+            self.remove(slot);
         }
     }
 
     /// The slots of the live simplices holding `v`, each once.
     pub fn incident(&mut self, v: u32) -> &[u32] {
-        &self.incident[v as usize]
+        self.incident.list(v)
     }
 
     /// Kept for callers written when the lists were pruned lazily: the lists are always clean
@@ -153,14 +255,13 @@ impl Complex {
 
     /// The slots of the live simplices holding `v`, each once, in slot order.
     pub fn listed(&self, v: u32) -> &[u32] {
-        &self.incident[v as usize]
+        self.incident.list(v)
     }
 
-    /// Drops the list of a vertex that holds nothing any more and never will (a merged-away
-    /// child), returning its memory.
+    /// Marks a vertex that holds nothing any more and never will (a merged-away child); its
+    /// list is already empty and holds no memory of its own.
     pub fn forget(&mut self, v: u32) {
-        debug_assert!(self.incident[v as usize].is_empty());
-        self.incident[v as usize] = Vec::new();
+        debug_assert!(self.incident.list(v).is_empty());
     }
 
     /// Ids of the vertices that still hold a simplex, in id order.
@@ -188,6 +289,15 @@ impl Complex {
 pub struct MaskList(pub Vec<(Simplex, u8)>);
 
 impl MaskList {
+    /// The mask of coarse simplex `c`: a merge has a handful, so a scan beats halving.
+    fn find(&self, c: &Simplex) -> Option<usize> {
+        if self.0.len() <= 16 {
+            self.0.iter().position(|e| e.0 == *c)
+        } else {
+            self.0.binary_search_by(|e| e.0.cmp(c)).ok()
+        }
+    }
+
     /// Sorts the `(coarse simplex, candidate bit)` pairs pushed so far and merges the pairs of
     /// one simplex into its mask.
     pub fn settle(&mut self) {
@@ -210,10 +320,7 @@ impl std::ops::Index<&Simplex> for MaskList {
     type Output = u8;
 
     fn index(&self, c: &Simplex) -> &u8 {
-        let i = self
-            .0
-            .binary_search_by(|e| e.0.cmp(c))
-            .expect("a coarse simplex of this merge");
+        let i = self.find(c).expect("a coarse simplex of this merge");
         &self.0[i].1
     }
 }

@@ -183,8 +183,8 @@ fn merge(
         masks
             .0
             .push((s.renamed(v2, v1), 1 << candidate_of(&s, v1, v2)));
-        cx.remove(slot);
     }
+    cx.remove_stars(fine_slots, &[v1, v2]);
     masks.settle();
     cx.vertices[v1 as usize].level = level as u8;
     cx.vertices[v2 as usize].level = u8::MAX;
@@ -338,9 +338,7 @@ fn split_vertex(
             .map(|&s| cx.simplices[s as usize].expect("live")),
     );
     let decoded = code_connectivity(cx, coarse, v, v2, level, bits, &mut Read { reader })?;
-    for &s in slots.iter() {
-        cx.remove(s);
-    }
+    cx.remove_stars(slots, &[v]);
     cx.vertices[v as usize].level = level as u8 + 1;
     for (c, mask) in decoded {
         for (i, f) in candidate_array(&c, v, v2).as_slice().iter().enumerate() {
