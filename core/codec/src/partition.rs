@@ -116,6 +116,25 @@ pub fn build(
     params: Params,
     progress: &dyn Fn(f64) -> bool,
 ) -> Result<Partition, CodecError> {
+    let budget = (src.vertex_count() / COUNT_BUDGET_SHARE).max(MIN_COUNT_BUDGET);
+    build_with_count_budget(src, params, progress, budget)
+}
+
+/// Cells the counting pass may count at every depth at once, as a share of the vertices: the
+/// counts cost about 32 bytes a cell against the points' 6 bytes a vertex.
+pub const COUNT_BUDGET_SHARE: u64 = 32;
+/// ... and at least this many.
+pub const MIN_COUNT_BUDGET: u64 = 1 << 16;
+
+/// [`build`], counting at most `budget` cells (summed over depths) in the counting pass: every
+/// depth whose counts fit is grown without a pass of its own, the deeper ones one pass each.
+/// The partition does not depend on `budget`.
+pub fn build_with_count_budget(
+    src: &mut dyn MeshSource,
+    params: Params,
+    progress: &dyn Fn(f64) -> bool,
+    budget: u64,
+) -> Result<Partition, CodecError> {
     let progress = |f: f64| {
         if progress(f) {
             Ok(())
@@ -171,27 +190,44 @@ pub fn build(
     })
     .map_err(mesh_error)?;
     progress(0.1)?;
-    // pass 3: triangle count, the referenced vertices, and the root's children's counts (the
-    // first level's pass, taken here: whether the root is split is known only after it)
+    // pass 3: triangle count, the referenced vertices, and the triangles of every cell at every
+    // depth a split can reach (`counted[d]`: depth d + 1), the deepest depths dropped while the
+    // cells counted exceed `budget` or are too many for the tree to reach them: the tree then
+    // grows without passes of its own down to there (which cells split is known only once a
+    // level is complete)
     let mut referenced = vec![0u64; (n as usize).div_ceil(64)];
     let mut triangles = 0u64;
-    let root_parents: FxHashMap<u64, usize> = [(code([0; 3]), 0)].into_iter().collect();
-    let mut root_children: FxHashMap<u64, u64> = FxHashMap::default();
-    let root_may_split = n > 0 && params.precision(0).1 < params.bits;
+    let depths = if n == 0 {
+        0
+    } else {
+        (0..)
+            .take_while(|&d| params.precision(d).1 < params.bits)
+            .count()
+    };
+    let mut counted: Vec<FxHashMap<u64, u64>> = vec![FxHashMap::default(); depths];
+    let mut cells = 0u64;
     src.triangles(&mut |t| {
         for x in t {
             referenced[x as usize / 64] |= 1 << (x % 64);
         }
         triangles += 1;
-        if root_may_split {
-            count_children(&params, &points, 0, &root_parents, &t, &mut root_children);
+        for (d, counts) in counted.iter_mut().enumerate() {
+            cells += count_children(&params, &points, d as u32, None, &t, counts);
+        }
+        // a depth whose cells would average under half of what a split's children need is
+        // unlikely to be reached: stop counting it (checked every 65 536 triangles)
+        let likely = |c: &FxHashMap<u64, u64>| {
+            !triangles.is_multiple_of(65_536)
+                || c.len() as u64 <= (2 * triangles * CHILD_SHARE / params.min_cell).max(4096)
+        };
+        while cells > budget || counted.last().is_some_and(|c| !likely(c)) {
+            cells -= counted.pop().map_or(0, |c| c.len() as u64);
         }
     })
     .map_err(mesh_error)?;
     let isolated: Vec<u32> = (0..n as u32)
         .filter(|&i| referenced[i as usize / 64] & (1 << (i % 64)) == 0)
         .collect();
-    let mut root_children = Some(root_children);
     // the tree, one level per pass
     let mut arena = Arena {
         nodes: vec![Node::default()],
@@ -221,16 +257,38 @@ pub fn build(
             .map(|&i| (code(arena.nodes[i].cell), i))
             .collect();
         let mut child_counts: FxHashMap<u64, u64> = FxHashMap::default();
-        match root_children.take() {
-            Some(counted) if depth == 0 => child_counts = counted,
-            _ => src
+        match counted.get_mut(depth as usize) {
+            Some(all) => {
+                let under = |c: &u64| {
+                    parents.contains_key(&code(uncode(*c).map(|x| x / params.cell_split)))
+                };
+                child_counts = std::mem::take(all)
+                    .into_iter()
+                    .filter(|(c, _)| under(c))
+                    .collect();
+            }
+            None => src
                 .triangles(&mut |t| {
-                    count_children(&params, &points, depth, &parents, &t, &mut child_counts)
+                    count_children(
+                        &params,
+                        &points,
+                        depth,
+                        Some(&parents),
+                        &t,
+                        &mut child_counts,
+                    );
                 })
                 .map_err(mesh_error)?,
         }
         for &i in &isolated {
-            count_children(&params, &points, depth, &parents, &[i], &mut child_counts);
+            count_children(
+                &params,
+                &points,
+                depth,
+                Some(&parents),
+                &[i],
+                &mut child_counts,
+            );
         }
         let mut children: Vec<(u64, u64)> = child_counts.into_iter().collect();
         children.sort_unstable();
@@ -419,16 +477,17 @@ pub fn worth_splitting(params: &Params, sum: u64, nonempty: u64) -> bool {
 pub const CHILD_SHARE: u64 = 8;
 
 /// Adds simplex `vertices` to the counts of the cells at `depth + 1` it belongs to (each once)
-/// whose parent is in `parents`.
+/// whose parent is in `parents` (every cell when `None`); returns how many cells it added.
 fn count_children(
     params: &Params,
     points: &Points,
     depth: u32,
-    parents: &FxHashMap<u64, usize>,
+    parents: Option<&FxHashMap<u64, usize>>,
     vertices: &[u32],
     counts: &mut FxHashMap<u64, u64>,
-) {
+) -> u64 {
     let mut cells = [[0u32; 3]; 3];
+    let mut added = 0;
     for (k, &x) in vertices.iter().enumerate() {
         let c = params.cell_at(depth + 1, points.get(x));
         cells[k] = c;
@@ -436,10 +495,22 @@ fn count_children(
             continue;
         }
         let parent = c.map(|x| x / params.cell_split);
-        if parents.contains_key(&code(parent)) {
-            *counts.entry(code(c)).or_insert(0) += 1;
+        if parents.is_none_or(|p| p.contains_key(&code(parent))) {
+            let n = counts.entry(code(c)).or_insert(0);
+            added += (*n == 0) as u64;
+            *n += 1;
         }
     }
+    added
+}
+
+/// The cell coordinates of a [`code`].
+fn uncode(c: u64) -> [u32; 3] {
+    [
+        (c & 0x1f_ffff) as u32,
+        ((c >> 21) & 0x1f_ffff) as u32,
+        (c >> 42) as u32,
+    ]
 }
 
 /// Position of `node` among its parent's children.

@@ -83,8 +83,8 @@ impl tessd_codec::source::MeshSource for Counting<'_> {
 }
 
 #[test]
-fn each_leaf_region_holds_exactly_its_simplices_in_one_pass_per_level_and_one_to_write() {
-    use tessd_codec::partition::{POINT_MARK, build};
+fn each_leaf_region_holds_exactly_its_simplices_after_two_passes_over_the_triangles() {
+    use tessd_codec::partition::{POINT_MARK, build, build_with_count_budget};
     let (mut p, t) = bunny();
     // a few unreferenced points, as the bunny has: they are simplices too
     p.extend([[0.0, 0.1, 0.0], [-0.05, 0.15, 0.02]]);
@@ -102,8 +102,18 @@ fn each_leaf_region_holds_exactly_its_simplices_in_one_pass_per_level_and_one_to
     let part = build(&mut src, params, &|_| true).unwrap();
     let depth = part.nodes.iter().map(|n| n.depth).max().unwrap();
     assert!(depth >= 2, "a tree of depth {depth}");
-    // the count pass takes the root's level; the last level splits nothing; then the write
-    assert_eq!(src.triangle_passes, depth as usize + 1);
+    // every level counted in the pass that counts the triangles, then the write
+    assert_eq!(src.triangle_passes, 2);
+    // the same partition with no cell counted ahead: one pass per level
+    src.triangle_passes = 0;
+    let slow = build_with_count_budget(&mut src, params, &|_| true, 0).unwrap();
+    assert!(
+        src.triangle_passes >= depth as usize + 1,
+        "{}",
+        src.triangle_passes
+    );
+    assert_eq!(slow.nodes, part.nodes);
+    assert_eq!(slow.regions, part.regions);
     // the leaf holding a grid point, down from the root
     let leaf_of = |q: [u32; 3]| {
         let mut i = 0;
