@@ -63,7 +63,8 @@ rm -f "$RESULTS/codec_raw.jsonl"
     echo "# View-dependent refinement along a camera path (\`bench/codec/view_path.py\`)"
     echo
     echo "Run $(date -u '+%Y-%m-%d %H:%M UTC'), \`bash bench/run_codec.sh\`. Zoom in from 20 radii to 1.2, half an orbit, zoom out;"
-    echo "60 frames, 1280x720, 30° vertical, 1 pixel; one daemon keeps the decoder states between frames."
+    echo "60 frames, 1280x720, 30° vertical, 1 pixel; one daemon keeps the decoder states between frames;"
+    echo "compressed with \`--min-cell 8000\` (several nSP-cells: at the default the bunny and fandisk are one cell)."
     echo
     for m in bun_zipper.ply fandisk.obj; do
         "$PY" bench/codec/view_path.py "$TESSD_BIN" "$DATA/mesh/$m" --frames 60 --jsonl "$WORK/view_$m.jsonl"

@@ -51,6 +51,9 @@ def main():
     ap.add_argument("binary")
     ap.add_argument("mesh")
     ap.add_argument("--bits", type=int, default=12)
+    # several nSP-cells, so that the view refines some and not others: at the default N_min
+    # (50 000, issue 34) the bunny and fandisk are one cell each
+    ap.add_argument("--min-cell", type=int, default=8000)
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--pixel-error", type=float, default=1.0)
     ap.add_argument("--size", default="1280x720")
@@ -58,7 +61,8 @@ def main():
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         tsc = os.path.join(tmp, "mesh.tsc")
-        out = subprocess.run([a.binary, "compress", a.mesh, tsc, "--bits", str(a.bits), "--json"],
+        out = subprocess.run([a.binary, "compress", a.mesh, tsc, "--bits", str(a.bits),
+                              "--min-cell", str(a.min_cell), "--json"],
                              check=True, stdout=subprocess.PIPE, text=True)
         info = json.loads(out.stdout)
         step, origin = info["step"], info["origin"]
