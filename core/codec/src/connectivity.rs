@@ -23,12 +23,14 @@ struct Scratch {
     local: Vec<u32>,
     generation: u32,
     /// Per local number: the vertex id; its rank in corner order; whether it is a pivot; its
-    /// links; its orientation evidence; its centre's offset from the split plane.
+    /// links; per child `c`, the fine edges c→x minus x→c of the once-held triangles coded so
+    /// far (an unmatched directed edge asks for the triangle on its other side); its centre's
+    /// offset from the split plane.
     ids: Vec<u32>,
     rank: Vec<u32>,
     pivot: Vec<bool>,
     link: Vec<u8>,
-    evidence: Vec<i32>,
+    balance: Vec<[i32; 2]>,
     offset: Vec<i64>,
     /// (corner, local number), sorted to give the ranks.
     by_corner: Vec<([u32; 3], u32)>,
@@ -89,8 +91,8 @@ impl Scratch {
         }
         self.link.clear();
         self.link.resize(n, 0);
-        self.evidence.clear();
-        self.evidence.resize(n, 0);
+        self.balance.clear();
+        self.balance.resize(n, [0, 0]);
     }
 
     fn of(&self, x: u32) -> u32 {
@@ -112,8 +114,10 @@ fn others(c: &Simplex, v: u32) -> (u32, u32) {
 ///
 /// The predicted child is the first single link, else the midpoint's side; the sub-context is the
 /// unordered pair of the vertices' states (link relative to the prediction: none, it, the other,
-/// both; pivot or not) times six bands of the midpoint's distance on the prediction's side.
-fn once_context(a: (u8, bool), b: (u8, bool), mid: i64) -> (usize, bool) {
+/// both; pivot or not) times six bands of the midpoint's distance on the prediction's side times
+/// how many more unmatched fine edges of `a` and `b` the triangle would close on the predicted
+/// child than on the other (−2..=2; `balance` holds, for `a` then `b`, c→x minus x→c per child).
+fn once_context(a: (u8, bool), b: (u8, bool), mid: i64, balance: [[i32; 2]; 2]) -> (usize, bool) {
     let flip = match (a.0, b.0) {
         (1 | 2, _) => a.0 == 2,
         (_, 1 | 2) => b.0 == 2,
@@ -138,7 +142,15 @@ fn once_context(a: (u8, bool), b: (u8, bool), mid: i64) -> (usize, bool) {
         2..=3 => 4,
         _ => 5,
     };
-    ((x * (x + 1) / 2 + y) * 6 + band, flip)
+    // the fine triangle (c, a, b) holds c→a and b→c: it closes an unmatched a→c or c→b and
+    // doubles an unmatched c→a or b→c; the predicted child's score against the other's
+    let [da, db] = balance;
+    let score = |k: usize| {
+        i32::from(da[k] < 0) + i32::from(db[k] > 0) - i32::from(da[k] > 0) - i32::from(db[k] < 0)
+    };
+    let (p, o) = if flip { (1, 0) } else { (0, 1) };
+    let closes = ((score(p) - score(o)).clamp(-2, 2) + 2) as usize;
+    (((x * (x + 1) / 2 + y) * 6 + band) * 5 + closes, flip)
 }
 
 /// Where the preimage masks of a split come from: the encoder knows them, the decoder reads them.
@@ -204,7 +216,7 @@ fn code_with(
     s.number(cx, coarse, v);
     // the coding order: kind, multiplicity, then the ranks of the other vertices in turn order
     s.order.clear();
-    let mut vvv = false;
+    let (mut vvv, mut twice) = (false, 0usize);
     for (i, c) in coarse.iter().enumerate() {
         let k = c.multiplicity(v) as u64;
         let head = ((c.kind as u64) << 2 | k) << 48;
@@ -218,6 +230,7 @@ fn code_with(
             let x = *c.v.iter().find(|&&x| x != v).unwrap();
             let l = s.of(x) as usize;
             s.pivot[l] = true;
+            twice += 1;
             head | (s.rank[s.of(x) as usize] as u64) << 24
         };
         s.order.push((key, i as u32));
@@ -314,7 +327,12 @@ fn code_with(
         let (a, b) = (a as usize, b as usize);
         // the midpoint of a and b from the plane, in quarters of a child's side
         let mid = (s.offset[a] + s.offset[b]).div_euclid(h);
-        let (sub, flip) = once_context((s.link[a], s.pivot[a]), (s.link[b], s.pivot[b]), mid);
+        let (sub, flip) = once_context(
+            (s.link[a], s.pivot[a]),
+            (s.link[b], s.pivot[b]),
+            mid,
+            [s.balance[a], s.balance[b]],
+        );
         let family = Family::TriangleOnce;
         let mask = masks.mask(
             &c,
@@ -326,16 +344,12 @@ fn code_with(
         )?;
         s.link[a] |= mask;
         s.link[b] |= mask;
-        // orientation evidence for the twice-held triangles (v1 v2 x): the fine triangle
-        // (v1, a, b) has the edges v1→a and b→v1, which predict (v1, v2, a) and (v2, v1, b);
-        // (v2, a, b) the opposite
-        if mask & 1 != 0 {
-            s.evidence[a] += 1;
-            s.evidence[b] -= 1;
-        }
-        if mask & 2 != 0 {
-            s.evidence[a] -= 1;
-            s.evidence[b] += 1;
+        // the fine triangle (c, a, b) has the edges c→a and b→c
+        for k in 0..2 {
+            if mask & (1 << k) != 0 {
+                s.balance[a][k] += 1;
+                s.balance[b][k] -= 1;
+            }
         }
         any_both |= mask == 3;
         out.push((c, mask));
@@ -352,13 +366,29 @@ fn code_with(
         let x = *c.v.iter().find(|&&x| x != v).unwrap();
         let l = s.of(x) as usize;
         let lx = s.link[l];
-        let ev = s.evidence[l].signum();
+        // orientation evidence: an unmatched v1→x or x→v2 predicts (v1, v2, x), an unmatched
+        // x→v1 or v2→x predicts (v2, v1, x)
+        let ev = (s.balance[l][0] - s.balance[l][1]).signum();
         let flip = lx == 2 || (lx != 1 && ev < 0);
         let ev = if flip { -ev } else { ev };
         let lx = if lx == 2 { 1 } else { lx.min(3) };
-        let sub = ([0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize) * 4
+        // x linked to both children: whether (c, c, ·) came before, for the predicted child c
+        // and the other (then its cell holds several vertices: more collapsed triangles)
+        let seen = if lx == 3 {
+            let (p, o) = if flip {
+                (collapsed_high, collapsed_low)
+            } else {
+                (collapsed_low, collapsed_high)
+            };
+            usize::from(p) * 2 + usize::from(o)
+        } else {
+            0
+        };
+        let sub = (([0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize) * 4
             + usize::from(vvv) * 2
-            + usize::from(any_both);
+            + usize::from(any_both))
+            * 4
+            + seen;
         let family = Family::Twice;
         let mask = masks.mask(
             c,
@@ -372,17 +402,20 @@ fn code_with(
         collapsed_high |= mask & 8 != 0;
         out.push((*c, mask));
     }
-    // the triangle made of the vertex alone
+    // the triangle made of the vertex alone: whether either child holds a collapsed edge,
+    // whether a once-held triangle went to both, how many twice-held triangles there were
     for &(key, i) in &s.order {
         let c = &coarse[i as usize];
         if c.kind == POINT || key >> 48 & 3 != 3 {
             continue;
         }
         let family = Family::Thrice;
-        let sub = (usize::from(collapsed_low) * 2 + usize::from(collapsed_high)) * 2
-            + usize::from(any_both);
+        let sub = ((usize::from(collapsed_low) * 2 + usize::from(collapsed_high)) * 2
+            + usize::from(any_both))
+            * 4
+            + twice.min(7) / 2;
         let coding = Coding {
-            ctx: context(family, sub, level),
+            ctx: context_banded(family, sub, band),
             family,
             flip: false,
         };

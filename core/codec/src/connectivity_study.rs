@@ -109,6 +109,20 @@ impl Geo<'_> {
         let w = self.vert(x);
         2 * w.corner[self.ax] as i64 + w.extent(self.ax, self.s.bits) as i64 - 1 - self.plane2
     }
+    fn class(&self, x: u32) -> u8 {
+        let c = self.off(x);
+        let e = self.vert(x).extent(self.ax, self.s.bits) as i64;
+        let (lo, hi) = (c - e, c + e);
+        if hi <= 0 {
+            if hi > -self.h2 { 1 } else { 0 }
+        } else if lo >= 0 {
+            if lo < self.h2 { 4 } else { 5 }
+        } else if c < 0 {
+            2
+        } else {
+            3
+        }
+    }
     fn corner_side(&self, x: u32) -> bool {
         2 * self.vert(x).corner[self.ax] as i64 >= self.plane2
     }
@@ -145,6 +159,15 @@ struct OnceFeat {
     far: bool,
     level: usize,
     n_once: usize,
+    /// a once-held triangle coded before went to both children
+    both_so_far: bool,
+    /// where a and b lie from the plane: 0 below and away, 1 below and touching, 2 straddling
+    /// with the centre below, 3 straddling with the centre above, 4 above touching, 5 above away
+    ca: u8,
+    cb: u8,
+    /// per child: c→x minus x→c over the once-held fine triangles so far, for a and b
+    da: [i32; 2],
+    db: [i32; 2],
     /// links of a and b from twice-held triangles coded before (twice-first designs)
     ta: u8,
     tb: u8,
@@ -175,6 +198,9 @@ fn run(
     for &(c, m) in &s.coded {
         if c.kind == POINT {
             cost.three(4, s.level as u64 / 3, once_value(m, false));
+            // slot 5: the same with "the point is alone in the star" (then both children need it)
+            let alone = u64::from(s.coded.len() == 1);
+            cost.three(5, s.level as u64 / 3 * 2 + alone, once_value(m, false));
             continue;
         }
         match c.multiplicity(v) {
@@ -189,12 +215,17 @@ fn run(
         .collect();
     let mut link: HashMap<u32, u8> = HashMap::new();
     let mut fine: Vec<Simplex> = Vec::new();
+    // per other vertex: v1→x minus x→v1, and v2→x minus x→v2, over the once-held fine triangles
+    let mut dir: HashMap<u32, [i32; 2]> = HashMap::new();
+    let mut nc = [0usize; 2];
     let v2 = u32::MAX;
     let mut any_both = false;
     let (mut cl, mut ch) = (false, false);
     // links from the twice-held triangles, when they are coded first
     let mut tlink: HashMap<u32, u8> = HashMap::new();
     let mut code_twice = |cost: &mut Cost,
+                          dir: &HashMap<u32, [i32; 2]>,
+                          nc: [usize; 2],
                           link: &HashMap<u32, u8>,
                           fine: &[Simplex],
                           any_both: bool,
@@ -204,6 +235,9 @@ fn run(
             let f = TwiceFeat {
                 lx: link.get(&x).copied().unwrap_or(0),
                 ev: orientation_evidence(fine, v, v2, x),
+                d: dir.get(&x).copied().unwrap_or([0, 0]),
+                seen: [cl, ch],
+                nc,
                 vvv: !thrice.is_empty(),
                 any_both,
                 level: s.level,
@@ -212,6 +246,14 @@ fn run(
                 xq: (g.off(x) * 4).div_euclid(g.h2),
             };
             let (ctx, flip) = twice_ctx(&f);
+            cost.tag = format!(
+                "p{:02} l{}{} m{:02}",
+                s.level / 3,
+                f.lx,
+                f.ev,
+                if flip { swap_children(m) } else { m }
+            );
+            cost.tagged.entry((8, cost.tag.clone())).or_default().1 += 1;
             cost.mask(2, ctx, if flip { swap_children(m) } else { m });
             cl |= m & 1 != 0;
             ch |= m & 8 != 0;
@@ -224,7 +266,7 @@ fn run(
         }
     };
     if twice_first {
-        code_twice(cost, &link, &fine, false, &mut tlink);
+        code_twice(cost, &dir, nc, &link, &fine, false, &mut tlink);
     }
     for &(c, m) in &once {
         let (a, b) = others(&c, v);
@@ -242,6 +284,11 @@ fn run(
             far: far(a) && far(b),
             level: s.level,
             n_once: once.len(),
+            both_so_far: any_both,
+            ca: g.class(a),
+            cb: g.class(b),
+            da: dir.get(&a).copied().unwrap_or([0, 0]),
+            db: dir.get(&b).copied().unwrap_or([0, 0]),
             ta: tlink.get(&a).copied().unwrap_or(0),
             tb: tlink.get(&b).copied().unwrap_or(0),
         };
@@ -262,13 +309,28 @@ fn run(
         any_both |= m == 3;
         if m & 1 != 0 {
             fine.push(Simplex::triangle(v, a, b));
+            dir.entry(a).or_default()[0] += 1;
+            nc[0] += 1;
+            dir.entry(b).or_default()[0] -= 1;
         }
         if m & 2 != 0 {
             fine.push(Simplex::triangle(v2, a, b));
+            dir.entry(a).or_default()[1] += 1;
+            nc[1] += 1;
+            dir.entry(b).or_default()[1] -= 1;
         }
     }
     if !twice_first {
-        code_twice(cost, &link, &fine, any_both, &mut tlink);
+        code_twice(cost, &dir, nc, &link, &fine, any_both, &mut tlink);
+    }
+    // which children hold a simplex already (a child holds at least one)
+    let mut cov = 0u8;
+    for &(c, m) in &s.coded {
+        if c.kind == POINT || c.multiplicity(v) == 1 {
+            cov |= m;
+        } else if c.multiplicity(v) == 2 {
+            cov |= (m & 1) | (m >> 2 & 2) | if m & 6 != 0 { 3 } else { 0 };
+        }
     }
     for &(_, m) in &thrice {
         let f = ThriceFeat {
@@ -279,6 +341,8 @@ fn run(
             n_twice: twice.len(),
         };
         cost.mask(3, thrice_ctx(&f), m);
+        // slot 0: the same with the children not covered yet
+        cost.mask(0, thrice_ctx(&f) * 4 + u64::from(cov ^ 3), m);
     }
 }
 
@@ -293,6 +357,12 @@ struct TwiceFeat {
     n_twice: usize,
     /// the third vertex's centre from the plane, in quarters of a child's side
     xq: i64,
+    /// v1→x minus x→v1 and v2→x minus x→v2 over the once-held fine triangles
+    d: [i32; 2],
+    /// (v1, v1, ·) and (v2, v2, ·) among the twice-held triangles coded before
+    seen: [bool; 2],
+    /// once-held fine triangles of each child
+    nc: [usize; 2],
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -431,35 +501,42 @@ fn report(name: &str, splits: &[Split], nv: f64, designs: &[Design], diag: bool)
         }
         let b = cost.bits.map(|x| x / nv);
         println!(
-            "{name:<28} {dn:<16} once {:6.3} twice {:6.3} thrice {:6.3} point {:5.3} conn {:6.3}  ctx {}",
+            "{name:<28} {dn:<16} once {:6.3} twice {:6.3} thrice {:6.3} point {:5.3} conn {:6.3}  ctx {} | thrice+cov {:6.3} point+alone {:5.3}",
             b[1],
             b[2],
             b[3],
             b[4],
             b[1] + b[2] + b[3] + b[4],
-            cost.counts.len()
+            cost.counts.len(),
+            b[0],
+            b[5]
         );
         if diag {
             // group the tags by one field at a time
-            for field in 0..4 {
-                let mut by: std::collections::BTreeMap<String, (f64, u64)> = Default::default();
-                for ((fam, tag), &(b, _)) in &cost.tagged {
-                    if *fam != 1 {
-                        continue;
+            for (fam, fields) in [(1u8, 0..4), (2u8, 0..3)] {
+                for field in fields {
+                    let mut by: std::collections::BTreeMap<String, (f64, u64)> = Default::default();
+                    for ((f, tag), &(b, _)) in &cost.tagged {
+                        if *f != fam {
+                            continue;
+                        }
+                        let n = cost
+                            .tagged
+                            .get(&(if fam == 1 { 9 } else { 8 }, tag.clone()))
+                            .map_or(0, |x| x.1);
+                        let key = tag.split(' ').nth(field).unwrap().to_string();
+                        let e = by.entry(key).or_default();
+                        e.0 += b;
+                        e.1 += n;
                     }
-                    let n = cost.tagged.get(&(9, tag.clone())).map_or(0, |x| x.1);
-                    let key = tag.split(' ').nth(field).unwrap().to_string();
-                    let e = by.entry(key).or_default();
-                    e.0 += b;
-                    e.1 += n;
-                }
-                for (k, (b, n)) in by {
-                    println!(
-                        "    {k:<8} {:7.3} b/v {:8} sym {:6.3} b/sym",
-                        b / nv,
-                        n,
-                        b / n as f64
-                    );
+                    for (k, (b, n)) in by {
+                        println!(
+                            "    {k:<8} {:7.3} b/v {:8} sym {:6.3} b/sym",
+                            b / nv,
+                            n,
+                            b / n as f64
+                        );
+                    }
                 }
             }
         }
@@ -556,7 +633,122 @@ fn connectivity_study() {
             flip,
         )
     };
+    // twice: the unmatched directed edges of each child with x, and its links, made symmetric
+    let t5 = |f: &TwiceFeat, geo: bool| {
+        let st = |d: i32, l: u8| (d.signum() + 1) as u64 * 2 + u64::from(l != 0);
+        let (s1, s2) = (st(f.d[0], f.lx & 1), st(f.d[1], f.lx & 2));
+        let flip = s2 > s1 || (s1 == s2 && geo && f.xq >= 0);
+        let (hi, lo) = (s1.max(s2), s1.min(s2));
+        let sub = ((hi * 6 + lo) * 2 + u64::from(f.vvv)) * 2 + u64::from(f.any_both);
+        let sub = if geo {
+            sub * 4 + xband(f.xq, flip)
+        } else {
+            sub
+        };
+        (sub * 64 + f.level as u64 / 3, flip)
+    };
+    let t5a = |f: &TwiceFeat| t5(f, false);
+    let t5b = |f: &TwiceFeat| t5(f, true);
+    // once: how many unmatched directed edges the triangle (c, a, b) would close for each child c
+    // (it holds c→a and b→c) minus how many it would double
+    let od = |f: &OnceFeat, lvl: bool| {
+        let (c, flip) = rich(f, (f.level / 3).clamp(4, 7) as u64);
+        let score = |k: usize| {
+            i32::from(f.da[k] < 0) + i32::from(f.db[k] > 0)
+                - i32::from(f.da[k] > 0)
+                - i32::from(f.db[k] < 0)
+        };
+        let (p, o) = if flip {
+            (score(1), score(0))
+        } else {
+            (score(0), score(1))
+        };
+        let sc = (p - o).clamp(-2, 2) + 2;
+        let c = if lvl {
+            c
+        } else {
+            c / 64 * 64 + (f.level / 3).clamp(4, 7) as u64
+        };
+        (c * 5 + sc as u64, flip)
+    };
+    let od1 = |f: &OnceFeat| od(f, true);
+    // once: per-vertex classes instead of the midpoint band
+    let oc = |f: &OnceFeat, joint: bool| {
+        let flip = pred(f);
+        let cl = |c: u8| if flip { c as u64 } else { 5 - c as u64 };
+        let x = (rel(f.la, flip) * 2 + u64::from(f.pa), cl(f.ca));
+        let y = (rel(f.lb, flip) * 2 + u64::from(f.pb), cl(f.cb));
+        let band = (f.level / 3).clamp(4, 7) as u64;
+        let sub = if joint {
+            let (x, y) = (x.0 * 6 + x.1, y.0 * 6 + y.1);
+            let (x, y) = (x.max(y), x.min(y));
+            x * (x + 1) / 2 + y
+        } else {
+            let (p, q) = (x.0.max(y.0), x.0.min(y.0));
+            let (c, d) = (x.1.max(y.1), x.1.min(y.1));
+            (p * (p + 1) / 2 + q) * 21 + c * (c + 1) / 2 + d
+        };
+        (sub * 64 + band, flip)
+    };
+    let oc1 = |f: &OnceFeat| oc(f, true);
+    let oc2 = |f: &OnceFeat| oc(f, false);
+    let t6 = |f: &TwiceFeat, which: u8| {
+        let (c, flip) = today_twice(f);
+        let (p, o) = if flip { (1, 0) } else { (0, 1) };
+        let seen = u64::from(f.seen[p]) * 2 + u64::from(f.seen[o]);
+        let r = |n: usize| match n {
+            0 => 0,
+            1..=2 => 1,
+            3..=5 => 2,
+            _ => 3,
+        };
+        let cnt = r(f.nc[p]) * 4 + r(f.nc[o]);
+        let extra = match which {
+            0 => seen,
+            3 => {
+                if f.lx == 3 {
+                    seen
+                } else {
+                    0
+                }
+            }
+            4 => u64::from(f.seen[p] || f.seen[o]),
+            1 => cnt,
+            _ => seen * 16 + cnt,
+        };
+        (
+            (c * 4 + u64::from(f.vvv) * 2 + u64::from(f.any_both)) * 64 + extra,
+            flip,
+        )
+    };
+    let t6a = |f: &TwiceFeat| t6(f, 0);
+    let t6b = |f: &TwiceFeat| t6(f, 1);
+    let t6c = |f: &TwiceFeat| t6(f, 2);
+    let t6d = |f: &TwiceFeat| t6(f, 3);
+    let t6e = |f: &TwiceFeat| t6(f, 4);
+    let ob = |f: &OnceFeat| {
+        let (c, flip) = rich(f, (f.level / 3).clamp(4, 7) as u64);
+        (c * 2 + u64::from(f.both_so_far), flip)
+    };
+    let obd = |f: &OnceFeat| {
+        let (c, flip) = od(f, true);
+        (c * 2 + u64::from(f.both_so_far), flip)
+    };
     let designs: Vec<Design> = vec![
+        ("once both", false, &ob, &t6d, &h1),
+        ("once both dir", false, &obd, &t6d, &h1),
+        ("once dir t6l3", false, &od1, &t6d, &h1),
+        ("once dir t6l3 h3", false, &od1, &t6d, &h3),
+        ("t6 seen l3", false, &o2, &t6d, &h1),
+        ("t6 seen any", false, &o2, &t6e, &h1),
+        ("t6 seen", false, &o2, &t6a, &h1),
+        ("t6 cnt", false, &o2, &t6b, &h1),
+        ("t6 both", false, &o2, &t6c, &h1),
+        ("once cls joint", false, &oc1, &t5a, &h1),
+        ("once cls sep", false, &oc2, &t5a, &h1),
+        ("once dir", false, &od1, &t5a, &h1),
+        ("t5", false, &o2, &t5a, &h1),
+        ("t5 geo", false, &o2, &t5b, &h1),
         ("today", false, &today_once, &today_twice, &today_thrice),
         ("once p", false, &o1, &t1, &h1),
         ("once p4-7", false, &o2, &t1, &h1),

@@ -21,16 +21,19 @@ pub enum Family {
     Split = 0,
     /// Where a triangle holding the split vertex once goes: 0 = the predicted child, 1 = the
     /// other, 2 = both. Sub-context: which children its other vertices are already linked to by
-    /// decoded triangles, whether they are pivots, and the midpoint's side and distance from the
-    /// split plane; the level in four bands of precision.
+    /// decoded triangles, whether they are pivots, the midpoint's side and distance from the
+    /// split plane, and which child closes more of their unmatched fine edges; the level in four
+    /// bands of precision.
     TriangleOnce = 1,
     /// The preimages of a triangle holding the split vertex twice, as a mask of four candidates
     /// minus one. Sub-context: the links of its third vertex, the orientation its neighbours
-    /// imply, whether `(v, v, v)` exists and whether a once-held triangle went to both children.
+    /// imply, whether `(v, v, v)` exists, whether a once-held triangle went to both children,
+    /// and (third vertex linked to both) which children held a collapsed triangle before.
     Twice = 2,
     /// The preimages of a triangle made of the split vertex alone (mask of four, minus one).
-    /// Sub-context: whether either child already holds a collapsed edge, and whether a
-    /// once-held triangle went to both children.
+    /// Sub-context: whether either child already holds a collapsed edge, whether a once-held
+    /// triangle went to both children, and the number of twice-held triangles; the level in four
+    /// bands of precision.
     Thrice = 3,
     /// Where an isolated point goes: 0 = low child, 1 = high child, 2 = both.
     Point = 4,
@@ -66,9 +69,9 @@ impl Family {
     pub const fn subs(self) -> usize {
         match self {
             Family::Split => 42, // split_context::SPLIT_SUBS
-            Family::TriangleOnce => 216,
-            Family::Twice => 36,
-            Family::Thrice => 8,
+            Family::TriangleOnce => 1080,
+            Family::Twice => 144,
+            Family::Thrice => 32,
             Family::Point => 1,
             Family::Ahead => 14,
         }
