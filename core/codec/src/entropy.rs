@@ -3,8 +3,9 @@
 //! ([`crate::adaptive`]) by the binary range coder ([`crate::binary_coder`]).
 //!
 //! The paper computes one probability table per (family, level) context from the whole file and
-//! writes it once; here every context of a cell starts at even odds and learns as it goes, so a
-//! cell is coded as soon as its symbols are known, in its own thread, and no table is stored.
+//! writes it once; here every context of a cell starts at even odds (or where the same context
+//! one level coarser stands in the cell) and learns as it goes, so a cell is coded as soon as its
+//! symbols are known, in its own thread, and no table is stored.
 //! Models never cross cells: a reader decodes any cell it reaches through the index on its own,
 //! which progressive prefixes, view sessions (§6.2) and thread-count independence rely on.
 //!
@@ -145,7 +146,7 @@ fn mask_decisions(value: u8, mut f: impl FnMut(usize, bool)) {
 }
 
 /// Cost in bits of a decision by its probability, as `2^-16` bits, indexed by the
-/// probability's top 12 bits.
+/// probability's top 12 bits (for the report only: floating point never reaches the bytes).
 static COST: LazyLock<[u32; 4096]> = LazyLock::new(|| {
     std::array::from_fn(|i| {
         let p = (i as f64 * 16.0 + 8.0) / 65536.0;
@@ -348,6 +349,27 @@ mod tests {
             "{real} {ideal}"
         );
         assert_eq!(code.family_symbols.iter().sum::<u64>(), syms.len() as u64);
+    }
+
+    #[test]
+    fn a_new_context_starts_where_the_coarser_level_stands() {
+        let mut cx = Contexts::new();
+        let coarse = context(Family::Split, 3, 10);
+        let (first, _) = cx.of(coarse);
+        for _ in 0..200 {
+            cx.models[first].update(false);
+            cx.models[first + 1].update(true);
+        }
+        let learnt = (cx.models[first].p0(), cx.models[first + 1].p0());
+        let (next, family) = cx.of(context(Family::Split, 3, 11));
+        assert_eq!(family, Family::Split);
+        assert_ne!(next, first);
+        assert_eq!((cx.models[next].p0(), cx.models[next + 1].p0()), learnt);
+        // another sub-context, or a level with no coarser one used, starts at even odds
+        for ctx in [context(Family::Split, 4, 11), context(Family::Split, 3, 13)] {
+            let (other, _) = cx.of(ctx);
+            assert_eq!(cx.models[other].p0(), 1 << 15);
+        }
     }
 
     #[test]
