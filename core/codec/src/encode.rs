@@ -139,6 +139,8 @@ struct Coder<'a> {
     params: Params,
     part: &'a Partition,
     shared: Mutex<Gathered>,
+    /// Chunks are held in memory up to this many bytes ([`HELD_BYTES`]).
+    held_limit: u64,
     total_entries: u64,
     progress: &'a (dyn Fn(f64) -> bool + Sync),
 }
@@ -184,7 +186,7 @@ impl Coder<'_> {
             g.family_symbols[f] += code.family_symbols[f];
         }
         let len = code.bytes.len() as u64;
-        g.chunks[i] = if g.held + len <= HELD_BYTES {
+        g.chunks[i] = if g.held + len <= self.held_limit {
             g.held += len;
             Chunk::Held(code.bytes)
         } else {
@@ -237,6 +239,17 @@ pub fn compress_source<W: Write + Seek>(
     out: &mut W,
     progress: &(dyn Fn(f64) -> bool + Sync),
 ) -> Result<CompressReport, CodecError> {
+    compress_holding(src, params, out, progress, HELD_BYTES)
+}
+
+/// [`compress_source`], holding at most `held_limit` bytes of chunks in memory.
+fn compress_holding<W: Write + Seek>(
+    src: &mut dyn MeshSource,
+    params: Params,
+    out: &mut W,
+    progress: &(dyn Fn(f64) -> bool + Sync),
+    held_limit: u64,
+) -> Result<CompressReport, CodecError> {
     params.validate()?;
     let t0 = Instant::now();
     let part = partition::build(src, params, progress)?;
@@ -250,6 +263,7 @@ pub fn compress_source<W: Write + Seek>(
             ends: vec![(0, 0); n],
             ..Gathered::default()
         }),
+        held_limit,
         total_entries: part.regions.iter().map(|r| r.1).sum(),
         progress,
     };
@@ -328,4 +342,66 @@ pub fn compress_source<W: Write + Seek>(
         family_symbols: gathered.family_symbols,
         steps_ms: [ms(t0, t1), ms(t1, t2), ms(t2, t3)],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A wavy 80 × 80 grid of quads, two triangles each.
+    fn grid() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+        let n = 80u32;
+        let positions = (0..n * n)
+            .map(|i| {
+                let (x, y) = ((i % n) as f32, (i / n) as f32);
+                [x, y, (x * 0.3).sin() * (y * 0.2).cos() * 4.0]
+            })
+            .collect();
+        let mut triangles = Vec::new();
+        for y in 0..n - 1 {
+            for x in 0..n - 1 {
+                let v = y * n + x;
+                triangles.push([v, v + 1, v + n + 1]);
+                triangles.push([v, v + n + 1, v + n]);
+            }
+        }
+        (positions, triangles)
+    }
+
+    #[test]
+    fn spilled_chunks_give_the_same_file_as_held_ones() {
+        let (positions, triangles) = grid();
+        let params = Params {
+            bits: 12,
+            min_cell: 800,
+            ..Params::default()
+        };
+        let run = |held_limit| {
+            let mut src = Slices {
+                positions: &positions,
+                triangles: &triangles,
+            };
+            let mut out = std::io::Cursor::new(Vec::new());
+            let r = compress_holding(&mut src, params, &mut out, &|_| true, held_limit).unwrap();
+            (out.into_inner(), r)
+        };
+        let (held, report) = run(u64::MAX);
+        assert!(report.nsp_cells > 4, "{} cells", report.nsp_cells);
+        // every chunk spilled, and about half of them
+        for limit in [0, held.len() as u64 / 2] {
+            let (spilled, _) = run(limit);
+            assert!(spilled == held, "held up to {limit} bytes: another file");
+        }
+        let tsc = crate::Tsc::open(&held).unwrap();
+        let decoded = tsc.decode(None).unwrap();
+        assert_eq!(decoded.triangles.len(), triangles.len());
+        // the report's bits are the chunks' real lengths, within each chunk's last bytes
+        let bits: f64 = report.family_bits.iter().sum();
+        let chunk_bits = 8.0 * tsc.nodes.iter().map(|n| n.len).sum::<u64>() as f64;
+        let slack = 40.0 * report.nsp_cells as f64;
+        assert!(
+            (chunk_bits - bits).abs() <= slack,
+            "{bits} bits coded, {chunk_bits} in the chunks"
+        );
+    }
 }
