@@ -40,8 +40,10 @@ const DENSITY: usize = 5;
 
 /// Number of [`Family::Split`] sub-contexts: margin × collapsed × parallelogram.
 pub(crate) const SPLIT_SUBS: usize = MARGINS * 2 * PARALLELOGRAM;
-/// Values the level slot of a split context takes: density × tangent plane.
-const SPLIT_LEVELS: usize = DENSITY * PLANE;
+/// Values the level slot of a split context takes: tangent plane × (a gap, then density). The
+/// adaptive coder starts a new context from the one a slot below (the level above, for other
+/// families): here the next sparser density with the same plane, never another plane class.
+const SPLIT_LEVELS: usize = (DENSITY + 1) * PLANE;
 const _: () = assert!(SPLIT_SUBS == Family::Split.subs() && SPLIT_LEVELS <= MAX_LEVELS);
 
 /// A cell's doubled centre along every axis, `2·corner + extent − 1` (exact integers).
@@ -92,9 +94,15 @@ fn across(cx: &Complex, v: u32, x: u32, y: u32, p: [[i64; 3]; 2], bits: u32, st:
     }
 }
 
-/// The star of `v`: its neighbours' centroid and reach, its oriented normal, the parallelograms
-/// across its far edges, and whether it holds a collapsed triangle.
-fn star(cx: &mut Complex, v: u32, bits: u32) -> Star {
+/// Reach, in half-cells, beyond which the parallelograms are not looked for: there the cell is
+/// far smaller than the star, both predictions lie many cells away on fixed sides, and the 2-ring
+/// lookups (half the splits at 16 bits) would buy little (bunny 0.05 b/v at 16 bits).
+const FAR: i64 = 64;
+
+/// The star of `v` (whose split halves are `h` wide): its neighbours' centroid and reach, its
+/// oriented normal, the parallelograms across its far edges, and whether it holds a collapsed
+/// triangle.
+fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
     let pv = doubled(&cx.vertices[v as usize], bits);
     let mut st = Star::default();
     let add = |st: &mut Star, p: [i64; 3]| {
@@ -107,9 +115,10 @@ fn star(cx: &mut Complex, v: u32, bits: u32) -> Star {
         st.reach += far;
     };
     // the far edges of the star's triangles, on the stack while they are few (the usual case)
-    let mut few = [(0u32, 0u32); 24];
+    type Edge = (u32, u32, [[i64; 3]; 2]);
+    let mut few = [(0u32, 0u32, [[0i64; 3]; 2]); 16];
     let mut count = 0;
-    let mut many: Vec<(u32, u32)> = Vec::new();
+    let mut many: Vec<Edge> = Vec::new();
     cx.prune(v);
     for &slot in cx.listed(v) {
         let s = cx.simplices[slot as usize].expect("pruned");
@@ -138,10 +147,10 @@ fn star(cx: &mut Complex, v: u32, bits: u32) -> Star {
                 st.normal[2] += e[0] as i128 * f[1] as i128 - e[1] as i128 * f[0] as i128;
                 if x != y {
                     if count < few.len() {
-                        few[count] = (x, y);
+                        few[count] = (x, y, p);
                         count += 1;
                     } else {
-                        many.push((x, y));
+                        many.push((x, y, p));
                     }
                 }
             }
@@ -155,12 +164,10 @@ fn star(cx: &mut Complex, v: u32, bits: u32) -> Star {
             }
         }
     }
-    for &(x, y) in few[..count].iter().chain(&many) {
-        let p = [
-            doubled(&cx.vertices[x as usize], bits),
-            doubled(&cx.vertices[y as usize], bits),
-        ];
-        across(cx, v, x, y, p, bits, &mut st);
+    if st.reach < st.count * 2 * h * FAR {
+        for &(x, y, p) in few[..count].iter().chain(&many) {
+            across(cx, v, x, y, p, bits, &mut st);
+        }
     }
     st
 }
@@ -181,12 +188,12 @@ fn along(n: [i128; 3], a: usize) -> bool {
 /// The coding of the split decision of vertex `v` (before its split at `level`), from the
 /// predictors of the module doc: the centroid's side is the predicted half (value 0); the
 /// sub-context is margin × collapsed × parallelogram, and the level slot of the context carries
-/// density × tangent plane (§5.3's per-level tables, by what the level stood for).
+/// tangent plane × density (§5.3's per-level tables, by what the level stood for).
 pub(crate) fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
     let a = level % 3;
     let corner = cx.vertices[v as usize].corner;
     let h = half(level, bits) as i64;
-    let st = star(cx, v, bits);
+    let st = star(cx, v, bits, h);
     // the split plane in doubled units: corner + h − 1/2
     let plane = 2 * corner[a] as i64 + 2 * h - 1;
     let (margin, high) = if st.count == 0 {
@@ -224,7 +231,7 @@ pub(crate) fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) ->
     let family = Family::Split;
     let sub = (margin * 2 + usize::from(st.collapsed)) * PARALLELOGRAM + parallelogram;
     Coding {
-        ctx: context(family, sub, density * PLANE + plane_class),
+        ctx: context(family, sub, plane_class * (DENSITY + 1) + 1 + density),
         family,
         flip: high,
     }
@@ -260,7 +267,7 @@ mod tests {
     #[test]
     fn a_flat_fan_has_a_normal_along_z_and_parallelograms_through_its_plane() {
         let (mut cx, v) = fan(0);
-        let st = star(&mut cx, v, 4);
+        let st = star(&mut cx, v, 4, 1);
         assert_eq!(st.count, 8, "two corners per star triangle");
         assert!(!st.collapsed);
         assert!(along(st.normal, 2) && !along(st.normal, 0) && !along(st.normal, 1));
@@ -279,7 +286,7 @@ mod tests {
             level: 12,
         });
         cx.add(Simplex::triangle(v, v, w));
-        let st = star(&mut cx, v, 4);
+        let st = star(&mut cx, v, 4, 1);
         assert!(st.collapsed);
         assert_eq!(
             st.count, 10,
@@ -311,7 +318,7 @@ mod tests {
             "the parallelograms agree with the centroid"
         );
         assert_eq!(
-            slot % PLANE,
+            slot / (DENSITY + 1),
             2,
             "the normal points away from the predicted half"
         );
