@@ -234,7 +234,9 @@ pub fn read<B: AsRef<[u8]>>(
     if trailer_len > tail_at - head_len {
         return Err(CodecError::corrupt(
             tail_at,
-            format!("a trailer of {trailer_len} bytes in a {file_len}-byte file"),
+            format!(
+                "a trailer of {trailer_len} bytes in a {file_len}-byte file (a truncated file?)"
+            ),
         ));
     }
     let base = tail_at - trailer_len;
