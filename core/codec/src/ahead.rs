@@ -16,15 +16,20 @@
 //!
 //! The split of a cell `c` at level `k` is coded before the connectivity of level `k` is known,
 //! so its prediction ([`Geometry::coding`]) comes from what is: the vertex `u` of the complex
-//! holding `c`, the barycentres of `u`'s neighbours' descendants at level `k` (their centroid,
-//! against `c`'s split plane, gives the predicted half and a margin), and whether `u` holds more
-//! than one level-`k` cell (then both halves are likely non-empty).
+//! holding `c`, its neighbours standing at the barycentres of their descendants at level `k`, and
+//! `c` itself; on that star run the predictors of [`crate::split_context`] (centroid and margin,
+//! parallelograms, tangent plane, density), with "collapsed" read as "`u` holds more than one
+//! level-`k` cell" (then both halves are likely non-empty).
 
-use crate::coding::{Coding, margin_context};
+use crate::coding::Coding;
 use crate::complex::{Complex, POINT, Vertex};
 use crate::error::CodecError;
 use crate::kd_cell::{half, kd_key};
-use crate::symbols::{Family, context};
+use crate::split_context::{Star, across, coding};
+use crate::symbols::Family;
+
+/// Fraction bits of the barycentres the split predictions ahead are computed from.
+const FRACTION: u32 = 8;
 
 /// The kd-cells of one level: corners in kd order, their kd keys, prefix sums of their doubled
 /// centres, and (once read) how each splits.
@@ -75,6 +80,15 @@ impl Level {
             self.keys.partition_point(|&k| k <= last)
         };
         lo..hi
+    }
+
+    /// The barycentre of the cells in `r`, in doubled grid units × 2^[`FRACTION`] (rounded
+    /// down: the same integers on every machine).
+    fn barycentre_fixed(&self, r: std::ops::Range<usize>) -> [i64; 3] {
+        let n = (r.end - r.start) as u64;
+        std::array::from_fn(|a| {
+            (((self.sums[r.end][a] - self.sums[r.start][a]) << FRACTION) / n) as i64
+        })
     }
 
     /// The barycentre of the cells in `r`, in grid units.
@@ -214,47 +228,83 @@ impl Geometry {
         out
     }
 
-    /// The coding of the split of the level-`depth` cell at `corner`, held by vertex `u`.
+    /// The coding of the split of the level-`depth` cell at `corner`, held by vertex `u`: the
+    /// predictors of [`crate::split_context`] on `u`'s star, each neighbour standing at the
+    /// barycentre of its descendants at level `depth` (in fixed point: integers on both sides,
+    /// whatever order they list the star in), the cell itself at its centre, and "collapsed"
+    /// meaning that `u` holds several cells of the level.
     fn coding(&self, cx: &Complex, u: u32, corner: [u32; 3], depth: usize, bits: u32) -> Coding {
         let level = self.level(depth);
-        let ux = cx.vertices[u as usize];
-        let crowded = level.below(&ux, bits).len() > 1;
         let a = depth % 3;
-        let plane = corner[a] as f64 + half(depth, bits) as f64 - 0.5;
-        // the neighbours' barycentres, summed in sorted order: encoder and decoder list them
-        // in different orders, and the sum must round the same on both sides
-        let mut along: Vec<f64> = Vec::with_capacity(16);
-        let mut seen: Vec<u32> = Vec::with_capacity(16);
-        for s in cx
-            .listed(u)
-            .iter()
-            .filter_map(|&slot| cx.simplices[slot as usize])
-        {
-            let k = if s.kind == POINT { 1 } else { 3 };
-            for &x in &s.v[..k] {
-                if x == u || seen.contains(&x) {
-                    continue;
+        let h = half(depth, bits) as i64;
+        let cell = Vertex {
+            corner,
+            level: depth as u8,
+        };
+        let pv: [i64; 3] = std::array::from_fn(|k| {
+            (2 * corner[k] as i64 + cell.extent(k, bits) as i64 - 1) << FRACTION
+        });
+        // the neighbours' barycentres, each looked up once (two binary searches)
+        let mut seen: Vec<(u32, Option<[i64; 3]>)> = Vec::with_capacity(16);
+        let mut at = |x: u32| -> Option<[i64; 3]> {
+            if let Some(&(_, p)) = seen.iter().find(|&&(y, _)| y == x) {
+                return p;
+            }
+            let r = level.below(&cx.vertices[x as usize], bits);
+            let p = (!r.is_empty()).then(|| level.barycentre_fixed(r));
+            seen.push((x, p));
+            p
+        };
+        let mut st = Star {
+            collapsed: level.below(&cx.vertices[u as usize], bits).len() > 1,
+            ..Star::default()
+        };
+        let mut edges: Vec<(u32, u32, [i64; 3], [i64; 3])> = Vec::with_capacity(16);
+        for &slot in cx.listed(u) {
+            let Some(s) = cx.simplices[slot as usize] else {
+                continue;
+            };
+            if s.kind == POINT {
+                continue;
+            }
+            let Some(i) = s.v.iter().position(|&x| x == u) else {
+                continue;
+            };
+            let (x, y) = (s.v[(i + 1) % 3], s.v[(i + 2) % 3]);
+            match (x == u, y == u) {
+                (false, false) => {
+                    let (px, py) = (at(x), at(y));
+                    for p in [px, py].into_iter().flatten() {
+                        st.neighbour(p, pv);
+                    }
+                    if let (Some(px), Some(py)) = (px, py) {
+                        st.triangle(pv, px, py);
+                        if x != y {
+                            edges.push((x, y, px, py));
+                        }
+                    }
                 }
-                seen.push(x);
-                let r = level.below(&cx.vertices[x as usize], bits);
-                if !r.is_empty() {
-                    along.push(level.barycentre(r)[a]);
+                (true, true) => {}
+                _ => {
+                    if let Some(p) = at(if x == u { y } else { x }) {
+                        st.neighbour(p, pv);
+                        st.neighbour(p, pv);
+                    }
                 }
             }
         }
-        along.sort_unstable_by(f64::total_cmp);
-        let (margin, high) = if along.is_empty() {
-            (0, false)
-        } else {
-            let mean = along.iter().sum::<f64>() / along.len() as f64;
-            let d = ((mean - plane) / half(depth, bits) as f64).abs();
-            (margin_context(d), mean > plane)
-        };
-        Coding {
-            ctx: context(Family::Ahead, usize::from(crowded) * 7 + margin, depth),
-            family: Family::Ahead,
-            flip: high,
+        let width = (2 * h) << FRACTION;
+        if st.near(width) {
+            for (x, y, px, py) in edges {
+                across(cx, u, x, y, |z| {
+                    if let Some(pz) = at(z) {
+                        st.parallelogram(px, py, pz);
+                    }
+                });
+            }
         }
+        let plane = (2 * corner[a] as i64 + 2 * h - 1) << FRACTION;
+        coding(&st, Family::Ahead, a, plane, width)
     }
 
     /// Reads the splits of level `depth` and adds the next level's cells (decoder side).

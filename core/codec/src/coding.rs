@@ -1,6 +1,6 @@
 //! How a coded value maps to what it means (paper 003 §3): a split's halves or a simplex's
-//! preimage mask, relative to the predicted child; and the margin bands of a prediction. Shared
-//! by the split contexts, the connectivity contexts and the geometry ahead.
+//! preimage mask, relative to the predicted child. Shared by the split contexts, the connectivity
+//! contexts and the geometry ahead.
 
 use crate::symbols::Family;
 
@@ -76,15 +76,6 @@ impl Coding {
             },
         }
     }
-}
-
-/// The sub-context of a predicted split from the prediction's distance to the split plane, in
-/// half-cells: 1 (closest) to 6; 0 is left for "no prediction".
-pub(crate) fn margin_context(d: f64) -> usize {
-    1 + [0.125, 0.25, 0.5, 1.0, 2.0]
-        .iter()
-        .filter(|&&m| d >= m)
-        .count()
 }
 
 #[cfg(test)]

@@ -51,28 +51,66 @@ fn doubled(w: &Vertex, bits: u32) -> [i64; 3] {
     std::array::from_fn(|a| 2 * w.corner[a] as i64 + w.extent(a, bits) as i64 - 1)
 }
 
-/// What the decoder's complex holds around a vertex, summed in integers.
+/// What the decoder knows around a vertex, summed in integers (doubled grid units for a
+/// complex's vertices; the geometry ahead uses its own fixed-point units).
 #[derive(Default)]
-struct Star {
-    /// Neighbour corners counted (a neighbour once per star edge reaching it).
-    count: i64,
-    /// Σ of their doubled centres.
-    sum: [i64; 3],
-    /// Σ over those of the largest coordinate distance from the vertex (doubled units).
-    reach: i64,
-    /// Σ of the oriented triangles' cross products (doubled units, relative to the vertex).
-    normal: [i128; 3],
-    /// Σ of the parallelogram predictions `x + y − z` (doubled) and how many were found.
-    parallelogram: [i64; 3],
-    parallelograms: i64,
-    /// The cell holds a collapsed triangle.
-    collapsed: bool,
+pub(crate) struct Star {
+    /// Neighbour positions counted (a neighbour once per star edge reaching it).
+    pub(crate) count: i64,
+    /// Σ of their positions.
+    pub(crate) sum: [i64; 3],
+    /// Σ over those of the largest coordinate distance from the vertex.
+    pub(crate) reach: i64,
+    /// Σ of the oriented triangles' cross products (relative to the vertex).
+    pub(crate) normal: [i128; 3],
+    /// Σ of the parallelogram predictions `x + y − z` and how many were found.
+    pub(crate) parallelogram: [i64; 3],
+    pub(crate) parallelograms: i64,
+    /// The cell holds a collapsed triangle (or, ahead, several cells of its level).
+    pub(crate) collapsed: bool,
 }
 
-/// Adds the parallelogram predictions across the far edge `x → y` of a star triangle
-/// `(v, x, y)`: `x + y − z` for every triangle `(y, x, z)` (the edge's other side, in the
-/// orientation a consistent surface gives it) whose `z` is none of `v, x, y`.
-fn across(cx: &Complex, v: u32, x: u32, y: u32, p: [[i64; 3]; 2], bits: u32, st: &mut Star) {
+impl Star {
+    /// Adds a neighbour at `p`, the vertex being at `pv`.
+    pub(crate) fn neighbour(&mut self, p: [i64; 3], pv: [i64; 3]) {
+        self.count += 1;
+        let mut far = 0;
+        for a in 0..3 {
+            self.sum[a] += p[a];
+            far = far.max((p[a] - pv[a]).abs());
+        }
+        self.reach += far;
+    }
+
+    /// Adds the oriented triangle `(v, x, y)` at `pv`, `px`, `py` to the normal.
+    pub(crate) fn triangle(&mut self, pv: [i64; 3], px: [i64; 3], py: [i64; 3]) {
+        let e: [i128; 3] = std::array::from_fn(|a| (px[a] - pv[a]) as i128);
+        let f: [i128; 3] = std::array::from_fn(|a| (py[a] - pv[a]) as i128);
+        self.normal[0] += e[1] * f[2] - e[2] * f[1];
+        self.normal[1] += e[2] * f[0] - e[0] * f[2];
+        self.normal[2] += e[0] * f[1] - e[1] * f[0];
+    }
+
+    /// Adds the parallelogram prediction `x + y − z`.
+    pub(crate) fn parallelogram(&mut self, px: [i64; 3], py: [i64; 3], pz: [i64; 3]) {
+        for a in 0..3 {
+            self.parallelogram[a] += px[a] + py[a] - pz[a];
+        }
+        self.parallelograms += 1;
+    }
+
+    /// Whether the parallelograms are worth looking for: the star reaches less than [`FAR`]
+    /// half-cells of width `cell`.
+    pub(crate) fn near(&self, cell: i64) -> bool {
+        self.reach < self.count * cell * FAR
+    }
+}
+
+/// Calls `f` with the third corner `z` of every triangle `(y, x, z)` across the far edge
+/// `x → y` of a star triangle `(v, x, y)` (the edge's other side, in the orientation a
+/// consistent surface gives it), `z` being none of `v, x, y`: where the parallelogram
+/// `x + y − z` predicts `v`.
+pub(crate) fn across(cx: &Complex, v: u32, x: u32, y: u32, mut f: impl FnMut(u32)) {
     for &slot in cx.listed(x) {
         // x's list may hold dead slots (pruned when x itself is split or merged)
         let Some(s) = cx.simplices[slot as usize] else {
@@ -84,11 +122,7 @@ fn across(cx: &Complex, v: u32, x: u32, y: u32, p: [[i64; 3]; 2], bits: u32, st:
         for r in 0..3 {
             let z = s.v[(r + 2) % 3];
             if s.v[r] == y && s.v[(r + 1) % 3] == x && z != v && z != x && z != y {
-                let pz = doubled(&cx.vertices[z as usize], bits);
-                for a in 0..3 {
-                    st.parallelogram[a] += p[0][a] + p[1][a] - pz[a];
-                }
-                st.parallelograms += 1;
+                f(z);
             }
         }
     }
@@ -97,7 +131,7 @@ fn across(cx: &Complex, v: u32, x: u32, y: u32, p: [[i64; 3]; 2], bits: u32, st:
 /// Reach, in half-cells, beyond which the parallelograms are not looked for: there the cell is
 /// far smaller than the star, both predictions lie many cells away on fixed sides, and the 2-ring
 /// lookups (half the splits at 16 bits) would buy little (bunny 0.05 b/v at 16 bits).
-const FAR: i64 = 64;
+pub(crate) const FAR: i64 = 64;
 
 /// The star of `v` (whose split halves are `h` wide): its neighbours' centroid and reach, its
 /// oriented normal, the parallelograms across its far edges, and whether it holds a collapsed
@@ -105,15 +139,6 @@ const FAR: i64 = 64;
 fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
     let pv = doubled(&cx.vertices[v as usize], bits);
     let mut st = Star::default();
-    let add = |st: &mut Star, p: [i64; 3]| {
-        st.count += 1;
-        let mut far = 0;
-        for a in 0..3 {
-            st.sum[a] += p[a];
-            far = far.max((p[a] - pv[a]).abs());
-        }
-        st.reach += far;
-    };
     // the far edges of the star's triangles, on the stack while they are few (the usual case)
     type Edge = (u32, u32, [[i64; 3]; 2]);
     let mut few = [(0u32, 0u32, [[0i64; 3]; 2]); 16];
@@ -136,15 +161,9 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
                     doubled(&cx.vertices[x as usize], bits),
                     doubled(&cx.vertices[y as usize], bits),
                 ];
-                add(&mut st, p[0]);
-                add(&mut st, p[1]);
-                let (e, f): ([i64; 3], [i64; 3]) = (
-                    std::array::from_fn(|a| p[0][a] - pv[a]),
-                    std::array::from_fn(|a| p[1][a] - pv[a]),
-                );
-                st.normal[0] += e[1] as i128 * f[2] as i128 - e[2] as i128 * f[1] as i128;
-                st.normal[1] += e[2] as i128 * f[0] as i128 - e[0] as i128 * f[2] as i128;
-                st.normal[2] += e[0] as i128 * f[1] as i128 - e[1] as i128 * f[0] as i128;
+                st.neighbour(p[0], pv);
+                st.neighbour(p[1], pv);
+                st.triangle(pv, p[0], p[1]);
                 if x != y {
                     if count < few.len() {
                         few[count] = (x, y, p);
@@ -159,14 +178,16 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
                 st.collapsed = true;
                 let x = if x == v { y } else { x };
                 let p = doubled(&cx.vertices[x as usize], bits);
-                add(&mut st, p);
-                add(&mut st, p);
+                st.neighbour(p, pv);
+                st.neighbour(p, pv);
             }
         }
     }
-    if st.reach < st.count * 2 * h * FAR {
+    if st.near(2 * h) {
         for &(x, y, p) in few[..count].iter().chain(&many) {
-            across(cx, v, x, y, p, bits, &mut st);
+            across(cx, v, x, y, |z| {
+                st.parallelogram(p[0], p[1], doubled(&cx.vertices[z as usize], bits))
+            });
         }
     }
     st
@@ -186,22 +207,29 @@ fn along(n: [i128; 3], a: usize) -> bool {
 }
 
 /// The coding of the split decision of vertex `v` (before its split at `level`), from the
-/// predictors of the module doc: the centroid's side is the predicted half (value 0); the
-/// sub-context is margin × collapsed × parallelogram, and the level slot of the context carries
-/// tangent plane × density (§5.3's per-level tables, by what the level stood for).
+/// predictors of the module doc.
 pub(crate) fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) -> Coding {
     let a = level % 3;
     let corner = cx.vertices[v as usize].corner;
     let h = half(level, bits) as i64;
     let st = star(cx, v, bits, h);
-    // the split plane in doubled units: corner + h − 1/2
+    // the split plane in doubled units: corner + h − 1/2; a half-cell is 2h
     let plane = 2 * corner[a] as i64 + 2 * h - 1;
+    coding(&st, Family::Split, a, plane, 2 * h)
+}
+
+/// The coding of a split along axis `a` from the star's sums, the split plane and a half-cell's
+/// width in the star's units: the centroid's side is the predicted half (value 0); the
+/// sub-context is margin × collapsed × parallelogram, and the level slot of the context carries
+/// tangent plane × density (§5.3's per-level tables, by what the level stood for). Shared with
+/// the geometry ahead ([`crate::ahead`]), whose star is made of its cells' barycentres.
+pub(crate) fn coding(st: &Star, family: Family, a: usize, plane: i64, cell: i64) -> Coding {
     let (margin, high) = if st.count == 0 {
         (0, false)
     } else {
         let off = st.sum[a] - st.count * plane;
         let d = 8 * off.unsigned_abs();
-        let unit = (2 * h * st.count) as u64;
+        let unit = (cell * st.count) as u64;
         let m = 1 + [1u64, 2, 4, 8, 16]
             .iter()
             .filter(|&&k| d >= k * unit)
@@ -219,16 +247,15 @@ pub(crate) fn split_coding(cx: &mut Complex, v: u32, level: usize, bits: u32) ->
     } else {
         0
     };
-    // octaves of the mean reach in half-cells (doubled units: 2h per half-cell)
+    // octaves of the mean reach in half-cells
     let density = if st.count == 0 {
         0
     } else {
         [2i64, 4, 8, 16]
             .iter()
-            .filter(|&&k| st.reach >= st.count * 2 * h * k)
+            .filter(|&&k| st.reach >= st.count * cell * k)
             .count()
     };
-    let family = Family::Split;
     let sub = (margin * 2 + usize::from(st.collapsed)) * PARALLELOGRAM + parallelogram;
     Coding {
         ctx: context(family, sub, plane_class * (DENSITY + 1) + 1 + density),

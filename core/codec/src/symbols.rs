@@ -38,8 +38,9 @@ pub enum Family {
     /// Where an isolated point goes: 0 = low child, 1 = high child, 2 = both.
     Point = 4,
     /// kd-cell subdivision coded ahead of the connectivity (§6.4, `--ahead`): values as
-    /// [`Family::Split`]. Sub-context: the vertex holding the cell holds several cells of its
-    /// level (×7), and the margin of its neighbours' descendants' centroid.
+    /// [`Family::Split`]. Contexts as [`Family::Split`]'s, on the star of the vertex holding the
+    /// cell (its neighbours at their descendants' barycentres; "collapsed" = it holds several
+    /// cells of the level).
     Ahead = 5,
 }
 
@@ -73,7 +74,7 @@ impl Family {
             Family::Twice => 144,
             Family::Thrice => 32,
             Family::Point => 1,
-            Family::Ahead => 14,
+            Family::Ahead => 42, // split_context::SPLIT_SUBS
         }
     }
 
