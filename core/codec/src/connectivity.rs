@@ -40,6 +40,7 @@ struct Scratch {
     once: Vec<(u32, u32, u32)>,
     /// The once-held triangles around each local vertex (offsets into `around`).
     start: Vec<u32>,
+    fill: Vec<u32>,
     around: Vec<u32>,
     visited: Vec<bool>,
     bfs: Vec<u32>,
@@ -201,9 +202,38 @@ pub(crate) fn code_connectivity(
     bits: u32,
     masks: &mut impl Masks,
 ) -> Result<Vec<(Simplex, u8)>, CodecError> {
-    SCRATCH.with(|s| code_with(&mut s.borrow_mut(), cx, coarse, (v, v2), level, bits, masks))
+    let mut out = Vec::with_capacity(coarse.len());
+    code_connectivity_into(cx, coarse, (v, v2), level, bits, masks, &mut out)?;
+    Ok(out)
 }
 
+/// [`code_connectivity`] into the caller's buffer `out` (cleared first), so that a caller
+/// splitting many vertices reuses one buffer.
+pub(crate) fn code_connectivity_into(
+    cx: &Complex,
+    coarse: &[Simplex],
+    (v, v2): (u32, u32),
+    level: usize,
+    bits: u32,
+    masks: &mut impl Masks,
+    out: &mut Vec<(Simplex, u8)>,
+) -> Result<(), CodecError> {
+    out.clear();
+    SCRATCH.with(|s| {
+        code_with(
+            &mut s.borrow_mut(),
+            cx,
+            coarse,
+            (v, v2),
+            level,
+            bits,
+            masks,
+            out,
+        )
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
 fn code_with(
     s: &mut Scratch,
     cx: &Complex,
@@ -212,7 +242,8 @@ fn code_with(
     level: usize,
     bits: u32,
     masks: &mut impl Masks,
-) -> Result<Vec<(Simplex, u8)>, CodecError> {
+    out: &mut Vec<(Simplex, u8)>,
+) -> Result<(), CodecError> {
     s.number(cx, coarse, v);
     // the coding order: kind, multiplicity, then the ranks of the other vertices in turn order
     s.order.clear();
@@ -237,7 +268,6 @@ fn code_with(
     }
     s.order.sort_unstable();
     debug_assert!(s.order.windows(2).all(|w| w[0].0 != w[1].0));
-    let mut out = Vec::with_capacity(coarse.len());
     // points, and the once-held triangles around each other vertex
     s.once.clear();
     for &(key, i) in &s.order {
@@ -268,15 +298,14 @@ fn code_with(
     }
     s.around.clear();
     s.around.resize(s.start[s.ids.len()] as usize, 0);
-    {
-        let mut fill: Vec<u32> = s.start[..s.ids.len()].to_vec();
-        for (j, &(a, b, _)) in s.once.iter().enumerate() {
-            s.around[fill[a as usize] as usize] = j as u32;
-            fill[a as usize] += 1;
-            if b != a {
-                s.around[fill[b as usize] as usize] = j as u32;
-                fill[b as usize] += 1;
-            }
+    s.fill.clear();
+    s.fill.extend_from_slice(&s.start[..s.ids.len()]);
+    for (j, &(a, b, _)) in s.once.iter().enumerate() {
+        s.around[s.fill[a as usize] as usize] = j as u32;
+        s.fill[a as usize] += 1;
+        if b != a {
+            s.around[s.fill[b as usize] as usize] = j as u32;
+            s.fill[b as usize] += 1;
         }
     }
     // breadth-first order of the once-held triangles through their shared vertices
@@ -422,7 +451,7 @@ fn code_with(
         out.push((*c, masks.mask(c, coding)?));
     }
     #[cfg(test)]
-    crate::connectivity_study::record(cx, v, level, bits, &out);
+    crate::connectivity_study::record(cx, v, level, bits, out);
     let _ = v2;
-    Ok(out)
+    Ok(())
 }

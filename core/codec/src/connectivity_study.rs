@@ -323,15 +323,7 @@ fn run(
     if !twice_first {
         code_twice(cost, &dir, nc, &link, &fine, any_both, &mut tlink);
     }
-    // which children hold a simplex already (a child holds at least one)
-    let mut cov = 0u8;
-    for &(c, m) in &s.coded {
-        if c.kind == POINT || c.multiplicity(v) == 1 {
-            cov |= m;
-        } else if c.multiplicity(v) == 2 {
-            cov |= (m & 1) | (m >> 2 & 2) | if m & 6 != 0 { 3 } else { 0 };
-        }
-    }
+    let bridged = twice.iter().any(|&(_, m)| m & 6 != 0);
     for &(_, m) in &thrice {
         let f = ThriceFeat {
             cl,
@@ -341,8 +333,8 @@ fn run(
             n_twice: twice.len(),
         };
         cost.mask(3, thrice_ctx(&f), m);
-        // slot 0: the same with the children not covered yet
-        cost.mask(0, thrice_ctx(&f) * 4 + u64::from(cov ^ 3), m);
+        // slot 0: the same with a fine (v1, v2, x) or (v2, v1, x) coded before
+        cost.mask(0, thrice_ctx(&f) * 2 + u64::from(bridged), m);
     }
 }
 
@@ -501,7 +493,7 @@ fn report(name: &str, splits: &[Split], nv: f64, designs: &[Design], diag: bool)
         }
         let b = cost.bits.map(|x| x / nv);
         println!(
-            "{name:<28} {dn:<16} once {:6.3} twice {:6.3} thrice {:6.3} point {:5.3} conn {:6.3}  ctx {} | thrice+cov {:6.3} point+alone {:5.3}",
+            "{name:<28} {dn:<16} once {:6.3} twice {:6.3} thrice {:6.3} point {:5.3} conn {:6.3}  ctx {} | thrice+bridged {:6.3} point+alone {:5.3}",
             b[1],
             b[2],
             b[3],
