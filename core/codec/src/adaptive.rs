@@ -72,6 +72,17 @@ impl Model {
         }
     }
 
+    /// A model that starts at probability `p0` (units of `2^-16`, clamped to the estimates'
+    /// bounds) as if learnt from `n` decisions.
+    pub fn starting_at(p0: u32, n: u16) -> Self {
+        let p = p0.clamp(MIN_P, (1 << PROB_BITS) - MIN_P) as u16;
+        Model {
+            fast: p,
+            slow: p,
+            n: n.min(SLOW as u16 - 1),
+        }
+    }
+
     /// The probability of a 0, in units of `2^-16`.
     #[inline]
     pub fn p0(self) -> u32 {
@@ -150,5 +161,15 @@ mod tests {
         // twenty 1s after a thousand 0s: the fast half is near 0, the slow one still high
         assert!(m.fast < 10_000 && m.slow > 40_000, "{m:?}");
         assert!(m.p0() > 20_000 && m.p0() < 40_000, "{}", m.p0());
+    }
+
+    #[test]
+    fn a_start_is_kept_until_decisions_move_it() {
+        let mut m = Model::starting_at(60_000, 1);
+        assert_eq!(m.p0(), 60_000);
+        m.update(true);
+        // the second decision moves it a third of the way (rate 1/(n + 2), n = 1)
+        assert_eq!(m.p0(), 60_000 - (60_000 - MIN_P) / 3 - 1);
+        assert_eq!(Model::starting_at(0, 0).p0(), MIN_P);
     }
 }

@@ -55,7 +55,8 @@ pub struct CompressReport {
     /// Symbols of each family.
     pub family_symbols: [u64; crate::symbols::FAMILIES],
     /// Milliseconds per step: partition (§5.1: box, quantisation, tree, raw index file), codes
-    /// (§5.2), final write (§5.3).
+    /// (§5.2, each cell's range coding included), final write (§5.3: the chunks copied in
+    /// pre-order, the trailer).
     pub steps_ms: [f64; 3],
 }
 
