@@ -264,6 +264,49 @@ impl Complex {
         debug_assert!(self.incident.list(v).is_empty());
     }
 
+    /// Renumbers the complex in the order of `alive` (vertex `alive[i]` becomes `i`), keeps only
+    /// those vertices and the live simplices, and stores each simplex beside its first vertex
+    /// (slots follow the vertices' order): with `alive` in kd order, the vertices and
+    /// simplices a star walk reads lie close together in memory again, after a level of merges
+    /// or splits scattered them. `alive` becomes `0..n`. Leaves the complex as it is when a live
+    /// simplex holds a vertex `alive` does not list.
+    pub fn reorder(&mut self, alive: &mut [u32]) {
+        let mut new_id = vec![u32::MAX; self.vertices.len()];
+        for (i, &v) in alive.iter().enumerate() {
+            new_id[v as usize] = i as u32;
+        }
+        let mut out = Complex {
+            vertices: alive.iter().map(|&v| self.vertices[v as usize]).collect(),
+            simplices: Vec::with_capacity(self.live),
+            incident: Incidence {
+                stars: vec![Star::default(); alive.len()],
+                spill: Vec::new(),
+                free: Vec::new(),
+            },
+            live: 0,
+        };
+        for &v in alive.iter() {
+            let id = new_id[v as usize];
+            for &slot in self.listed(v) {
+                let s = self.simplices[slot as usize].expect("listed slots are live");
+                if s.v.iter().any(|&x| new_id[x as usize] == u32::MAX) {
+                    return;
+                }
+                let r = s.map(|x| new_id[x as usize]);
+                if r.v[0] == id {
+                    out.add(r);
+                }
+            }
+        }
+        if out.live != self.live {
+            return;
+        }
+        *self = out;
+        for (i, v) in alive.iter_mut().enumerate() {
+            *v = i as u32;
+        }
+    }
+
     /// Ids of the vertices that still hold a simplex, in id order.
     pub fn used_vertices(&self) -> Vec<u32> {
         let mut used = vec![false; self.vertices.len()];
@@ -434,6 +477,64 @@ mod tests {
                 assert_eq!(f.renamed(v2, v), c);
             }
         }
+    }
+
+    #[test]
+    fn reorder_keeps_the_complex_under_the_new_numbers() {
+        let mut cx = Complex::default();
+        for i in 0..6u32 {
+            cx.add_vertex(Vertex {
+                corner: [i, 0, 0],
+                level: 3,
+            });
+        }
+        // vertex 4 is dead (holds nothing); vertex 0 holds more simplices than a record inline
+        let mut before = Vec::new();
+        for (a, b, c) in [(0, 1, 2), (2, 1, 3), (5, 0, 0), (3, 3, 3), (1, 5, 2)] {
+            before.push(Simplex::triangle(a, b, c));
+        }
+        before.push(Simplex::point(5));
+        for a in [1, 2, 3, 5] {
+            for b in [1, 2, 3, 5] {
+                let s = Simplex::triangle(0, a, b);
+                if !before.contains(&s) {
+                    before.push(s);
+                }
+            }
+        }
+        for &s in &before {
+            cx.add(s);
+        }
+        assert!(cx.listed(0).len() > INLINE);
+        cx.remove(0);
+        before.remove(0);
+        let mut alive = vec![5, 3, 0, 2, 1];
+        let old = alive.clone();
+        cx.reorder(&mut alive);
+        assert_eq!(alive, vec![0, 1, 2, 3, 4]);
+        let new_of = |x: u32| old.iter().position(|&v| v == x).unwrap() as u32;
+        let mut want: Vec<Simplex> = before.iter().map(|s| s.map(new_of)).collect();
+        let mut got: Vec<Simplex> = cx.live_simplices().collect();
+        want.sort();
+        got.sort();
+        assert_eq!(got, want);
+        assert_eq!(cx.live, want.len());
+        for v in 0..5u32 {
+            let listed: Vec<Simplex> = cx
+                .listed(v)
+                .iter()
+                .map(|&t| cx.simplices[t as usize].unwrap())
+                .collect();
+            let holding: Vec<Simplex> = want.iter().copied().filter(|s| s.v.contains(&v)).collect();
+            assert_eq!(listed.len(), holding.len(), "vertex {v}");
+            assert!(listed.iter().all(|s| holding.contains(s)));
+        }
+        // a live simplex on a vertex `alive` leaves out: nothing changes
+        let mut partial = vec![0, 1];
+        cx.reorder(&mut partial);
+        assert_eq!(partial, vec![0, 1]);
+        assert_eq!(cx.live, want.len());
+        assert_eq!(cx.vertices.len(), 6 - 1);
     }
 
     #[test]

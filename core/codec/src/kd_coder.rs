@@ -307,6 +307,11 @@ pub fn decode(
             }
         }
         *alive = next;
+        // new vertices and simplices were appended far from their neighbours: renumber in kd
+        // order once per bit of precision, so the next levels' star walks stay local
+        if level % 3 == 2 {
+            cx.reorder(alive);
+        }
         if let Some(g) = geometry {
             g.drop_above(level + 1);
             if level + advance < end {
