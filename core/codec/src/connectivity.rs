@@ -455,3 +455,156 @@ fn code_with(
     let _ = v2;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::complex::Vertex;
+
+    #[test]
+    fn once_contexts_do_not_depend_on_which_child_is_low() {
+        // swapping the children swaps link bits 1 and 2, mirrors the midpoint (floor quarters:
+        // m ↔ −1 − m) and swaps each vertex's balance; the sub-context must stay and the
+        // predicted child swap, so that both halves of a split share their statistics
+        let swap = |l: u8| ((l & 1) << 1) | ((l & 2) >> 1);
+        let mut subs = std::collections::HashSet::new();
+        for la in 0..4u8 {
+            for lb in 0..4u8 {
+                for (pa, pb) in [(false, false), (true, false), (false, true), (true, true)] {
+                    for mid in -9..9i64 {
+                        for d in 0..81 {
+                            let t = |k: i32| (d / 3i32.pow(k as u32)) % 3 - 1;
+                            let balance = [[t(0), t(1)], [t(2), t(3)]];
+                            let (sub, flip) = once_context((la, pa), (lb, pb), mid, balance);
+                            let mirrored = [[t(1), t(0)], [t(3), t(2)]];
+                            let (sub2, flip2) =
+                                once_context((swap(la), pa), (swap(lb), pb), -1 - mid, mirrored);
+                            assert_eq!((sub, flip), (sub2, !flip2), "{la} {lb} {mid} {balance:?}");
+                            assert!(sub < Family::TriangleOnce.subs());
+                            subs.insert(sub);
+                        }
+                    }
+                }
+            }
+        }
+        // (600 of the 1 080 are reachable: "the other child" needs both links single)
+        assert_eq!(subs.len(), 600);
+    }
+
+    /// Masks from the corners of a simplex's vertices (so both numberings get the same ones),
+    /// with every coding recorded.
+    struct ByCorner {
+        corners: Vec<[u32; 3]>,
+        log: Vec<(usize, bool, u8)>,
+    }
+
+    impl Masks for ByCorner {
+        fn mask(&mut self, c: &Simplex, coding: Coding) -> Result<u8, CodecError> {
+            // the corners in their smallest rotation: the ids' rotation differs between sides
+            let t = c.v.map(|x| self.corners[x as usize]);
+            let t = *[t, [t[1], t[2], t[0]], [t[2], t[0], t[1]]]
+                .iter()
+                .min()
+                .unwrap();
+            let mut h = 0x9e37_79b9u32;
+            for k in t {
+                for &k in &k {
+                    h = (h ^ k).wrapping_mul(0x0100_0193);
+                }
+            }
+            let mask = match coding.family {
+                Family::Twice | Family::Thrice => 1 + (h >> 7) as u8 % 15,
+                _ => 1 + (h >> 7) as u8 % 3,
+            };
+            self.log.push((coding.ctx, coding.flip, coding.value(mask)));
+            Ok(mask)
+        }
+    }
+
+    #[test]
+    fn codes_depend_on_corners_not_on_vertex_numbers() {
+        // the encoder and the decoder number vertices differently and list a star in different
+        // orders: the codes must be the same
+        let (bits, level) = (6, 6);
+        let centre = [16u32, 16, 16];
+        let mut corners = vec![centre];
+        for dx in [0u32, 16, 32] {
+            for dy in [0u32, 16, 32] {
+                for dz in [0u32, 16, 32] {
+                    if [dx, dy, dz] != [16, 16, 16] {
+                        corners.push([dx, dy, dz]);
+                    }
+                }
+            }
+        }
+        // the star of vertex 0 (by position in `corners`): a ring, a few more, collapsed ones
+        let mut star: Vec<[usize; 3]> = Vec::new();
+        for i in 1..corners.len() {
+            star.push([0, i, 1 + i % (corners.len() - 1)]);
+            if i % 4 == 0 {
+                star.push([0, 0, i]);
+            }
+        }
+        star.push([0, 0, 0]);
+        let run = |order: &dyn Fn(usize) -> usize, reverse: bool| {
+            let n = corners.len();
+            let mut cx = Complex::default();
+            let mut id = vec![0u32; n];
+            for k in 0..n {
+                let i = order(k);
+                id[i] = cx.add_vertex(Vertex {
+                    corner: corners[i],
+                    level: level as u8,
+                });
+            }
+            let mut coarse: Vec<Simplex> = star
+                .iter()
+                .map(|t| Simplex::triangle(id[t[0]], id[t[1]], id[t[2]]))
+                .collect();
+            coarse.push(Simplex::point(id[0]));
+            if reverse {
+                coarse.reverse();
+            }
+            let mut high = corners[0];
+            high[0] += 8;
+            let v2 = cx.add_vertex(Vertex {
+                corner: high,
+                level: level as u8 + 1,
+            });
+            let mut masks = ByCorner {
+                corners: cx.vertices.iter().map(|w| w.corner).collect(),
+                log: Vec::new(),
+            };
+            let out =
+                code_connectivity(&cx, &coarse, id[0], v2, level, bits, &mut masks).expect("codes");
+            let by_corner: Vec<([[u32; 3]; 3], u8)> = out
+                .iter()
+                .map(|(c, m)| (c.v.map(|x| masks.corners[x as usize]), *m))
+                .collect();
+            (masks.log, by_corner)
+        };
+        let n = corners.len();
+        let (log_a, out_a) = run(&|k| k, false);
+        let (log_b, out_b) = run(&|k| n - 1 - k, true);
+        assert_eq!(log_a.len(), star.len() + 1);
+        assert_eq!(log_a, log_b);
+        // the same simplices (up to rotation, which differs with the ids) with the same masks
+        let norm = |v: &[([[u32; 3]; 3], u8)]| {
+            let mut v: Vec<([[u32; 3]; 3], u8)> = v
+                .iter()
+                .map(|&(t, m)| {
+                    (
+                        *[t, [t[1], t[2], t[0]], [t[2], t[0], t[1]]]
+                            .iter()
+                            .min()
+                            .unwrap(),
+                        m,
+                    )
+                })
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        assert_eq!(norm(&out_a), norm(&out_b));
+    }
+}
