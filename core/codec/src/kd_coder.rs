@@ -13,19 +13,19 @@
 //! first) and the decoder top-down (splitting, first cell first), so that before each split the
 //! decoder holds exactly the complex the encoder held after the matching merge.
 //!
-//! Predictions (the contexts of [`crate::symbols`]), all computed from what the decoder already
-//! has, by one function both sides run (`code_connectivity`, `split_coding`):
-//! - a split: the half the vertex's neighbours' centroid lies in, how far it is from the plane,
-//!   and whether the cell holds a collapsed triangle (then it likely holds several points);
-//! - a triangle holding the vertex once, taken breadth first through shared vertices: the child
-//!   its other vertices are already linked to, else the side of the plane they lie on;
-//! - a triangle holding both children (`v1 v2 x`, an edge collapse): the links of `x` and the
-//!   orientation the neighbouring fine triangles imply;
-//! - a triangle made of the vertex alone: whether either child already holds a collapsed edge.
+//! Predictions (the contexts of [`crate::symbols`]) are all computed from what the decoder
+//! already has, by one function both sides run: [`crate::split_context`] for a split (the
+//! star's centroid, parallelograms, tangent plane, density) and [`crate::connectivity`] for the
+//! preimage masks (links, pivots, the midpoint's side and distance, unmatched fine edges); their
+//! module docs say what each context is.
+//!
+//! This module is the loops and the data movement: merges and splits on [`Complex`], buffers
+//! reused across a cell's splits ([`Scratch`]), and the decoder's complex renumbered in kd order
+//! once per bit of precision so that star walks stay local.
 
 use crate::ahead::Geometry;
 use crate::complex::{Complex, MaskList, Simplex, candidate_array, candidate_of};
-use crate::connectivity::{Known, Read, code_connectivity};
+use crate::connectivity::{Known, Read, code_connectivity, code_connectivity_into};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
 use crate::kd_cell::half;
@@ -157,6 +157,8 @@ struct Scratch {
     slots: Vec<u32>,
     coarse: Vec<Simplex>,
     masks: MaskList,
+    /// The coarse simplices with their preimage masks, as the connectivity coder returns them.
+    decoded: Vec<(Simplex, u8)>,
 }
 
 /// Merges `v2` (high child) into `v1` (low child) and appends the connectivity codes of the
@@ -196,6 +198,8 @@ fn merge(
         cx.add(c);
     }
     let mut known = Known { masks, out };
+    // still the allocating form (one Vec per merge): code_connectivity_into would need
+    // code_connectivity to have no other user first, or it is dead code
     code_connectivity(cx, coarse, v1, v2, level, bits, &mut known)
         .expect("the encoder knows every mask");
     scratch.masks = known.masks;
@@ -333,7 +337,12 @@ fn split_vertex(
     reader: &mut SymbolReader,
     scratch: &mut Scratch,
 ) -> Result<(), CodecError> {
-    let Scratch { slots, coarse, .. } = scratch;
+    let Scratch {
+        slots,
+        coarse,
+        decoded,
+        ..
+    } = scratch;
     slots.clear();
     slots.extend_from_slice(cx.incident(v));
     coarse.clear();
@@ -342,10 +351,18 @@ fn split_vertex(
             .iter()
             .map(|&s| cx.simplices[s as usize].expect("live")),
     );
-    let decoded = code_connectivity(cx, coarse, v, v2, level, bits, &mut Read { reader })?;
+    code_connectivity_into(
+        cx,
+        coarse,
+        (v, v2),
+        level,
+        bits,
+        &mut Read { reader },
+        decoded,
+    )?;
     cx.remove_stars(slots, &[v]);
     cx.vertices[v as usize].level = level as u8 + 1;
-    for (c, mask) in decoded {
+    for &(c, mask) in decoded.iter() {
         for (i, f) in candidate_array(&c, v, v2).as_slice().iter().enumerate() {
             if mask & (1 << i) != 0 {
                 cx.add(*f);
