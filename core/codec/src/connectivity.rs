@@ -350,6 +350,8 @@ fn code_with(
     }));
     let band = (level / 3).clamp(4, 7) - 4;
     let mut any_both = false;
+    // which children hold a once-held fine triangle already
+    let mut held = [false; 2];
     for &j in &s.bfs {
         let (a, b, i) = s.once[j as usize];
         let c = coarse[i as usize];
@@ -362,6 +364,8 @@ fn code_with(
             mid,
             [s.balance[a], s.balance[b]],
         );
+        let (p, o) = if flip { (1, 0) } else { (0, 1) };
+        let sub = sub * 4 + usize::from(held[p]) * 2 + usize::from(held[o]);
         let family = Family::TriangleOnce;
         let mask = masks.mask(
             &c,
@@ -374,8 +378,9 @@ fn code_with(
         s.link[a] |= mask;
         s.link[b] |= mask;
         // the fine triangle (c, a, b) has the edges c→a and b→c
-        for k in 0..2 {
+        for (k, held) in held.iter_mut().enumerate() {
             if mask & (1 << k) != 0 {
+                *held = true;
                 s.balance[a][k] += 1;
                 s.balance[b][k] -= 1;
             }
@@ -480,7 +485,7 @@ mod tests {
                             let (sub2, flip2) =
                                 once_context((swap(la), pa), (swap(lb), pb), -1 - mid, mirrored);
                             assert_eq!((sub, flip), (sub2, !flip2), "{la} {lb} {mid} {balance:?}");
-                            assert!(sub < Family::TriangleOnce.subs());
+                            assert!(sub * 4 + 3 < Family::TriangleOnce.subs());
                             subs.insert(sub);
                         }
                     }

@@ -161,6 +161,9 @@ struct OnceFeat {
     n_once: usize,
     /// a once-held triangle coded before went to both children
     both_so_far: bool,
+    /// once-held fine triangles of each child so far, and once-held triangles left to code
+    ncs: [usize; 2],
+    left: usize,
     /// where a and b lie from the plane: 0 below and away, 1 below and touching, 2 straddling
     /// with the centre below, 3 straddling with the centre above, 4 above touching, 5 above away
     ca: u8,
@@ -268,7 +271,7 @@ fn run(
     if twice_first {
         code_twice(cost, &dir, nc, &link, &fine, false, &mut tlink);
     }
-    for &(c, m) in &once {
+    for (done, &(c, m)) in once.iter().enumerate() {
         let (a, b) = others(&c, v);
         let la = link.get(&a).copied().unwrap_or(0);
         let lb = link.get(&b).copied().unwrap_or(0);
@@ -285,6 +288,8 @@ fn run(
             level: s.level,
             n_once: once.len(),
             both_so_far: any_both,
+            ncs: nc,
+            left: once.len() - done,
             ca: g.class(a),
             cb: g.class(b),
             da: dir.get(&a).copied().unwrap_or([0, 0]),
@@ -726,7 +731,26 @@ fn connectivity_study() {
         let (c, flip) = od(f, true);
         (c * 2 + u64::from(f.both_so_far), flip)
     };
+    let on = |f: &OnceFeat, which: u8| {
+        let (c, flip) = od(f, true);
+        let (p, o) = if flip { (1, 0) } else { (0, 1) };
+        let x = match which {
+            0 => u64::from(f.ncs[p] > 0) * 2 + u64::from(f.ncs[o] > 0),
+            1 => u64::from(f.ncs[o] == 0) * 2 + u64::from(f.left == 1),
+            _ => {
+                u64::from(f.ncs[o] == 0 && f.left == 1)
+                    + 2 * u64::from(f.ncs[p] == 0 && f.left == 1)
+            }
+        };
+        (c * 4 + x, flip)
+    };
+    let on0 = |f: &OnceFeat| on(f, 0);
+    let on1 = |f: &OnceFeat| on(f, 1);
+    let on2 = |f: &OnceFeat| on(f, 2);
     let designs: Vec<Design> = vec![
+        ("once cov", false, &on0, &t6d, &h3),
+        ("once unc last", false, &on1, &t6d, &h3),
+        ("once forced", false, &on2, &t6d, &h3),
         ("once both", false, &ob, &t6d, &h1),
         ("once both dir", false, &obd, &t6d, &h1),
         ("once dir t6l3", false, &od1, &t6d, &h1),

@@ -22,8 +22,8 @@ pub enum Family {
     /// Where a triangle holding the split vertex once goes: 0 = the predicted child, 1 = the
     /// other, 2 = both. Sub-context: which children its other vertices are already linked to by
     /// decoded triangles, whether they are pivots, the midpoint's side and distance from the
-    /// split plane, and which child closes more of their unmatched fine edges; the level in four
-    /// bands of precision.
+    /// split plane, which child closes more of their unmatched fine edges, and which children hold
+    /// a once-held triangle already; the level in four bands of precision.
     TriangleOnce = 1,
     /// The preimages of a triangle holding the split vertex twice, as a mask of four candidates
     /// minus one. Sub-context: the links of its third vertex, the orientation its neighbours
@@ -70,7 +70,7 @@ impl Family {
     pub const fn subs(self) -> usize {
         match self {
             Family::Split => 42, // split_context::SPLIT_SUBS
-            Family::TriangleOnce => 1080,
+            Family::TriangleOnce => 4320,
             Family::Twice => 144,
             Family::Thrice => 32,
             Family::Point => 1,
