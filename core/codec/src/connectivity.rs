@@ -31,6 +31,8 @@ struct Scratch {
     pivot: Vec<bool>,
     link: Vec<u8>,
     balance: Vec<[i32; 2]>,
+    /// Per local number: the once-held fine triangles holding it, per child.
+    held_by: Vec<[u8; 2]>,
     offset: Vec<i64>,
     /// (corner, local number), sorted to give the ranks.
     by_corner: Vec<([u32; 3], u32)>,
@@ -94,6 +96,8 @@ impl Scratch {
         self.link.resize(n, 0);
         self.balance.clear();
         self.balance.resize(n, [0, 0]);
+        self.held_by.clear();
+        self.held_by.resize(n, [0, 0]);
     }
 
     fn of(&self, x: u32) -> u32 {
@@ -381,6 +385,8 @@ fn code_with(
         for (k, held) in held.iter_mut().enumerate() {
             if mask & (1 << k) != 0 {
                 *held = true;
+                s.held_by[a][k] = s.held_by[a][k].saturating_add(1);
+                s.held_by[b][k] = s.held_by[b][k].saturating_add(1);
                 s.balance[a][k] += 1;
                 s.balance[b][k] -= 1;
             }
@@ -408,21 +414,26 @@ fn code_with(
         let lx = if lx == 2 { 1 } else { lx.min(3) };
         // x linked to both children: whether (c, c, ·) came before, for the predicted child c
         // and the other (then its cell holds several vertices: more collapsed triangles)
-        let seen = if lx == 3 {
+        // and how many once-held fine triangles of each child hold x (0, 1, 2, 3+)
+        let (seen, around) = if lx == 3 {
             let (p, o) = if flip {
                 (collapsed_high, collapsed_low)
             } else {
                 (collapsed_low, collapsed_high)
             };
-            usize::from(p) * 2 + usize::from(o)
+            let [n1, n2] = s.held_by[l].map(|n| n.min(3) as usize);
+            let (np, no) = if flip { (n2, n1) } else { (n1, n2) };
+            (usize::from(p) * 2 + usize::from(o), np * 4 + no)
         } else {
-            0
+            (0, 0)
         };
-        let sub = (([0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize) * 4
+        let sub = ((([0, 1, 0, 2][lx as usize] * 3 + (ev + 1) as usize) * 4
             + usize::from(vvv) * 2
             + usize::from(any_both))
             * 4
-            + seen;
+            + seen)
+            * 16
+            + around;
         let family = Family::Twice;
         let mask = masks.mask(
             c,

@@ -221,6 +221,7 @@ fn run(
     // per other vertex: v1→x minus x→v1, and v2→x minus x→v2, over the once-held fine triangles
     let mut dir: HashMap<u32, [i32; 2]> = HashMap::new();
     let mut nc = [0usize; 2];
+    let mut nx: HashMap<u32, [usize; 2]> = HashMap::new();
     let v2 = u32::MAX;
     let mut any_both = false;
     let (mut cl, mut ch) = (false, false);
@@ -229,6 +230,7 @@ fn run(
     let mut code_twice = |cost: &mut Cost,
                           dir: &HashMap<u32, [i32; 2]>,
                           nc: [usize; 2],
+                          nx: &HashMap<u32, [usize; 2]>,
                           link: &HashMap<u32, u8>,
                           fine: &[Simplex],
                           any_both: bool,
@@ -240,6 +242,7 @@ fn run(
                 ev: orientation_evidence(fine, v, v2, x),
                 d: dir.get(&x).copied().unwrap_or([0, 0]),
                 seen: [cl, ch],
+                nx: nx.get(&x).copied().unwrap_or([0, 0]),
                 nc,
                 vvv: !thrice.is_empty(),
                 any_both,
@@ -269,7 +272,7 @@ fn run(
         }
     };
     if twice_first {
-        code_twice(cost, &dir, nc, &link, &fine, false, &mut tlink);
+        code_twice(cost, &dir, nc, &nx, &link, &fine, false, &mut tlink);
     }
     for (done, &(c, m)) in once.iter().enumerate() {
         let (a, b) = others(&c, v);
@@ -315,18 +318,22 @@ fn run(
         if m & 1 != 0 {
             fine.push(Simplex::triangle(v, a, b));
             dir.entry(a).or_default()[0] += 1;
+            nx.entry(a).or_default()[0] += 1;
+            nx.entry(b).or_default()[0] += 1;
             nc[0] += 1;
             dir.entry(b).or_default()[0] -= 1;
         }
         if m & 2 != 0 {
             fine.push(Simplex::triangle(v2, a, b));
             dir.entry(a).or_default()[1] += 1;
+            nx.entry(a).or_default()[1] += 1;
+            nx.entry(b).or_default()[1] += 1;
             nc[1] += 1;
             dir.entry(b).or_default()[1] -= 1;
         }
     }
     if !twice_first {
-        code_twice(cost, &dir, nc, &link, &fine, any_both, &mut tlink);
+        code_twice(cost, &dir, nc, &nx, &link, &fine, any_both, &mut tlink);
     }
     let bridged = twice.iter().any(|&(_, m)| m & 6 != 0);
     for &(_, m) in &thrice {
@@ -360,6 +367,8 @@ struct TwiceFeat {
     seen: [bool; 2],
     /// once-held fine triangles of each child
     nc: [usize; 2],
+    /// once-held fine triangles of each child holding x
+    nx: [usize; 2],
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -747,7 +756,20 @@ fn connectivity_study() {
     let on0 = |f: &OnceFeat| on(f, 0);
     let on1 = |f: &OnceFeat| on(f, 1);
     let on2 = |f: &OnceFeat| on(f, 2);
+    let t7 = |f: &TwiceFeat| {
+        let (c, flip) = t6(f, 3);
+        let (p, o) = if flip { (1, 0) } else { (0, 1) };
+        let r = |n: usize| n.min(3) as u64;
+        let x = if f.lx == 3 {
+            r(f.nx[p]) * 4 + r(f.nx[o])
+        } else {
+            0
+        };
+        (c * 16 + x, flip)
+    };
     let designs: Vec<Design> = vec![
+        ("twice nx (kept)", false, &on0, &t7, &h3),
+        ("once cov", false, &on0, &t6d, &h3),
         ("once cov", false, &on0, &t6d, &h3),
         ("once unc last", false, &on1, &t6d, &h3),
         ("once forced", false, &on2, &t6d, &h3),

@@ -28,7 +28,8 @@ pub enum Family {
     /// The preimages of a triangle holding the split vertex twice, as a mask of four candidates
     /// minus one. Sub-context: the links of its third vertex, the orientation its neighbours
     /// imply, whether `(v, v, v)` exists, whether a once-held triangle went to both children,
-    /// and (third vertex linked to both) which children held a collapsed triangle before.
+    /// and (third vertex linked to both) which children held a collapsed triangle before and
+    /// how many once-held triangles of each child hold the third vertex.
     Twice = 2,
     /// The preimages of a triangle made of the split vertex alone (mask of four, minus one).
     /// Sub-context: whether either child already holds a collapsed edge, whether a once-held
@@ -71,7 +72,7 @@ impl Family {
         match self {
             Family::Split => 42, // split_context::SPLIT_SUBS
             Family::TriangleOnce => 4320,
-            Family::Twice => 144,
+            Family::Twice => 2304,
             Family::Thrice => 32,
             Family::Point => 1,
             Family::Ahead => 42, // split_context::SPLIT_SUBS
