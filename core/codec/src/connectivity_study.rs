@@ -164,6 +164,9 @@ struct OnceFeat {
     /// once-held fine triangles of each child so far, and once-held triangles left to code
     ncs: [usize; 2],
     left: usize,
+    /// once-held fine triangles of each child holding a, b
+    na: [usize; 2],
+    nb: [usize; 2],
     /// where a and b lie from the plane: 0 below and away, 1 below and touching, 2 straddling
     /// with the centre below, 3 straddling with the centre above, 4 above touching, 5 above away
     ca: u8,
@@ -292,6 +295,8 @@ fn run(
             n_once: once.len(),
             both_so_far: any_both,
             ncs: nc,
+            na: nx.get(&a).copied().unwrap_or([0, 0]),
+            nb: nx.get(&b).copied().unwrap_or([0, 0]),
             left: once.len() - done,
             ca: g.class(a),
             cb: g.class(b),
@@ -338,6 +343,7 @@ fn run(
     let bridged = twice.iter().any(|&(_, m)| m & 6 != 0);
     for &(_, m) in &thrice {
         let f = ThriceFeat {
+            nc,
             cl,
             ch,
             any_both,
@@ -373,6 +379,8 @@ struct TwiceFeat {
 
 #[derive(Clone, Copy, Debug)]
 struct ThriceFeat {
+    /// once-held fine triangles of each child
+    nc: [usize; 2],
     cl: bool,
     ch: bool,
     any_both: bool,
@@ -767,7 +775,22 @@ fn connectivity_study() {
         };
         (c * 16 + x, flip)
     };
+    let onx = |f: &OnceFeat| {
+        let (c, flip) = on(f, 0);
+        let (p, o) = if flip { (1, 0) } else { (0, 1) };
+        let r = |n: usize| n.min(3) as u64;
+        (
+            c * 16 + r(f.na[p] + f.nb[p]) * 4 + r(f.na[o] + f.nb[o]),
+            flip,
+        )
+    };
+    let h4 = |f: &ThriceFeat| {
+        let r = |n: usize| (n.min(11) / 4) as u64;
+        h3(f) * 9 + r(f.nc[0]).max(r(f.nc[1])) * 3 + r(f.nc[0]).min(r(f.nc[1]))
+    };
     let designs: Vec<Design> = vec![
+        ("thrice nc", false, &on0, &t7, &h4),
+        ("once nx", false, &onx, &t7, &h3),
         ("twice nx (kept)", false, &on0, &t7, &h3),
         ("once cov", false, &on0, &t6d, &h3),
         ("once cov", false, &on0, &t6d, &h3),
