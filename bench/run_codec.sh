@@ -47,7 +47,7 @@ if [ -z "${TESSD_BIN:-}" ]; then
     TESSD_BIN=target/release/tessd
 fi
 # the one-core speed rows' ~1.1 M-triangle torus (bench/codec/goals.py), generated if missing
-if [ ! -f /work/data34/torus1m.ply ] && [ -z "${CODEC_SPEED_MESH:-}" ]; then
+if [ ! -f "$WORK/torus1m.ply" ] && [ -z "${CODEC_SPEED_MESH:-}" ]; then
     cargo build --release -q -p tessd-bench-simplify
 fi
 [ -x "$TESSD_BIN" ] || { echo "run_codec: tessd binary not built yet: $TESSD_BIN" >&2; exit 1; }

@@ -53,7 +53,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("binary")
     ap.add_argument("--data", default=os.environ.get("TESSD_SHARED_DATA", "/work/shared/data"))
-    ap.add_argument("--torus", default="/work/data34/torus1m.ply")
+    ap.add_argument("--torus", required=True, help="the ~1.1 M-triangle torus (bench-simplify gen 1100000)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--work", default="/tmp/tessd-budget-before")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "results" / "codec_budget_before.json"))

@@ -84,8 +84,9 @@ def write_referenced_ply(verts, tris, path):
 
 
 def speed_mesh(work, binary_dir):
-    """The ~1.1 M-triangle torus: the lead's copy, else generated once with bench-simplify."""
-    for p in (os.environ.get("CODEC_SPEED_MESH"), "/work/data34/torus1m.ply", Path(work) / "torus1m.ply"):
+    """The ~1.1 M-triangle torus ($CODEC_SPEED_MESH, else generated once into the work folder
+    with bench-simplify)."""
+    for p in (os.environ.get("CODEC_SPEED_MESH"), Path(work) / "torus1m.ply"):
         if p and Path(p).is_file():
             return Path(p)
     gen = Path(binary_dir) / "bench-simplify"

@@ -1,5 +1,5 @@
-//! Feeds bytes to the codec's decoder as a `.tsc` file held in memory: `Tsc::open` (header,
-//! probability tables, index), a full decode (`decode(None)`), a coarser prefix
+//! Feeds bytes to the codec's decoder as a `.tsc` file held in memory: `Tsc::open` (head,
+//! trailer, index), a full decode (`decode(None)`), a coarser prefix
 //! (`decode(Some(bits))`, the bits taken from the input's last byte) and a view-dependent decode
 //! (`ViewSession::view`) from a fixed camera: three box diagonals from the grid's centre,
 //! looking at it, 1280×720, 30°, one pixel.
