@@ -249,10 +249,6 @@ impl Complex {
         self.incident.list(v)
     }
 
-    /// Kept for callers written when the lists were pruned lazily: the lists are always clean
-    /// now, so there is nothing to do.
-    pub fn prune(&mut self, _v: u32) {}
-
     /// The slots of the live simplices holding `v`, each once, in slot order.
     pub fn listed(&self, v: u32) -> &[u32] {
         self.incident.list(v)

@@ -112,7 +112,6 @@ impl Star {
 /// `x + y − z` predicts `v`.
 pub(crate) fn across(cx: &Complex, v: u32, x: u32, y: u32, mut f: impl FnMut(u32)) {
     for &slot in cx.listed(x) {
-        // x's list may hold dead slots (pruned when x itself is split or merged)
         let Some(s) = cx.simplices[slot as usize] else {
             continue;
         };
@@ -144,9 +143,8 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
     let mut few = [(0u32, 0u32, [[0i64; 3]; 2]); 16];
     let mut count = 0;
     let mut many: Vec<Edge> = Vec::new();
-    cx.prune(v);
     for &slot in cx.listed(v) {
-        let s = cx.simplices[slot as usize].expect("pruned");
+        let s = cx.simplices[slot as usize].expect("incidence lists hold live slots");
         if s.kind == POINT {
             continue;
         }
