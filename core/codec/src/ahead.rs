@@ -15,9 +15,9 @@
 //! connectivity then see geometry only down to the parent's last level.
 //!
 //! The split of a cell `c` at level `k` is coded before the connectivity of level `k` is known,
-//! so its prediction ([`Geometry::coding`]) comes from what is: the vertex `u` of the complex
+//! so its prediction (`Geometry::coding`) comes from what is: the vertex `u` of the complex
 //! holding `c`, its neighbours standing at the barycentres of their descendants at level `k`, and
-//! `c` itself; on that star run the predictors of [`crate::split_context`] (centroid and margin,
+//! `c` itself; on that star run the predictors of `split_context` (centroid and margin,
 //! tangent plane, density; not the parallelograms), with "collapsed" read as "`u` holds more than one
 //! level-`k` cell" (then both halves are likely non-empty).
 

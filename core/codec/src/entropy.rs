@@ -1,6 +1,6 @@
 //! Entropy coding of a cell's symbols (paper 003 §5.3), in one pass: each symbol is cut into
 //! binary decisions, each decision coded with the adaptive model of its context
-//! ([`crate::adaptive`]) by the binary range coder ([`crate::binary_coder`]).
+//! (`adaptive`) by the binary range coder (`binary_coder`).
 //!
 //! The paper computes one probability table per (family, level) context from the whole file and
 //! writes it once; here every context of a cell starts from a built-in start of its family (or

@@ -1,7 +1,7 @@
 //! The Gandoin–Devillers coder of one nSP-cell (paper 003 §3 and §5.2b).
 //!
 //! Geometry: the kd-tree splits every cell in two along x, y, z in turn; each split is coded as
-//! "low half non-empty", "high half non-empty" or "both" ([`Family::Split`]). Connectivity: when a
+//! "low half non-empty", "high half non-empty" or "both" ([`Family::Split`](crate::symbols::Family::Split)). Connectivity: when a
 //! cell splits into two non-empty halves, its vertex `v` becomes `v1` (low) and `v2` (high), and
 //! every simplex holding `v` is replaced by a non-empty subset of its candidate preimages
 //! ([`crate::complex::candidates`]). That subset is the connectivity code, interleaved with the
@@ -14,13 +14,13 @@
 //! decoder holds exactly the complex the encoder held after the matching merge.
 //!
 //! Predictions (the contexts of [`crate::symbols`]) are all computed from what the decoder
-//! already has, by one function both sides run: [`crate::split_context`] for a split (the
-//! star's centroid, parallelograms, tangent plane, density) and [`crate::connectivity`] for the
+//! already has, by one function both sides run: `split_context` for a split (the
+//! star's centroid, parallelograms, tangent plane, density) and `connectivity` for the
 //! preimage masks (links, pivots, the midpoint's side and distance, unmatched fine edges); their
 //! module docs say what each context is.
 //!
 //! This module is the loops and the data movement: merges and splits on [`Complex`], buffers
-//! reused across a cell's splits ([`Scratch`]), and the decoder's complex renumbered in kd order
+//! reused across a cell's splits (`Scratch`), and the decoder's complex renumbered in kd order
 //! once per bit of precision so that star walks stay local.
 
 use crate::ahead::Geometry;
