@@ -185,11 +185,12 @@ impl<'a> Decoder<'a> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// A small deterministic generator (xorshift), so the tests need no crate.
-    fn rng(seed: u64) -> impl FnMut() -> u64 {
+    /// A small deterministic generator (xorshift), so the tests need no crate (the entropy
+    /// tests use it too).
+    pub(crate) fn rng(seed: u64) -> impl FnMut() -> u64 {
         let mut s = seed.max(1);
         move || {
             s ^= s << 13;

@@ -1,5 +1,6 @@
 //! How a coded value maps to what it means (paper 003 §3): a split's halves or a simplex's
-//! preimage mask, relative to the predicted child. Shared by the split contexts, the connectivity
+//! preimage mask, relative to the predicted child, and the band of a once-held triangle's
+//! midpoint on the predicted side. Shared by the split contexts, the connectivity
 //! contexts and the geometry ahead.
 
 use crate::symbols::Family;
@@ -75,6 +76,20 @@ impl Coding {
                 }
             },
         }
+    }
+}
+
+/// Six bands of `mid` (a once-held triangle's midpoint from the split plane, in quarters of a
+/// child's side) on the side of the predicted child (`flip`: the high one), far on the other side
+/// first.
+pub(crate) fn midpoint_band(mid: i64, flip: bool) -> usize {
+    match if flip { mid } else { -1 - mid } {
+        ..=-5 => 0,
+        -4..=-3 => 1,
+        -2..=-1 => 2,
+        0..=1 => 3,
+        2..=3 => 4,
+        _ => 5,
     }
 }
 

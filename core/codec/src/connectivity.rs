@@ -5,7 +5,7 @@
 
 use std::cell::RefCell;
 
-use crate::coding::Coding;
+use crate::coding::{Coding, midpoint_band};
 use crate::complex::{Complex, POINT, Simplex};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
@@ -138,15 +138,7 @@ fn once_context(a: (u8, bool), b: (u8, bool), mid: i64, balance: [[i32; 2]; 2]) 
     };
     let (x, y) = (state(a), state(b));
     let (x, y) = (x.max(y), x.min(y));
-    let m = if flip { mid } else { -1 - mid };
-    let band = match m {
-        ..=-5 => 0,
-        -4..=-3 => 1,
-        -2..=-1 => 2,
-        0..=1 => 3,
-        2..=3 => 4,
-        _ => 5,
-    };
+    let band = midpoint_band(mid, flip);
     // the fine triangle (c, a, b) holds c→a and b→c: it closes an unmatched a→c or c→b and
     // doubles an unmatched c→a or b→c; the predicted child's score against the other's
     let [da, db] = balance;
@@ -193,27 +185,12 @@ impl Masks for Read<'_> {
 /// coarse complex `cx`: points first, then the triangles holding `v` once in breadth-first order
 /// through their shared vertices (so each is predicted from its decoded neighbours), then those
 /// holding it twice (orientation from the once-held ones), then three times; within a kind, in
-/// the order of the corners of their other vertices in turn order. Returns every coarse simplex
-/// with its preimage mask. Encoder and decoder both run this, so their contexts cannot drift
+/// the order of the corners of their other vertices in turn order. Writes every coarse simplex
+/// with its preimage mask into `out` (cleared first: a caller splitting many vertices reuses one
+/// buffer). Encoder and decoder both run this, so their contexts cannot drift
 /// apart; every order and context comes from corners and decoded masks, never from vertex ids
 /// (the two sides number vertices differently).
 pub(crate) fn code_connectivity(
-    cx: &Complex,
-    coarse: &[Simplex],
-    v: u32,
-    v2: u32,
-    level: usize,
-    bits: u32,
-    masks: &mut impl Masks,
-) -> Result<Vec<(Simplex, u8)>, CodecError> {
-    let mut out = Vec::with_capacity(coarse.len());
-    code_connectivity_into(cx, coarse, (v, v2), level, bits, masks, &mut out)?;
-    Ok(out)
-}
-
-/// [`code_connectivity`] into the caller's buffer `out` (cleared first), so that a caller
-/// splitting many vertices reuses one buffer.
-pub(crate) fn code_connectivity_into(
     cx: &Complex,
     coarse: &[Simplex],
     (v, v2): (u32, u32),
@@ -591,8 +568,9 @@ mod tests {
                 corners: cx.vertices.iter().map(|w| w.corner).collect(),
                 log: Vec::new(),
             };
-            let out =
-                code_connectivity(&cx, &coarse, id[0], v2, level, bits, &mut masks).expect("codes");
+            let mut out = Vec::new();
+            code_connectivity(&cx, &coarse, (id[0], v2), level, bits, &mut masks, &mut out)
+                .expect("codes");
             let by_corner: Vec<([[u32; 3]; 3], u8)> = out
                 .iter()
                 .map(|(c, m)| (c.v.map(|x| masks.corners[x as usize]), *m))

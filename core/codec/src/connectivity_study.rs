@@ -453,15 +453,7 @@ fn rel(l: u8, flip: bool) -> u64 {
 }
 
 fn mid_band(f: &OnceFeat, flip: bool) -> u64 {
-    let m = if flip { f.mid } else { -1 - f.mid };
-    match m {
-        ..=-5 => 0,
-        -4..=-3 => 1,
-        -2..=-1 => 2,
-        0..=1 => 3,
-        2..=3 => 4,
-        _ => 5,
-    }
+    crate::coding::midpoint_band(f.mid, flip) as u64
 }
 
 fn rich(f: &OnceFeat, lvl: u64) -> (u64, bool) {

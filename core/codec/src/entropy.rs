@@ -316,17 +316,8 @@ impl SymbolReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::binary_coder::tests::rng;
     use crate::symbols::{Family, context};
-
-    fn rng(seed: u64) -> impl FnMut() -> u64 {
-        let mut s = seed.max(1);
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        }
-    }
 
     /// A stream over every family, skewed as the real ones are.
     fn stream(n: usize, seed: u64) -> Vec<Symbol> {

@@ -25,7 +25,7 @@
 
 use crate::ahead::Geometry;
 use crate::complex::{Complex, MaskList, Simplex, candidate_array, candidate_of};
-use crate::connectivity::{Known, Read, code_connectivity, code_connectivity_into};
+use crate::connectivity::{Known, Read, code_connectivity};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
 use crate::kd_cell::half;
@@ -198,10 +198,16 @@ fn merge(
         cx.add(c);
     }
     let mut known = Known { masks, out };
-    // still the allocating form (one Vec per merge): code_connectivity_into would need
-    // code_connectivity to have no other user first, or it is dead code
-    code_connectivity(cx, coarse, v1, v2, level, bits, &mut known)
-        .expect("the encoder knows every mask");
+    code_connectivity(
+        cx,
+        coarse,
+        (v1, v2),
+        level,
+        bits,
+        &mut known,
+        &mut scratch.decoded,
+    )
+    .expect("the encoder knows every mask");
     scratch.masks = known.masks;
 }
 
@@ -351,7 +357,7 @@ fn split_vertex(
             .iter()
             .map(|&s| cx.simplices[s as usize].expect("live")),
     );
-    code_connectivity_into(
+    code_connectivity(
         cx,
         coarse,
         (v, v2),
