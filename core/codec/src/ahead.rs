@@ -22,7 +22,7 @@
 //! level-`k` cell" (then both halves are likely non-empty).
 
 use crate::coding::Coding;
-use crate::complex::{Complex, POINT, Vertex};
+use crate::complex::{Complex, Vertex};
 use crate::error::CodecError;
 use crate::kd_cell::{half, kd_key};
 use crate::split_context::{Star, coding};
@@ -259,17 +259,7 @@ impl Geometry {
             collapsed: level.below(&cx.vertices[u as usize], bits).len() > 1,
             ..Star::default()
         };
-        for &slot in cx.listed(u) {
-            let Some(s) = cx.simplices[slot as usize] else {
-                continue;
-            };
-            if s.kind == POINT {
-                continue;
-            }
-            let Some(i) = s.v.iter().position(|&x| x == u) else {
-                continue;
-            };
-            let (x, y) = (s.v[(i + 1) % 3], s.v[(i + 2) % 3]);
+        for (x, y) in cx.star(u) {
             match (x == u, y == u) {
                 (false, false) => {
                     let (px, py) = (at(x), at(y));

@@ -21,6 +21,17 @@ pub struct Simplex {
 }
 
 impl Simplex {
+    /// The two vertices after `v` in this triangle's turn order (`v` one of its corners).
+    #[inline]
+    pub fn after(&self, v: u32) -> (u32, u32) {
+        let i = self
+            .v
+            .iter()
+            .position(|&x| x == v)
+            .expect("the triangle holds v");
+        (self.v[(i + 1) % 3], self.v[(i + 2) % 3])
+    }
+
     /// The triangle `(a, b, c)` in its canonical rotation.
     pub fn triangle(a: u32, b: u32, c: u32) -> Self {
         let r = [[a, b, c], [b, c, a], [c, a, b]];
@@ -252,6 +263,15 @@ impl Complex {
     /// The slots of the live simplices holding `v`, each once, in slot order.
     pub fn listed(&self, v: u32) -> &[u32] {
         self.incident.list(v)
+    }
+
+    /// The oriented star of `v`: each triangle holding it (points left out), as the two
+    /// vertices after `v` in the triangle's turn order.
+    pub fn star(&self, v: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.listed(v).iter().filter_map(move |&slot| {
+            let s = self.simplices[slot as usize].expect("incidence lists hold live slots");
+            (s.kind != POINT).then(|| s.after(v))
+        })
     }
 
     /// Marks a vertex that holds nothing any more and never will (a merged-away child); its

@@ -105,12 +105,6 @@ impl Scratch {
     }
 }
 
-/// The vertices after `v` in the turn order of a triangle holding it once.
-fn others(c: &Simplex, v: u32) -> (u32, u32) {
-    let i = c.v.iter().position(|&x| x == v).unwrap();
-    (c.v[(i + 1) % 3], c.v[(i + 2) % 3])
-}
-
 /// The sub-context and predicted child (`true` = high) of a once-held triangle `(v, a, b)` from
 /// the links `a` and `b` have (bit 0: to the low child, bit 1: to the high one, by triangles
 /// decoded before), whether each is a pivot (the third vertex of a coarse `(v, v, x)`: around
@@ -236,7 +230,7 @@ fn code_with(
             vvv |= c.kind != POINT;
             head
         } else if k == 1 {
-            let (a, b) = others(c, v);
+            let (a, b) = c.after(v);
             head | (s.rank[s.of(a) as usize] as u64) << 24 | s.rank[s.of(b) as usize] as u64
         } else {
             let x = *c.v.iter().find(|&&x| x != v).unwrap();
@@ -262,7 +256,7 @@ fn code_with(
             };
             out.push((*c, masks.mask(c, coding)?));
         } else if key >> 48 & 3 == 1 {
-            let (a, b) = others(c, v);
+            let (a, b) = c.after(v);
             s.once.push((s.of(a), s.of(b), i));
         }
     }

@@ -143,16 +143,7 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
     let mut few = [(0u32, 0u32, [[0i64; 3]; 2]); 16];
     let mut count = 0;
     let mut many: Vec<Edge> = Vec::new();
-    for &slot in cx.listed(v) {
-        let s = cx.simplices[slot as usize].expect("incidence lists hold live slots");
-        if s.kind == POINT {
-            continue;
-        }
-        let i =
-            s.v.iter()
-                .position(|&x| x == v)
-                .expect("listed simplices hold v");
-        let (x, y) = (s.v[(i + 1) % 3], s.v[(i + 2) % 3]);
+    for (x, y) in cx.star(v) {
         match (x == v, y == v) {
             (false, false) => {
                 let p = [
