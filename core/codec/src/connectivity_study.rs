@@ -552,7 +552,8 @@ fn report(name: &str, splits: &[Split], nv: f64, designs: &[Design], diag: bool)
 #[test]
 #[ignore]
 fn connectivity_study() {
-    let m = "/work/shared/data/mesh";
+    let m = tessd_testdata::shared("mesh");
+    let m = m.display();
     let reset = std::env::var("RESET").is_ok();
     RESET.with(|r| *r.borrow_mut() = reset);
     let meshes = [
