@@ -157,6 +157,9 @@ struct Scratch {
     slots: Vec<u32>,
     coarse: Vec<Simplex>,
     masks: MaskList,
+    /// The encoder's merge: `(image, preimage)` of every simplex it welds, and a buffer.
+    pairs: Vec<(Simplex, Simplex)>,
+    work: Vec<(u128, u32)>,
     /// The coarse simplices with their preimage masks, as the connectivity coder returns them.
     decoded: Vec<(Simplex, u8)>,
 }
@@ -172,31 +175,23 @@ fn merge(
     out: &mut Vec<Symbol>,
     scratch: &mut Scratch,
 ) {
-    let fine_slots = &mut scratch.slots;
-    fine_slots.clear();
-    fine_slots.extend_from_slice(cx.incident(v1));
-    fine_slots.extend_from_slice(cx.incident(v2));
-    fine_slots.sort_unstable();
-    fine_slots.dedup();
+    cx.weld(v1, v2, &mut scratch.pairs, &mut scratch.work);
+    // the preimage mask of each image: one candidate bit per preimage, pairs sorted by image
     let mut masks = std::mem::take(&mut scratch.masks);
     masks.0.clear();
-    for &slot in fine_slots.iter() {
-        let s = cx.simplices[slot as usize].expect("incident() lists live simplices");
-        masks
-            .0
-            .push((s.renamed(v2, v1), 1 << candidate_of(&s, v1, v2)));
+    for &(image, fine) in scratch.pairs.iter() {
+        let bit = 1 << candidate_of(&fine, v1, v2);
+        match masks.0.last_mut() {
+            Some(last) if last.0 == image => last.1 |= bit,
+            _ => masks.0.push((image, bit)),
+        }
     }
-    cx.remove_stars(fine_slots, &[v1, v2]);
-    masks.settle();
     cx.vertices[v1 as usize].level = level as u8;
     cx.vertices[v2 as usize].level = u8::MAX;
     cx.forget(v2);
     let coarse = &mut scratch.coarse;
     coarse.clear();
     coarse.extend(masks.0.iter().map(|e| e.0));
-    for &c in coarse.iter() {
-        cx.add(c);
-    }
     let mut known = Known { masks, out };
     code_connectivity(
         cx,
