@@ -18,7 +18,7 @@ use crate::error::CodecError;
 use crate::nsp_tree::{Node, Params};
 use crate::positional_io;
 use crate::quantize::Quantizer;
-use crate::source::{MeshSource, mesh_error};
+use crate::source::{MeshSource, mesh_error, triangles_beside, vertices_beside};
 
 /// Marks an isolated point in the RWI: `[vertex, POINT_MARK, POINT_MARK]`.
 pub const POINT_MARK: u32 = u32::MAX;
@@ -94,8 +94,6 @@ impl Partition {
 /// Tree under construction: arena order (breadth-first).
 struct Arena {
     nodes: Vec<Node>,
-    /// Node of each (depth, cell code).
-    by_cell: FxHashMap<(u32, u64), usize>,
     /// Simplices belonging to each node.
     counts: Vec<u64>,
 }
@@ -119,6 +117,10 @@ pub fn build(
     let budget = (src.vertex_count() / COUNT_BUDGET_SHARE).max(MIN_COUNT_BUDGET);
     build_with_count_budget(src, params, progress, budget)
 }
+
+/// Bytes of the leaves' write buffers of the RWI pass, all together (each holds at least 40
+/// entries).
+const RWI_BUFFERS: usize = 32 << 20;
 
 /// Cells the counting pass may count at every depth at once, as a share of the vertices: the
 /// counts cost about 32 bytes a cell against the points' 6 bytes a vertex.
@@ -181,14 +183,13 @@ pub fn build_with_count_budget(
     } else {
         Points::Wide(Vec::with_capacity(n as usize))
     };
-    src.vertices(&mut |p| {
+    vertices_beside(src, &mut |p| {
         let q = grid.quantize(p.map(f64::from));
         match &mut points {
             Points::Narrow(v) => v.push(q.map(|x| x as u16)),
             Points::Wide(v) => v.push(q),
         }
-    })
-    .map_err(mesh_error)?;
+    })?;
     progress(0.1)?;
     // pass 3: triangle count, the referenced vertices, and the triangles of every cell at every
     // depth a split can reach (`counted[d]`: depth d + 1), the deepest depths dropped while the
@@ -206,7 +207,7 @@ pub fn build_with_count_budget(
     };
     let mut counted: Vec<FxHashMap<u64, u64>> = vec![FxHashMap::default(); depths];
     let mut cells = 0u64;
-    src.triangles(&mut |t| {
+    triangles_beside(src, &mut |t| {
         for x in t {
             referenced[x as usize / 64] |= 1 << (x % 64);
         }
@@ -223,18 +224,15 @@ pub fn build_with_count_budget(
         while cells > budget || counted.last().is_some_and(|c| !likely(c)) {
             cells -= counted.pop().map_or(0, |c| c.len() as u64);
         }
-    })
-    .map_err(mesh_error)?;
+    })?;
     let isolated: Vec<u32> = (0..n as u32)
         .filter(|&i| referenced[i as usize / 64] & (1 << (i % 64)) == 0)
         .collect();
     // the tree, one level per pass
     let mut arena = Arena {
         nodes: vec![Node::default()],
-        by_cell: FxHashMap::default(),
         counts: vec![triangles + isolated.len() as u64],
     };
-    arena.by_cell.insert((0, 0), 0);
     if n == 0 {
         arena.nodes.clear();
         arena.counts.clear();
@@ -267,18 +265,16 @@ pub fn build_with_count_budget(
                     .filter(|(c, _)| under(c))
                     .collect();
             }
-            None => src
-                .triangles(&mut |t| {
-                    count_children(
-                        &params,
-                        &points,
-                        depth,
-                        Some(&parents),
-                        &t,
-                        &mut child_counts,
-                    );
-                })
-                .map_err(mesh_error)?,
+            None => triangles_beside(src, &mut |t| {
+                count_children(
+                    &params,
+                    &points,
+                    depth,
+                    Some(&parents),
+                    &t,
+                    &mut child_counts,
+                );
+            })?,
         }
         for &i in &isolated {
             count_children(
@@ -325,7 +321,6 @@ pub fn build_with_count_budget(
                 ..Node::default()
             });
             arena.counts.push(cnt);
-            arena.by_cell.insert((depth + 1, c), id);
             let pos = {
                 let nn = params.cell_split;
                 let l = cell.map(|x| x % nn);
@@ -369,17 +364,27 @@ pub fn build_with_count_budget(
             node
         })
         .collect();
-    // the leaf holding a point: down from the root by cell
+    // the counts of depths the tree did not reach are not needed any more
+    drop(counted);
+    // the leaf holding a point: down from the root by the child's position in its parent, the
+    // children being in position order (a hash map of cells took a fifth of the partition)
     let leaf_of = |q: [u32; 3]| -> usize {
+        // n is a power of two: masks and shifts, not divisions (three a level, a third of
+        // this pass)
+        let (lb, low) = (params.level_bits(), params.cell_split - 1);
         let mut i = 0usize;
-        while !nodes[i].children.is_empty() {
-            let d = nodes[i].depth + 1;
-            match arena.by_cell.get(&(d, code(params.cell_at(d, q)))) {
-                Some(&a) => i = new_id[a],
-                None => break,
+        loop {
+            let node = &nodes[i];
+            if node.children.is_empty() {
+                return i;
             }
+            let c = params.cell_at(node.depth + 1, q).map(|x| x & low);
+            let bit = 1u64 << (c[0] | (c[1] | c[2] << lb) << lb);
+            if node.child_mask & bit == 0 {
+                return i;
+            }
+            i = node.children[(node.child_mask & (bit - 1)).count_ones() as usize];
         }
-        i
     };
     // entries per leaf: a leaf's simplices are those with a vertex in it, which its level's pass
     // counted (no pass of their own); then one pass writes them (the RWI)
@@ -399,22 +404,28 @@ pub fn build_with_count_budget(
     rwi.set_len(at * 12)
         .map_err(|e| CodecError::io("sizing the raw index file", e))?;
     // one small buffer per leaf: an input in row order touches every leaf around a ring at
-    // once, so their sum, not one of them, is what memory holds (40 entries: 100 k leaves
-    // take 48 MB)
+    // once, so their sum, not one of them, is what memory holds: RWI_BUFFERS shared out, and at
+    // least 40 entries a leaf (100 k leaves take 48 MB); the fewer writes, the fewer system
+    // calls (at 40 entries, one per 36 triangles)
+    let leaves = nodes
+        .iter()
+        .filter(|n| n.children.is_empty())
+        .count()
+        .max(1);
+    let flush = (RWI_BUFFERS / leaves / 12).clamp(40, 1 << 12) * 12;
     let mut buffers: Vec<Vec<u8>> = vec![Vec::new(); nodes.len()];
     let mut written = vec![0u64; nodes.len()];
-    const FLUSH: usize = 12 * 40;
     let mut failure: Option<std::io::Error> = None;
     {
         let mut put = |leaf: usize, e: [u32; 3]| {
             let b = &mut buffers[leaf];
             if b.capacity() == 0 {
-                b.reserve_exact(FLUSH);
+                b.reserve_exact(flush);
             }
             for x in e {
                 b.extend_from_slice(&x.to_le_bytes());
             }
-            if b.len() >= FLUSH {
+            if b.len() >= flush {
                 let off = (regions[leaf].0 + written[leaf]) * 12;
                 if let Err(e) = positional_io::write_all_at(&rwi, b, off) {
                     failure.get_or_insert(e);
@@ -424,12 +435,11 @@ pub fn build_with_count_budget(
             }
         };
         if !nodes.is_empty() {
-            src.triangles(&mut |t| {
+            triangles_beside(src, &mut |t| {
                 for leaf in distinct3(t.map(|x| leaf_of(points.get(x)))) {
                     put(leaf, t);
                 }
-            })
-            .map_err(mesh_error)?;
+            })?;
             for &i in &isolated {
                 put(leaf_of(points.get(i)), [i, POINT_MARK, POINT_MARK]);
             }
