@@ -193,6 +193,20 @@ impl Incidence {
         st.len += 1;
     }
 
+    /// Makes `slots` (in slot order) `v`'s list.
+    fn set(&mut self, v: u32, slots: &[u32]) {
+        self.clear(v);
+        if slots.len() <= INLINE {
+            let st = &mut self.stars[v as usize];
+            st.slots[..slots.len()].copy_from_slice(slots);
+            st.len = slots.len() as u32;
+        } else {
+            for &slot in slots {
+                self.push(v, slot);
+            }
+        }
+    }
+
     fn remove(&mut self, v: u32, slot: u32) {
         let st = &mut self.stars[v as usize];
         let len = st.len as usize;
@@ -288,16 +302,13 @@ impl Complex {
     /// either becomes its image with `v2` renamed `v1`, each image once. The images keep the
     /// slots of their preimages (the first in image order where several meet), so the lists of
     /// the other vertices stay as they are but for the few preimages that met: a merge touches
-    /// the records of `v1` and `v2` only, not those of the whole star. `pairs` receives every
-    /// `(image, preimage)`, sorted by image; `work` is a buffer.
-    pub fn weld(
-        &mut self,
-        v1: u32,
-        v2: u32,
-        pairs: &mut Vec<(Simplex, Simplex)>,
-        work: &mut Vec<(u128, u32)>,
-    ) {
-        work.clear();
+    /// the records of `v1` and `v2` only, not those of the whole star. `masks` receives every
+    /// image with its preimage mask (a bit per preimage, numbered by [`candidate_of`]), sorted
+    /// by image.
+    pub fn weld(&mut self, v1: u32, v2: u32, masks: &mut MaskList, work: &mut Weld) {
+        let Weld { keys, slots } = work;
+        keys.clear();
+        slots.clear();
         {
             // both lists are in slot order: one merge of the two lists, a simplex on both once
             let (a, b) = (self.incident.list(v1), self.incident.list(v2));
@@ -314,42 +325,38 @@ impl Complex {
                     b[j - 1]
                 };
                 let s = self.simplices[slot as usize].expect("listed slots are live");
-                work.push((pack(&s.renamed(v2, v1)), slot));
+                let bit = 1u8 << candidate_of(&s, v1, v2);
+                keys.push((pack(&s.renamed(v2, v1)), slot, bit));
+                slots.push(slot);
             }
         }
-        let slots_in_order = work.len();
-        work.sort_unstable_by_key(|e| e.0);
-        pairs.clear();
-        let mut kept = 0;
-        for k in 0..slots_in_order {
-            let (key, slot) = work[k];
-            let fine = self.simplices[slot as usize].expect("listed slots are live");
+        keys.sort_unstable_by_key(|e| e.0);
+        masks.0.clear();
+        for k in 0..keys.len() {
+            let (key, slot, bit) = keys[k];
             let image = unpack(key);
-            pairs.push((image, fine));
-            if k > 0 && work[k - 1].0 == key {
+            if k > 0 && keys[k - 1].0 == key {
                 // a second preimage of one image: its slot goes, from its other vertices too
+                // (the image's, v1 aside, are the preimage's)
+                masks.0.last_mut().expect("the image's first preimage").1 |= bit;
                 self.simplices[slot as usize] = None;
                 self.live -= 1;
-                let n = if fine.kind == POINT { 1 } else { 3 };
-                for (i, &x) in fine.v[..n].iter().enumerate() {
-                    if x != v1 && x != v2 && !fine.v[..i].contains(&x) {
+                let n = if image.kind == POINT { 1 } else { 3 };
+                for (i, &x) in image.v[..n].iter().enumerate() {
+                    if x != v1 && !image.v[..i].contains(&x) {
                         self.incident.remove(x, slot);
                     }
                 }
             } else {
+                masks.0.push((image, bit));
                 self.simplices[slot as usize] = Some(image);
-                work[kept].1 = slot;
-                kept += 1;
             }
         }
-        // v1's list: the kept slots, in slot order again
-        let kept_slots = &mut work[..kept];
-        kept_slots.sort_unstable_by_key(|e| e.1);
-        self.incident.clear(v1);
+        masks.hash_positions();
+        // v1's list: the slots that stay, in slot order
+        slots.retain(|&t| self.simplices[t as usize].is_some());
         self.incident.clear(v2);
-        for &(_, slot) in kept_slots.iter() {
-            self.incident.push(v1, slot);
-        }
+        self.incident.set(v1, slots);
     }
 
     /// The slots of the live simplices holding `v`, each once.
@@ -439,18 +446,75 @@ impl Complex {
     }
 }
 
-/// The preimage masks of a merge's coarse simplices, sorted by simplex: a merge has a handful,
-/// so a small sorted vector (built by one sort, looked up by binary search) replaces a hash map.
+/// Buffers of [`Complex::weld`], reused from merge to merge.
 #[derive(Clone, Debug, Default)]
-pub struct MaskList(pub Vec<(Simplex, u8)>);
+pub struct Weld {
+    /// (packed image, slot, candidate bit of the preimage in that slot).
+    keys: Vec<(u128, u32, u8)>,
+    /// The welded slots in slot order.
+    slots: Vec<u32>,
+}
+
+/// The preimage masks of a merge's coarse simplices, sorted by simplex, with a small hash table
+/// of their positions (the connectivity coder asks for each mask once, in its own order; a
+/// merge has a dozen or two, and a scan's unpredictable exit cost more than a hash).
+#[derive(Clone, Debug, Default)]
+pub struct MaskList(pub Vec<(Simplex, u8)>, Positions);
+
+/// Open-addressed positions of [`MaskList`]'s entries (index + 1; 0 is empty), built by
+/// [`MaskList::settle`] and [`Complex::weld`]; a lookup checks the simplex it finds, and falls
+/// back to a search when the list changed since.
+#[derive(Clone, Debug, Default)]
+struct Positions {
+    at: Vec<u32>,
+    shift: u32,
+}
+
+/// A multiplicative hash of a simplex, its top bits the table index.
+fn hash(c: &Simplex) -> u32 {
+    (c.v[0].wrapping_mul(0x9e37_79b1)
+        ^ c.v[1].wrapping_mul(0x85eb_ca77)
+        ^ c.v[2].wrapping_mul(0xc2b2_ae3d))
+    .wrapping_add(u32::from(c.kind).wrapping_mul(0x2545_f491))
+}
 
 impl MaskList {
-    /// The mask of coarse simplex `c`: a merge has a handful, so a scan beats halving.
+    /// The position of coarse simplex `c`.
     fn find(&self, c: &Simplex) -> Option<usize> {
+        let at = &self.1.at;
+        if !at.is_empty() {
+            let wrap = at.len() - 1;
+            let mut i = (hash(c) >> self.1.shift) as usize;
+            while at[i] != 0 {
+                let k = at[i] as usize - 1;
+                if self.0.get(k).is_some_and(|e| e.0 == *c) {
+                    return Some(k);
+                }
+                i = (i + 1) & wrap;
+            }
+        }
         if self.0.len() <= 16 {
             self.0.iter().position(|e| e.0 == *c)
         } else {
             self.0.binary_search_by(|e| e.0.cmp(c)).ok()
+        }
+    }
+
+    /// Builds the hash table of the entries' positions (at most half full).
+    fn hash_positions(&mut self) {
+        let n = self.0.len();
+        let bits = (2 * n).max(16).next_power_of_two().trailing_zeros();
+        let at = &mut self.1.at;
+        at.clear();
+        at.resize(1 << bits, 0);
+        self.1.shift = 32 - bits;
+        let wrap = at.len() - 1;
+        for (k, e) in self.0.iter().enumerate() {
+            let mut i = (hash(&e.0) >> self.1.shift) as usize;
+            while at[i] != 0 {
+                i = (i + 1) & wrap;
+            }
+            at[i] = k as u32 + 1;
         }
     }
 
@@ -469,6 +533,7 @@ impl MaskList {
             }
         }
         list.truncate(w);
+        self.hash_positions();
     }
 }
 
@@ -482,43 +547,80 @@ impl std::ops::Index<&Simplex> for MaskList {
 }
 
 /// Roles of the corners of a fine simplex in a split of `v` into `v1` (low) and `v2` (high):
-/// 1 or 2 for the children, 0 for another vertex.
+/// 1 or 2 for the children, 0 for another vertex (`v1` ≠ `v2`).
+#[inline]
 fn role(x: u32, v1: u32, v2: u32) -> u8 {
-    if x == v1 {
-        1
-    } else if x == v2 {
-        2
-    } else {
-        0
-    }
+    u8::from(x == v1) | u8::from(x == v2) << 1
 }
 
-/// Which candidate preimage of its coarse simplex the fine simplex `s` is (§3, the connectivity
-/// codes of a vertex split): the coarse simplex is `s` with `v2` renamed `v1`; the candidates are
-/// numbered as [`candidates`] lists them.
-pub fn candidate_of(s: &Simplex, v1: u32, v2: u32) -> usize {
-    if s.kind == POINT {
-        return (role(s.v[0], v1, v2) - 1) as usize;
+/// The candidate number of a triangle from its corners' roles (as [`role`] gives them).
+const fn candidate_by_roles(r: [u8; 3]) -> u8 {
+    let mut held = 0;
+    let mut ones = 0;
+    let mut k = 0;
+    while k < 3 {
+        held += (r[k] != 0) as u8;
+        ones += (r[k] == 1) as u8;
+        k += 1;
     }
-    let r = s.v.map(|x| role(x, v1, v2));
-    match r.iter().filter(|&&x| x != 0).count() {
+    match held {
         1 => {
-            let i = r.iter().position(|&x| x != 0).unwrap();
-            (r[i] - 1) as usize
+            let i = if r[0] != 0 {
+                0
+            } else if r[1] != 0 {
+                1
+            } else {
+                2
+            };
+            r[i] - 1
         }
         2 => {
             // rotate so that the other vertex is last: (r0, r1, x)
-            let i = r.iter().position(|&x| x == 0).unwrap();
+            let i = if r[0] == 0 {
+                0
+            } else if r[1] == 0 {
+                1
+            } else {
+                2
+            };
             let (r0, r1) = (r[(i + 1) % 3], r[(i + 2) % 3]);
-            ((r0 - 1) * 2 + (r1 - 1)) as usize
+            (r0 - 1) * 2 + (r1 - 1)
         }
-        _ => match r.iter().filter(|&&x| x == 1).count() {
+        _ => match ones {
             3 => 0,
             0 => 1,
             2 => 2,
             _ => 3,
         },
     }
+}
+
+/// [`candidate_by_roles`] of every triple of roles, indexed by `9 r0 + 3 r1 + r2`: one load per
+/// preimage instead of a chain of branches on its shape.
+const CANDIDATE: [u8; 27] = {
+    let mut t = [0u8; 27];
+    let mut i = 0;
+    while i < 27 {
+        let r = [(i / 9) as u8, (i / 3 % 3) as u8, (i % 3) as u8];
+        // a triangle holds v1 or v2 (no entry is read for one holding neither)
+        if r[0] + r[1] + r[2] > 0 {
+            t[i] = candidate_by_roles(r);
+        }
+        i += 1;
+    }
+    t
+};
+
+/// Which candidate preimage of its coarse simplex the fine simplex `s` is (§3, the connectivity
+/// codes of a vertex split): the coarse simplex is `s` with `v2` renamed `v1`; the candidates are
+/// numbered as [`candidates`] lists them.
+#[inline]
+pub fn candidate_of(s: &Simplex, v1: u32, v2: u32) -> usize {
+    if s.kind == POINT {
+        return (role(s.v[0], v1, v2) - 1) as usize;
+    }
+    let r = s.v.map(|x| role(x, v1, v2));
+    CANDIDATE[(r[0] * 9 + r[1] * 3 + r[2]) as usize] as usize
 }
 
 /// The candidate preimages of coarse simplex `c` (holding `v`) when `v` splits into `v1` = `v`
@@ -694,8 +796,8 @@ mod tests {
             cx.add(s);
         }
         assert!(cx.listed(0).len() > INLINE);
-        let (mut pairs, mut work) = (Vec::new(), Vec::new());
-        cx.weld(0, 1, &mut pairs, &mut work);
+        let (mut masks, mut work) = (MaskList::default(), Weld::default());
+        cx.weld(0, 1, &mut masks, &mut work);
         let mut want: Vec<Simplex> = all.iter().map(|s| s.renamed(1, 0)).collect();
         want.sort();
         want.dedup();
@@ -705,23 +807,58 @@ mod tests {
         assert_eq!(cx.live, want.len());
         assert!(cx.listed(1).is_empty());
         assert_lists_clean(&cx);
-        // every preimage once, beside its image, sorted by image
-        let mut before: Vec<Simplex> = all
-            .iter()
-            .copied()
-            .filter(|s| s.v.contains(&0) || s.v.contains(&1))
-            .collect();
-        before.sort();
-        assert_eq!(pairs.len(), before.len());
-        assert!(pairs.windows(2).all(|w| w[0].0 <= w[1].0));
-        assert!(
-            pairs
-                .iter()
-                .all(|(image, fine)| fine.renamed(1, 0) == *image)
-        );
-        let mut fine: Vec<Simplex> = pairs.iter().map(|p| p.1).collect();
-        fine.sort();
-        assert_eq!(fine, before);
+        // every image once, sorted, with a bit per preimage: the masks a split decodes back
+        let mut expected: Vec<(Simplex, u8)> = Vec::new();
+        for s in all.iter().filter(|s| s.v.contains(&0) || s.v.contains(&1)) {
+            let image = s.renamed(1, 0);
+            let bit = 1u8 << candidate_of(s, 0, 1);
+            match expected.iter_mut().find(|e| e.0 == image) {
+                Some(e) => e.1 |= bit,
+                None => expected.push((image, bit)),
+            }
+        }
+        expected.sort();
+        assert_eq!(masks.0, expected);
+        assert!(expected.iter().any(|e| e.1.count_ones() > 1));
+        for &(image, mask) in &masks.0 {
+            assert_eq!(masks[&image], mask);
+            for (i, f) in candidates(&image, 0, 1).iter().enumerate() {
+                let held = all.contains(f);
+                assert_eq!(mask & (1 << i) != 0, held, "{image:?} candidate {f:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn mask_lists_find_every_mask_by_hash_and_after_a_change() {
+        for n in [1u32, 5, 17, 200] {
+            let mut masks = MaskList::default();
+            for i in 0..n {
+                // pairs of one simplex merged, points beside triangles of the same corners
+                masks
+                    .0
+                    .push((Simplex::triangle(1000, i, i + 1), 1 << (i % 4)));
+                masks.0.push((Simplex::triangle(1000, i, i + 1), 2));
+                masks.0.push((Simplex::point(i), 1));
+                masks.0.push((Simplex::triangle(i, i, i), 8));
+            }
+            masks.settle();
+            assert_eq!(masks.0.len(), 3 * n as usize);
+            for i in 0..n {
+                assert_eq!(masks[&Simplex::triangle(i + 1, 1000, i)], 1 << (i % 4) | 2);
+                assert_eq!(masks[&Simplex::point(i)], 1);
+                assert_eq!(masks[&Simplex::triangle(i, i, i)], 8);
+                assert_eq!(masks.find(&Simplex::triangle(1000, i + 1, i)), None);
+            }
+            // a list changed after its table was built is still searched right
+            masks.0.reverse();
+            masks.0.truncate(2);
+            let kept = masks.0.clone();
+            for (c, m) in kept {
+                assert_eq!(masks[&c], m);
+            }
+            assert_eq!(masks.find(&Simplex::point(n + 5)), None);
+        }
     }
 
     #[test]

@@ -24,7 +24,7 @@
 //! once per bit of precision so that star walks stay local.
 
 use crate::ahead::Geometry;
-use crate::complex::{Complex, MaskList, Simplex, candidate_array, candidate_of};
+use crate::complex::{Complex, MaskList, Simplex, Weld, candidate_array};
 use crate::connectivity::{Known, Read, code_connectivity};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
@@ -157,9 +157,8 @@ struct Scratch {
     slots: Vec<u32>,
     coarse: Vec<Simplex>,
     masks: MaskList,
-    /// The encoder's merge: `(image, preimage)` of every simplex it welds, and a buffer.
-    pairs: Vec<(Simplex, Simplex)>,
-    work: Vec<(u128, u32)>,
+    /// The encoder's merge's buffers.
+    weld: Weld,
     /// The coarse simplices with their preimage masks, as the connectivity coder returns them.
     decoded: Vec<(Simplex, u8)>,
 }
@@ -175,17 +174,8 @@ fn merge(
     out: &mut Vec<Symbol>,
     scratch: &mut Scratch,
 ) {
-    cx.weld(v1, v2, &mut scratch.pairs, &mut scratch.work);
-    // the preimage mask of each image: one candidate bit per preimage, pairs sorted by image
     let mut masks = std::mem::take(&mut scratch.masks);
-    masks.0.clear();
-    for &(image, fine) in scratch.pairs.iter() {
-        let bit = 1 << candidate_of(&fine, v1, v2);
-        match masks.0.last_mut() {
-            Some(last) if last.0 == image => last.1 |= bit,
-            _ => masks.0.push((image, bit)),
-        }
-    }
+    cx.weld(v1, v2, &mut masks, &mut scratch.weld);
     cx.vertices[v1 as usize].level = level as u8;
     cx.vertices[v2 as usize].level = u8::MAX;
     cx.forget(v2);
