@@ -293,6 +293,18 @@ impl PlyFile {
                 // (the vertex and face elements the passes want always have properties).
                 continue;
             }
+            if !here
+                && self.format != PlyFormat::Ascii
+                && e.properties.iter().all(|p| p.list.is_none())
+            {
+                // fixed-size binary records this pass does not want (the vertices, in a pass
+                // over the faces): one seek, not a read per scalar (the open checked that the
+                // file can hold them; a short file fails on the wanted element's first read)
+                let size: u64 = e.properties.iter().map(|p| p.scalar.size() as u64).sum();
+                r.seek_relative((e.count * size) as i64)
+                    .map_err(io_err(path))?;
+                continue;
+            }
             values.resize(e.properties.len(), Vec::new());
             for k in 0..e.count {
                 let eof = || parse_err(path, format!("the file ends inside {} {k}", e.name));
