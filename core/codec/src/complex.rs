@@ -129,12 +129,14 @@ impl Vertex {
 
 /// Slots a vertex's list holds inline, before it moves to [`Incidence::spill`]: on a 1.1 M
 /// triangle torus most lists a merge or split touches hold 4 to 31 slots (a kd-cell's star
-/// holds its degenerate triangles too), and one 64-byte record is one cache line.
+/// holds its degenerate triangles too), and one 64-byte record is one cache line (aligned to
+/// one: a list read is one line, not two).
 const INLINE: usize = 15;
 
 /// One vertex's list: up to [`INLINE`] slots in place, else (when `len > INLINE`) `slots[0]`
 /// is the index of its list in [`Incidence::spill`].
 #[derive(Clone, Copy, Debug, Default)]
+#[repr(align(64))]
 struct Star {
     len: u32,
     slots: [u32; INLINE],
@@ -213,9 +215,7 @@ impl Incidence {
         if len <= INLINE {
             // slots are listed in increasing order and the newest are removed most
             if let Some(k) = st.slots[..len].iter().rposition(|&t| t == slot) {
-                for j in k..len - 1 {
-                    st.slots[j] = st.slots[j + 1];
-                }
+                st.slots.copy_within(k + 1..len, k);
                 st.len -= 1;
             }
             return;
@@ -294,7 +294,16 @@ impl Complex {
             self.incident.clear(x);
         }
         for &slot in slots {
-            self.remove(slot);
+            let Some(s) = self.simplices[slot as usize].take() else {
+                continue;
+            };
+            self.live -= 1;
+            let n = if s.kind == POINT { 1 } else { 3 };
+            for (i, &x) in s.v[..n].iter().enumerate() {
+                if !stars.contains(&x) && !s.v[..i].contains(&x) {
+                    self.incident.remove(x, slot);
+                }
+            }
         }
     }
 
@@ -409,13 +418,19 @@ impl Complex {
             let id = new_id[v as usize];
             for &slot in self.listed(v) {
                 let s = self.simplices[slot as usize].expect("listed slots are live");
-                if s.v.iter().any(|&x| new_id[x as usize] == u32::MAX) {
+                // stored once, by its first vertex in the new numbering: the smallest new id
+                // (a canonical rotation starts with its smallest id), found before renaming
+                let n = s.v.map(|x| new_id[x as usize]);
+                if n[0].min(n[1]).min(n[2]) != id {
+                    continue;
+                }
+                if n.contains(&u32::MAX) {
                     return;
                 }
-                let r = s.map(|x| new_id[x as usize]);
-                if r.v[0] == id {
-                    out.add(r);
-                }
+                out.add(match s.kind {
+                    POINT => Simplex::point(id),
+                    _ => Simplex::triangle(n[0], n[1], n[2]),
+                });
             }
         }
         if out.live != self.live {
@@ -643,6 +658,28 @@ impl Candidates {
     }
 }
 
+/// Calls `f` with each candidate preimage of `c` (holding `v`, which splits into `v` and `v2`)
+/// that `mask` selects, in the numbering of [`candidate_of`]: the decoder's split. A once-held
+/// triangle (most of them) builds only the preimages it has, the first being `c` itself.
+#[inline]
+pub fn preimages(c: &Simplex, v: u32, v2: u32, mask: u8, mut f: impl FnMut(Simplex)) {
+    if c.kind != POINT && c.multiplicity(v) == 1 {
+        if mask & 1 != 0 {
+            f(*c);
+        }
+        if mask & 2 != 0 {
+            let (a, b) = c.after(v);
+            f(Simplex::triangle(v2, a, b));
+        }
+        return;
+    }
+    for (i, s) in candidate_array(c, v, v2).as_slice().iter().enumerate() {
+        if mask & (1 << i) != 0 {
+            f(*s);
+        }
+    }
+}
+
 /// [`candidates`] without an allocation.
 pub fn candidate_array(c: &Simplex, v: u32, v2: u32) -> Candidates {
     let v1 = v;
@@ -687,9 +724,19 @@ mod tests {
             Simplex::triangle(v, v, v),
             Simplex::point(v),
         ] {
-            for (i, f) in candidates(&c, v, v2).iter().enumerate() {
+            let all = candidates(&c, v, v2);
+            for (i, f) in all.iter().enumerate() {
                 assert_eq!(candidate_of(f, v, v2), i, "{c:?} {f:?}");
                 assert_eq!(f.renamed(v2, v), c);
+            }
+            for mask in 1..1u8 << all.len() {
+                let mut got = Vec::new();
+                preimages(&c, v, v2, mask, |f| got.push(f));
+                let want: Vec<Simplex> = (0..all.len())
+                    .filter(|&i| mask & (1 << i) != 0)
+                    .map(|i| all[i])
+                    .collect();
+                assert_eq!(got, want, "{c:?} mask {mask}");
             }
         }
     }

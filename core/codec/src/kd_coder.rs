@@ -24,7 +24,7 @@
 //! once per bit of precision so that star walks stay local.
 
 use crate::ahead::Geometry;
-use crate::complex::{Complex, MaskList, Simplex, Weld, candidate_array};
+use crate::complex::{Complex, MaskList, Simplex, Weld, preimages};
 use crate::connectivity::{Known, Read, code_connectivity};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
@@ -354,11 +354,7 @@ fn split_vertex(
     cx.remove_stars(slots, &[v]);
     cx.vertices[v as usize].level = level as u8 + 1;
     for &(c, mask) in decoded.iter() {
-        for (i, f) in candidate_array(&c, v, v2).as_slice().iter().enumerate() {
-            if mask & (1 << i) != 0 {
-                cx.add(*f);
-            }
-        }
+        preimages(&c, v, v2, mask, |f| cx.add(f));
     }
     Ok(())
 }
