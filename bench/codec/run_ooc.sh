@@ -24,7 +24,7 @@ cargo build --release -q -p tessd -p tessd-bench-simplify
 IN="$WORK/torus_${TRIS}.ply"
 [ -f "$IN" ] || target/release/bench-simplify gen "$TRIS" "$IN"
 T=/usr/bin/time
-$T -f '%e %M' -o "$WORK/c.time" target/release/tessd compress "$IN" "$WORK/t.tsc" --bits "$BITS" --json > "$WORK/c.json"
+$T -f '%e %M %U %S' -o "$WORK/c.time" target/release/tessd compress "$IN" "$WORK/t.tsc" --bits "$BITS" --json > "$WORK/c.json"
 rm -f "$WORK/out.ply" "$WORK/d.json" "$WORK/d.time"
 if [ "$COMPRESS_ONLY" = 0 ]; then
     $T -f '%e %M' -o "$WORK/d.time" target/release/tessd decompress "$WORK/t.tsc" "$WORK/out.ply" --json > "$WORK/d.json"
@@ -33,7 +33,9 @@ python3 - "$WORK" "$TRIS" "$BITS" <<'PY'
 import json, sys, os, platform
 work, tris, bits = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 c = json.load(open(os.path.join(work, "c.json")))
-ce, cm = open(os.path.join(work, "c.time")).read().split()
+# wall, peak KiB, user and system CPU seconds (both cores: user + system over wall is how busy
+# they were)
+ce, cm, cu, cs = open(os.path.join(work, "c.time")).read().split()
 decoded = os.path.exists(os.path.join(work, "d.json"))
 if decoded:
     d = json.load(open(os.path.join(work, "d.json")))
@@ -42,6 +44,7 @@ cores = os.cpu_count()
 row = dict(triangles=c["input_triangles"], vertices=c["input_vertices"], bits=bits,
            tsc_bytes=c["bytes"], bits_per_vertex=c["bits_per_vertex"], nsp_cells=c["nsp_cells"],
            compress_s=float(ce), compress_peak_mib=int(cm) / 1024, steps_ms=c["steps_ms"], cores=cores,
+           compress_user_s=float(cu), compress_sys_s=float(cs),
            raw_bytes=int((3 * bits * c["input_vertices"] + 3 * c["input_triangles"] * __import__("math").log2(max(2, c["input_vertices"]))) / 8))
 if decoded:
     row.update(decompress_s=float(de), decompress_peak_mib=int(dm) / 1024,
@@ -57,6 +60,9 @@ print("| %d | %d | %d | %d | %.2f | %d | %.0f (%.0f / %.0f / %.0f) | %.0f | %.3f
     row["triangles"], bits, row["raw_bytes"], row["tsc_bytes"], row["raw_bytes"] / row["tsc_bytes"],
     row["nsp_cells"], row["compress_s"], s.get("partition", 0) / 1e3, s.get("codes", 0) / 1e3,
     s.get("final", 0) / 1e3, row["compress_peak_mib"], row["triangles"] / row["compress_s"] / cores / 1e6, dec))
+print("compress CPU: user %.0f s + system %.0f s over %.0f s wall = %.2f cores busy" % (
+    row["compress_user_s"], row["compress_sys_s"], row["compress_s"],
+    (row["compress_user_s"] + row["compress_sys_s"]) / row["compress_s"]))
 if decoded:
     print("decoded: %d vertices, %d triangles (input %d, %d)" % (d["vertices"], d["triangles"], c["input_vertices"], c["input_triangles"]))
 PY

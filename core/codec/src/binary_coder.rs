@@ -63,12 +63,23 @@ impl Encoder {
     pub fn encode(&mut self, bit: bool, p0: u32) {
         debug_assert!(p0 > 0 && p0 < 1 << PROB_BITS);
         let bound = (self.range >> PROB_BITS) * p0;
-        if bit {
-            self.low += bound as u64;
-            self.range -= bound;
+        // selects rather than branches: the decisions are what the models could not predict
+        let (add, range) = if bit {
+            (bound, self.range - bound)
         } else {
-            self.range = bound;
+            (0, bound)
+        };
+        self.low += add as u64;
+        self.range = range;
+        if range < TOP {
+            self.renormalise();
         }
+    }
+
+    /// Shifts bytes out until the range is wide again (about once every two bytes' worth of
+    /// decisions: out of line).
+    #[inline(never)]
+    fn renormalise(&mut self) {
         while self.range < TOP {
             self.range <<= 8;
             self.shift_low();
@@ -159,17 +170,27 @@ impl<'a> Decoder<'a> {
     pub fn decode(&mut self, p0: u32) -> bool {
         let bound = (self.range >> PROB_BITS) * p0;
         let bit = self.code >= bound;
-        if bit {
-            self.code -= bound;
-            self.range -= bound;
+        // selects rather than branches, as the encoder
+        let (sub, range) = if bit {
+            (bound, self.range - bound)
         } else {
-            self.range = bound;
+            (0, bound)
+        };
+        self.code -= sub;
+        self.range = range;
+        if range < TOP {
+            self.renormalise();
         }
+        bit
+    }
+
+    /// Takes bytes in until the range is wide again (out of line, as the encoder's).
+    #[inline(never)]
+    fn renormalise(&mut self) {
         while self.range < TOP {
             self.range <<= 8;
             self.code = (self.code << 8) | self.byte();
         }
-        bit
     }
 
     /// Bytes taken from the chunk so far, the four-byte look-ahead included, made-up zeros past

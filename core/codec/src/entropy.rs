@@ -211,23 +211,26 @@ fn encode_in(symbols: &[Symbol], mut cx: Contexts) -> CellCode {
     let mut counts = [0u64; FAMILIES];
     for s in symbols {
         let (first, family) = cx.of(s.context());
-        let spent = &mut bits[family as usize];
-        counts[family as usize] += 1;
+        // the symbol's cost summed here, added to its family's once (not through memory at
+        // every decision)
+        let mut spent = 0u64;
         let v = s.value();
         if is_mask(family) {
             let models = &mut cx.models[first..first + MASK_MODELS as usize];
             mask_decisions(v, |node, bit| {
-                put(&mut coder, &mut models[node], bit, spent, cost)
+                put(&mut coder, &mut models[node], bit, &mut spent, cost)
             });
         } else {
             let [both, which] = &mut cx.models[first..first + 2] else {
                 unreachable!("two models")
             };
-            put(&mut coder, both, v == 2, spent, cost);
+            put(&mut coder, both, v == 2, &mut spent, cost);
             if v != 2 {
-                put(&mut coder, which, v == 1, spent, cost);
+                put(&mut coder, which, v == 1, &mut spent, cost);
             }
         }
+        bits[family as usize] += spent;
+        counts[family as usize] += 1;
     }
     CellCode {
         bytes: coder.finish(),
