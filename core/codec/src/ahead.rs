@@ -30,6 +30,9 @@ use crate::symbols::Family;
 
 /// Fraction bits of the barycentres the split predictions ahead are computed from.
 const FRACTION: u32 = 8;
+// the star's coordinates (doubled, then FRACTION bits more) stay below 2^31, so that one
+// triangle's cross product fits in 64 bits (split_context::Star::triangle)
+const _: () = assert!(crate::quantize::MAX_BITS + 1 + FRACTION <= 31);
 
 /// The kd-cells of one level: corners in kd order, their kd keys, prefix sums of their doubled
 /// centres, and (once read) how each splits.

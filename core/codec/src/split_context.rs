@@ -23,7 +23,7 @@
 //!   means the same at every precision and on every mesh, so a handful of classes suffice.
 
 use crate::coding::Coding;
-use crate::complex::{Complex, POINT, Vertex};
+use crate::complex::{Complex, Vertex};
 use crate::kd_cell::half;
 use crate::symbols::{Family, MAX_LEVELS, context};
 
@@ -83,12 +83,16 @@ impl Star {
     }
 
     /// Adds the oriented triangle `(v, x, y)` at `pv`, `px`, `py` to the normal.
+    #[inline]
     pub(crate) fn triangle(&mut self, pv: [i64; 3], px: [i64; 3], py: [i64; 3]) {
-        let e: [i128; 3] = std::array::from_fn(|a| (px[a] - pv[a]) as i128);
-        let f: [i128; 3] = std::array::from_fn(|a| (py[a] - pv[a]) as i128);
-        self.normal[0] += e[1] * f[2] - e[2] * f[1];
-        self.normal[1] += e[2] * f[0] - e[0] * f[2];
-        self.normal[2] += e[0] * f[1] - e[1] * f[0];
+        // one triangle's cross product fits in 64 bits (coordinates below 2^31: a grid of at
+        // most MAX_BITS doubled, or shifted by ahead's fraction bits, which ahead.rs asserts);
+        // only the star's sum needs 128
+        let e: [i64; 3] = std::array::from_fn(|a| px[a] - pv[a]);
+        let f: [i64; 3] = std::array::from_fn(|a| py[a] - pv[a]);
+        self.normal[0] += (e[1] * f[2] - e[2] * f[1]) as i128;
+        self.normal[1] += (e[2] * f[0] - e[0] * f[2]) as i128;
+        self.normal[2] += (e[0] * f[1] - e[1] * f[0]) as i128;
     }
 
     /// Adds the parallelogram prediction `x + y − z`.
@@ -111,21 +115,40 @@ impl Star {
 /// consistent surface gives it), `z` being none of `v, x, y`: where the parallelogram
 /// `x + y − z` predicts `v`.
 pub(crate) fn across(cx: &Complex, v: u32, x: u32, y: u32, mut f: impl FnMut(u32)) {
-    for &slot in cx.listed(x) {
-        let Some(s) = cx.simplices[slot as usize] else {
-            continue;
-        };
-        if s.kind == POINT {
-            continue;
+    // no branch per simplex (a branch per rotation mispredicted ~15 times a split on the
+    // torus, as y → x moves around x's triangles): each triangle of x's list is read from x —
+    // the corner before it must be y, z is the one after — and a find is kept by advancing the
+    // end of a small buffer
+    let mut found = [0u32; 16];
+    for chunk in cx.listed(x).chunks(found.len()) {
+        let mut n = 0;
+        for &slot in chunk {
+            let Some(s) = cx.simplices[slot as usize] else {
+                continue;
+            };
+            // x's first place (where x is there twice, the triangle holds no edge y → x with
+            // a third corner other than x and y, whichever place is read); a point (p, p, p)
+            // holds no edge y → x either, as x ≠ y
+            let [a, b, c] = s.v;
+            let (before, z) = if a == x {
+                (c, b)
+            } else if b == x {
+                (a, c)
+            } else {
+                (b, a)
+            };
+            let keep = (before == y) & (z != v) & (z != x) & (z != y);
+            found[n & 15] = z;
+            n += usize::from(keep);
         }
-        for r in 0..3 {
-            let z = s.v[(r + 2) % 3];
-            if s.v[r] == y && s.v[(r + 1) % 3] == x && z != v && z != x && z != y {
-                f(z);
-            }
+        for &z in &found[..n] {
+            f(z);
         }
     }
 }
+
+// a doubled coordinate stays below 2^(MAX_BITS + 1) ≤ 2^31 (Star::triangle's 64-bit products)
+const _: () = assert!(crate::quantize::MAX_BITS < 31);
 
 /// Reach, in half-cells, beyond which the parallelograms are not looked for: there the cell is
 /// far smaller than the star, both predictions lie many cells away on fixed sides, and the 2-ring
@@ -308,6 +331,39 @@ mod tests {
             st.count, 10,
             "the collapsed triangle's other corner counts twice"
         );
+    }
+
+    #[test]
+    fn across_finds_every_third_corner_of_the_edge_and_nothing_degenerate() {
+        // x → y is a far edge of v's star; y → x is held by two triangles (a non-manifold
+        // edge) besides degenerate and foreign ones, and x's list is long enough to be read
+        // in several chunks
+        let mut cx = Complex::default();
+        let ids: Vec<u32> = (0..40u32)
+            .map(|i| {
+                cx.add_vertex(Vertex {
+                    corner: [i, 0, 0],
+                    level: 12,
+                })
+            })
+            .collect();
+        let (v, x, y, z1, z2) = (ids[0], ids[1], ids[2], ids[3], ids[4]);
+        cx.add(Simplex::triangle(v, x, y));
+        for k in 5..30 {
+            cx.add(Simplex::triangle(x, ids[k], ids[k + 1]));
+        }
+        cx.add(Simplex::triangle(y, x, z1));
+        cx.add(Simplex::triangle(y, x, x));
+        cx.add(Simplex::triangle(x, x, y));
+        cx.add(Simplex::triangle(y, x, v));
+        cx.add(Simplex::triangle(x, y, z1));
+        cx.add(Simplex::point(x));
+        cx.add(Simplex::triangle(z2, y, x));
+        cx.add(Simplex::triangle(x, x, x));
+        assert!(cx.listed(x).len() > 32);
+        let mut got = Vec::new();
+        across(&cx, v, x, y, |z| got.push(z));
+        assert_eq!(got, vec![z1, z2], "in slot order, each once");
     }
 
     #[test]
