@@ -6,6 +6,9 @@
 #
 #   bash bench/codec/run_ooc.sh [--compress-only] [TRIANGLES=200100000] [BITS=16]
 #
+# TESSD_BIN=path runs that binary instead of building and running target/release/tessd (a
+# build made from a known commit while others edit the tree).
+#
 # --compress-only skips the decompression (30 min at 200 M triangles): the row's decompress
 # columns are then empty ("–") and the JSON has no decompress fields.
 #
@@ -20,14 +23,18 @@ TRIS="${1:-200100000}"
 BITS="${2:-16}"
 WORK="${BENCH_WORK:-/tmp/tessd-bench-ooc}"
 mkdir -p "$WORK" bench/results
-cargo build --release -q -p tessd -p tessd-bench-simplify
+BIN="${TESSD_BIN:-target/release/tessd}"
+if [ -z "${TESSD_BIN:-}" ]; then
+    cargo build --release -q -p tessd -p tessd-bench-simplify
+fi
 IN="$WORK/torus_${TRIS}.ply"
+[ -f "$IN" ] || cargo build --release -q -p tessd-bench-simplify
 [ -f "$IN" ] || target/release/bench-simplify gen "$TRIS" "$IN"
 T=/usr/bin/time
-$T -f '%e %M %U %S' -o "$WORK/c.time" target/release/tessd compress "$IN" "$WORK/t.tsc" --bits "$BITS" --json > "$WORK/c.json"
+$T -f '%e %M %U %S' -o "$WORK/c.time" "$BIN" compress "$IN" "$WORK/t.tsc" --bits "$BITS" --json > "$WORK/c.json"
 rm -f "$WORK/out.ply" "$WORK/d.json" "$WORK/d.time"
 if [ "$COMPRESS_ONLY" = 0 ]; then
-    $T -f '%e %M' -o "$WORK/d.time" target/release/tessd decompress "$WORK/t.tsc" "$WORK/out.ply" --json > "$WORK/d.json"
+    $T -f '%e %M' -o "$WORK/d.time" "$BIN" decompress "$WORK/t.tsc" "$WORK/out.ply" --json > "$WORK/d.json"
 fi
 python3 - "$WORK" "$TRIS" "$BITS" <<'PY'
 import json, sys, os, platform
