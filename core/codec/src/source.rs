@@ -116,4 +116,41 @@ mod tests {
         vertices_beside(&mut src, &mut |p| xs.push(p)).unwrap();
         assert!(xs == positions);
     }
+
+    /// A source whose triangle pass fails after `good` triangles.
+    struct Failing {
+        good: u32,
+    }
+
+    impl MeshSource for Failing {
+        fn vertex_count(&self) -> u64 {
+            4 * BESIDE_FROM
+        }
+        fn vertices(&mut self, _: &mut dyn FnMut([f32; 3])) -> Result<(), tessd_mesh::MeshError> {
+            Ok(())
+        }
+        fn triangles(&mut self, f: &mut dyn FnMut([u32; 3])) -> Result<(), tessd_mesh::MeshError> {
+            for i in 0..self.good {
+                f([i, i + 1, i + 2]);
+            }
+            Err(tessd_mesh::MeshError::Parse {
+                path: "failing.ply".into(),
+                line: 0,
+                message: "the file ends inside face 40000".into(),
+            })
+        }
+    }
+
+    #[test]
+    fn a_failing_pass_beside_reports_its_error_after_the_triangles_before_it() {
+        let mut seen = 0u32;
+        let e = triangles_beside(&mut Failing { good: 40_000 }, &mut |t| {
+            assert_eq!(t[0], seen);
+            seen += 1;
+        })
+        .unwrap_err();
+        assert!(e.to_string().contains("ends inside face 40000"), "{e}");
+        // the batches read before the failure may or may not have been used: never more
+        assert!(seen <= 40_000);
+    }
 }
