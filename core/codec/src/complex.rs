@@ -242,12 +242,19 @@ pub struct Complex {
     pub vertices: Vec<Vertex>,
     /// Simplex slots; `None` once removed.
     pub simplices: Vec<Option<Simplex>>,
-    /// Per vertex, the slots of the live simplices holding it, each once, in slot order (slots
-    /// are never reused; [`Complex::remove`] takes a slot out of its vertices' lists at once, so
-    /// that the lists are always clean and readers need no pruning pass).
+    /// Per vertex, the slots of the live simplices holding it, each once, in slot order
+    /// ([`Complex::remove`] takes a slot out of its vertices' lists at once, so that the lists
+    /// are always clean and readers need no pruning pass; a merge or split that reuses a slot
+    /// for a simplex over the same other vertices leaves their lists as they are).
     incident: Incidence,
     /// Live simplices.
     pub live: usize,
+    /// Per slot, when its simplex was made: a count of the simplices made since the complex
+    /// was built or last renumbered, which is the slot a split would have given it had it
+    /// never reused one. [`Complex::reorder`] keeps each vertex's simplices in this order, so
+    /// the decoder's output order does not depend on which slots were reused.
+    born: Vec<u32>,
+    made: u32,
 }
 
 impl Complex {
@@ -263,6 +270,8 @@ impl Complex {
     pub fn add(&mut self, s: Simplex) {
         let slot = self.simplices.len() as u32;
         self.simplices.push(Some(s));
+        self.born.push(self.made);
+        self.made += 1;
         self.live += 1;
         let n = if s.kind == POINT { 1 } else { 3 };
         for (i, &x) in s.v[..n].iter().enumerate() {
@@ -284,6 +293,70 @@ impl Complex {
                 self.incident.remove(x, slot);
             }
         }
+    }
+
+    /// Splits `v` into itself and `v2` (the decoder's kd split, §3): each coarse simplex of
+    /// `decoded` (every simplex holding `v`, whose slots `coarse_slots` lists) is replaced by
+    /// the preimages its mask selects, in that order ([`preimages`]). The first preimage takes
+    /// its coarse simplex's slot (the same other vertices: their lists stay as they are), the
+    /// others new slots; only the lists of `v` and `v2` are rebuilt.
+    pub fn split(
+        &mut self,
+        v: u32,
+        v2: u32,
+        coarse_slots: &[u32],
+        decoded: &[(Simplex, u8)],
+        work: &mut Weld,
+    ) {
+        let Weld { keys, slots, high } = work;
+        keys.clear();
+        keys.extend(coarse_slots.iter().map(|&slot| {
+            let c = self.simplices[slot as usize].expect("listed slots are live");
+            (pack(&c), slot, 0)
+        }));
+        keys.sort_unstable_by_key(|e| e.0);
+        slots.clear();
+        high.clear();
+        for &(c, mask) in decoded {
+            let k = keys
+                .binary_search_by_key(&pack(&c), |e| e.0)
+                .expect("a coarse simplex of v");
+            let mut reuse = Some(keys[k].1);
+            preimages(&c, v, v2, mask, |f| {
+                let made = self.made;
+                self.made += 1;
+                let slot = match reuse.take() {
+                    Some(slot) => {
+                        self.simplices[slot as usize] = Some(f);
+                        self.born[slot as usize] = made;
+                        slot
+                    }
+                    None => {
+                        let slot = self.simplices.len() as u32;
+                        self.simplices.push(Some(f));
+                        self.born.push(made);
+                        self.live += 1;
+                        let n = if f.kind == POINT { 1 } else { 3 };
+                        for (i, &x) in f.v[..n].iter().enumerate() {
+                            if x != v && x != v2 && !f.v[..i].contains(&x) {
+                                self.incident.push(x, slot);
+                            }
+                        }
+                        slot
+                    }
+                };
+                if f.v.contains(&v) {
+                    slots.push(slot);
+                }
+                if f.v.contains(&v2) {
+                    high.push(slot);
+                }
+            });
+        }
+        slots.sort_unstable();
+        high.sort_unstable();
+        self.incident.set(v, slots);
+        self.incident.set(v2, high);
     }
 
     /// Removes the simplices in `slots`, which are every simplex holding the vertices `stars`:
@@ -315,7 +388,7 @@ impl Complex {
     /// image with its preimage mask (a bit per preimage, numbered by [`candidate_of`]), sorted
     /// by image.
     pub fn weld(&mut self, v1: u32, v2: u32, masks: &mut MaskList, work: &mut Weld) {
-        let Weld { keys, slots } = work;
+        let Weld { keys, slots, .. } = work;
         keys.clear();
         slots.clear();
         {
@@ -413,9 +486,14 @@ impl Complex {
                 free: Vec::new(),
             },
             live: 0,
+            born: Vec::with_capacity(self.live),
+            made: 0,
         };
+        // a vertex's simplices, in the order they were made
+        let mut owned: Vec<(u32, Simplex)> = Vec::new();
         for &v in alive.iter() {
             let id = new_id[v as usize];
+            owned.clear();
             for &slot in self.listed(v) {
                 let s = self.simplices[slot as usize].expect("listed slots are live");
                 // stored once, by its first vertex in the new numbering: the smallest new id
@@ -427,10 +505,15 @@ impl Complex {
                 if n.contains(&u32::MAX) {
                     return;
                 }
-                out.add(match s.kind {
+                let r = match s.kind {
                     POINT => Simplex::point(id),
                     _ => Simplex::triangle(n[0], n[1], n[2]),
-                });
+                };
+                owned.push((self.born[slot as usize], r));
+            }
+            owned.sort_unstable_by_key(|e| e.0);
+            for &(_, r) in &owned {
+                out.add(r);
             }
         }
         if out.live != self.live {
@@ -461,13 +544,15 @@ impl Complex {
     }
 }
 
-/// Buffers of [`Complex::weld`], reused from merge to merge.
+/// Buffers of [`Complex::weld`] and [`Complex::split`], reused from merge to merge.
 #[derive(Clone, Debug, Default)]
 pub struct Weld {
     /// (packed image, slot, candidate bit of the preimage in that slot).
     keys: Vec<(u128, u32, u8)>,
-    /// The welded slots in slot order.
+    /// The welded slots in slot order; a split's slots holding its low child.
     slots: Vec<u32>,
+    /// A split's slots holding its high child.
+    high: Vec<u32>,
 }
 
 /// The preimage masks of a merge's coarse simplices, sorted by simplex, with a small hash table
@@ -906,6 +991,76 @@ mod tests {
             }
             assert_eq!(masks.find(&Simplex::point(n + 5)), None);
         }
+    }
+
+    #[test]
+    fn split_in_place_gives_the_complex_and_order_of_remove_and_add() {
+        // v = 0 splits into 0 and 9 (added last); its star: once-, twice-, thrice-held
+        // triangles and a point, enough to spill its list; other simplices around
+        let mut cx = Complex::default();
+        for i in 0..9u32 {
+            cx.add_vertex(Vertex {
+                corner: [i, 0, 0],
+                level: 3,
+            });
+        }
+        for a in 1..7u32 {
+            cx.add(Simplex::triangle(0, a, a + 1));
+            cx.add(Simplex::triangle(a, 8, a + 1));
+            cx.add(Simplex::triangle(0, a + 1, a));
+        }
+        for s in [
+            Simplex::triangle(0, 0, 3),
+            Simplex::triangle(5, 0, 0),
+            Simplex::triangle(0, 0, 0),
+            Simplex::point(0),
+            Simplex::triangle(0, 2, 5),
+        ] {
+            cx.add(s);
+        }
+        cx.remove(3);
+        assert!(cx.listed(0).len() > INLINE);
+        let v2 = cx.add_vertex(Vertex {
+            corner: [0, 1, 0],
+            level: 4,
+        });
+        let slots = cx.listed(0).to_vec();
+        // masks cycling through each simplex's candidates, in an order other than the slots'
+        let mut decoded: Vec<(Simplex, u8)> = slots
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| {
+                let c = cx.simplices[t as usize].unwrap();
+                let n = candidates(&c, 0, v2).len();
+                (c, 1 + (k % ((1 << n) - 1)) as u8)
+            })
+            .collect();
+        decoded.reverse();
+        decoded.swap(0, 3);
+        let mut old = cx.clone();
+        old.remove_stars(&slots, &[0]);
+        for &(c, mask) in &decoded {
+            preimages(&c, 0, v2, mask, |f| old.add(f));
+        }
+        let mut new = cx.clone();
+        new.split(0, v2, &slots, &decoded, &mut Weld::default());
+        assert_eq!(new.live, old.live);
+        assert_lists_clean(&new);
+        let mut a: Vec<Simplex> = new.live_simplices().collect();
+        let mut b: Vec<Simplex> = old.live_simplices().collect();
+        a.sort();
+        b.sort();
+        assert_eq!(a, b);
+        // renumbered, both keep each vertex's simplices in the order they were made
+        let mut alive: Vec<u32> = vec![8, 0, 9, 1, 2, 3, 4, 5, 6, 7];
+        let mut alive2 = alive.clone();
+        new.reorder(&mut alive);
+        old.reorder(&mut alive2);
+        assert_eq!(
+            new.live_simplices().collect::<Vec<_>>(),
+            old.live_simplices().collect::<Vec<_>>()
+        );
+        assert_lists_clean(&new);
     }
 
     #[test]

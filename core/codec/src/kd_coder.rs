@@ -24,7 +24,7 @@
 //! once per bit of precision so that star walks stay local.
 
 use crate::ahead::Geometry;
-use crate::complex::{Complex, MaskList, Simplex, Weld, preimages};
+use crate::complex::{Complex, MaskList, Simplex, Weld};
 use crate::connectivity::{Known, Read, code_connectivity};
 use crate::entropy::SymbolReader;
 use crate::error::CodecError;
@@ -332,6 +332,7 @@ fn split_vertex(
         slots,
         coarse,
         decoded,
+        weld,
         ..
     } = scratch;
     slots.clear();
@@ -351,10 +352,7 @@ fn split_vertex(
         &mut Read { reader },
         decoded,
     )?;
-    cx.remove_stars(slots, &[v]);
+    cx.split(v, v2, slots, decoded, weld);
     cx.vertices[v as usize].level = level as u8 + 1;
-    for &(c, mask) in decoded.iter() {
-        preimages(&c, v, v2, mask, |f| cx.add(f));
-    }
     Ok(())
 }
