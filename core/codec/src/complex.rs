@@ -361,7 +361,8 @@ impl Complex {
 
     /// Removes the simplices in `slots`, which are every simplex holding the vertices `stars`:
     /// their lists are emptied at once rather than slot by slot (a coarse vertex's list is
-    /// long, and a split or merge removes all of it).
+    /// long). The coder's merges and splits reuse slots instead ([`Complex::weld`],
+    /// [`Complex::split`]); this is the plain form, which the tests check them against.
     pub fn remove_stars(&mut self, slots: &[u32], stars: &[u32]) {
         for &x in stars {
             self.incident.clear(x);

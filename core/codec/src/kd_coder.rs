@@ -19,9 +19,11 @@
 //! preimage masks (links, pivots, the midpoint's side and distance, unmatched fine edges); their
 //! module docs say what each context is.
 //!
-//! This module is the loops and the data movement: merges and splits on [`Complex`], buffers
-//! reused across a cell's splits (`Scratch`), and the decoder's complex renumbered in kd order
-//! once per bit of precision so that star walks stay local.
+//! This module is the loops and the data movement: merges and splits on [`Complex`] (both in
+//! place: a merged or split simplex keeps its slot, so only the records of the split vertex and
+//! its children change, see `Complex::weld` and `Complex::split`), buffers reused across a
+//! cell's splits (`Scratch`), and the decoder's complex renumbered in kd order once per bit of
+//! precision so that star walks stay local.
 
 use crate::ahead::Geometry;
 use crate::complex::{Complex, MaskList, Simplex, Weld};
