@@ -134,34 +134,51 @@ impl Star {
 /// consistent surface gives it), `z` being none of `v, x, y`: where the parallelogram
 /// `x + y − z` predicts `v`.
 pub(crate) fn across(cx: &Complex, v: u32, x: u32, y: u32, mut f: impl FnMut(u32)) {
+    across_both(cx, v, x, y, NONE, |_, z| f(z));
+}
+
+/// No vertex: a corner is never this id (ids index the complex's vertices).
+const NONE: u32 = u32::MAX;
+
+/// The lookups of [`across`] for two far edges at once, from one pass over `w`'s list (each
+/// triangle across a far edge holds both its ends, so either end's list finds it): the far
+/// edge `w → y` (`w` as its x; `f(0, z)`) and the far edge `x → w` (`w` as its y; `f(1, z)`),
+/// [`NONE`] for a side not wanted. A star's ring of far edges is then read from every other
+/// neighbour's list instead of from every neighbour's.
+fn across_both(cx: &Complex, v: u32, w: u32, y: u32, x: u32, mut f: impl FnMut(usize, u32)) {
     // no branch per simplex (a branch per rotation mispredicted ~15 times a split on the
-    // torus, as y → x moves around x's triangles): each triangle of x's list is read from x —
-    // the corner before it must be y, z is the one after — and a find is kept by advancing the
-    // end of a small buffer
-    let mut found = [0u32; 16];
-    for chunk in cx.listed(x).chunks(found.len()) {
-        let mut n = 0;
+    // torus): each triangle is read from w's first place, and a find is kept by advancing the
+    // end of a small buffer. A triangle holding w twice, or y or x twice, has no third corner
+    // besides the edge's ends, whichever place is read, so the tests on z reject it; a point
+    // (p, p, p) holds no edge between two distinct vertices.
+    let mut found = [[0u32; 16]; 2];
+    for chunk in cx.listed(w).chunks(16) {
+        let mut n = [0usize; 2];
         for &slot in chunk {
             let Some(s) = cx.simplices[slot as usize] else {
                 continue;
             };
-            // x's first place (where x is there twice, the triangle holds no edge y → x with
-            // a third corner other than x and y, whichever place is read); a point (p, p, p)
-            // holds no edge y → x either, as x ≠ y
             let [a, b, c] = s.v;
-            let (before, z) = if a == x {
+            let (before, after) = if a == w {
                 (c, b)
-            } else if b == x {
+            } else if b == w {
                 (a, c)
             } else {
                 (b, a)
             };
-            let keep = (before == y) & (z != v) & (z != x) & (z != y);
-            found[n & 15] = z;
-            n += usize::from(keep);
+            // w → y's other side is (y, w, z): y before w, z after it
+            let keep = (before == y) & (after != v) & (after != w) & (after != y);
+            found[0][n[0] & 15] = after;
+            n[0] += usize::from(keep);
+            // x → w's other side is (w, x, z): x after w, z before it
+            let keep = (after == x) & (before != v) & (before != x) & (before != w);
+            found[1][n[1] & 15] = before;
+            n[1] += usize::from(keep);
         }
-        for &z in &found[..n] {
-            f(z);
+        for (side, found) in found.iter().enumerate() {
+            for &z in &found[..n[side]] {
+                f(side, z);
+            }
         }
     }
 }
@@ -214,12 +231,58 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
             }
         }
     }
-    if st.near(2 * h) {
+    if !st.near(2 * h) {
+        return st;
+    }
+    if !many.is_empty() {
         for &(x, y, p) in few[..count].iter().chain(&many) {
             across(cx, v, x, y, |z| {
                 st.parallelogram(p[0], p[1], doubled(&cx.vertices[z as usize], bits))
             });
         }
+        return st;
+    }
+    // every far edge read once, two at a time where they meet: an edge x → y with the edge
+    // ending at x (x's list serves both) or the one starting at y (y's list). On a fan of k
+    // triangles that is about k/2 list passes instead of k. The edges are found by their
+    // ends' low bits; where two ends share them one is not found and its edge is read alone.
+    let edges = &few[..count];
+    let (mut x_at, mut y_at) = ([NONE; 32], [NONE; 32]);
+    let (mut x_edge, mut y_edge) = ([0u8; 32], [0u8; 32]);
+    for (k, &(x, y, _)) in edges.iter().enumerate() {
+        x_at[x as usize & 31] = x;
+        x_edge[x as usize & 31] = k as u8;
+        y_at[y as usize & 31] = y;
+        y_edge[y as usize & 31] = k as u8;
+    }
+    // the edges not read yet, taken lowest first (a loop per list pass, not per edge)
+    let mut open = (1u32 << count) - 1;
+    while open != 0 {
+        let i = open.trailing_zeros() as usize;
+        open &= open - 1;
+        let (x, y, _) = edges[i];
+        let into_x = y_edge[x as usize & 31] as usize;
+        let from_y = x_edge[y as usize & 31] as usize;
+        let pair_x = (y_at[x as usize & 31] == x) & (open >> into_x & 1 != 0);
+        let pair_y = !pair_x & (x_at[y as usize & 31] == y) & (open >> from_y & 1 != 0);
+        // (the vertex whose list is read, its edge as x, its edge as y or none)
+        let (w, out, inn) = if pair_x {
+            (x, i, into_x)
+        } else if pair_y {
+            (y, from_y, i)
+        } else {
+            (x, i, usize::MAX)
+        };
+        let xw = if inn == usize::MAX {
+            NONE
+        } else {
+            edges[inn].0
+        };
+        open &= !(1u32 << out) & !(1u32 << (inn & 31));
+        across_both(cx, v, w, edges[out].1, xw, |side, z| {
+            let p = edges[if side == 0 { out } else { inn }].2;
+            st.parallelogram(p[0], p[1], doubled(&cx.vertices[z as usize], bits))
+        });
     }
     st
 }
@@ -383,6 +446,80 @@ mod tests {
         let mut got = Vec::new();
         across(&cx, v, x, y, |z| got.push(z));
         assert_eq!(got, vec![z1, z2], "in slot order, each once");
+        // the same edge looked up from y's list, as the far edge ending there
+        let mut from_y = Vec::new();
+        across_both(&cx, v, y, NONE, x, |side, z| {
+            assert_eq!(side, 1);
+            from_y.push(z)
+        });
+        from_y.sort();
+        assert_eq!(from_y, vec![z1, z2]);
+    }
+
+    #[test]
+    fn the_paired_lookups_sum_what_one_lookup_per_far_edge_sums() {
+        // a 7 × 7 grid of two triangles a square, some squares doubled by the other diagonal
+        // (non-manifold edges), a flipped copy of a triangle, and degenerate triangles
+        let mut cx = Complex::default();
+        let id: Vec<u32> = (0..49u32)
+            .map(|i| {
+                cx.add_vertex(Vertex {
+                    corner: [4 * (i % 7), 4 * (i / 7), (i * 5) % 3],
+                    level: 12,
+                })
+            })
+            .collect();
+        let at = |i: u32, j: u32| id[(j * 7 + i) as usize];
+        let mut all = Vec::new();
+        for j in 0..6 {
+            for i in 0..6 {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                all.push(Simplex::triangle(a, b, c));
+                all.push(Simplex::triangle(a, c, d));
+                if (i + j) % 4 == 0 {
+                    all.push(Simplex::triangle(a, b, d));
+                    all.push(Simplex::triangle(a, d, c));
+                }
+                if (i * j) % 5 == 1 {
+                    all.push(Simplex::triangle(a, a, c));
+                    all.push(Simplex::triangle(b, c, c));
+                }
+            }
+        }
+        all.push(Simplex::triangle(at(3, 3), at(3, 2), at(2, 2)));
+        all.sort();
+        all.dedup();
+        for s in all {
+            cx.add(s);
+        }
+        let mut pairs = 0;
+        for &v in &id {
+            let st = star(&mut cx, v, 4, 1);
+            let (mut sum, mut n) = ([0i64; 3], 0);
+            for (x, y) in cx.star(v).collect::<Vec<_>>() {
+                if x == v || y == v || x == y {
+                    continue;
+                }
+                let (px, py) = (
+                    doubled(&cx.vertices[x as usize], 4),
+                    doubled(&cx.vertices[y as usize], 4),
+                );
+                across(&cx, v, x, y, |z| {
+                    let pz = doubled(&cx.vertices[z as usize], 4);
+                    for a in 0..3 {
+                        sum[a] += px[a] + py[a] - pz[a];
+                    }
+                    n += 1;
+                });
+            }
+            assert_eq!(
+                (st.parallelogram, st.parallelograms),
+                (sum, n),
+                "vertex {v}"
+            );
+            pairs += n;
+        }
+        assert!(pairs > 100);
     }
 
     #[test]
