@@ -212,8 +212,10 @@ pub fn build_with_count_budget(
             referenced[x as usize / 64] |= 1 << (x % 64);
         }
         triangles += 1;
+        // the grid points fetched once for every depth
+        let q = t.map(|x| points.get(x));
         for (d, counts) in counted.iter_mut().enumerate() {
-            cells += count_children(&params, &points, d as u32, None, &t, counts);
+            cells += count_children(&params, d as u32, None, &q, counts);
         }
         // a depth whose cells would average under a sixteenth of what a split's children need
         // is unlikely to be reached: stop counting it (checked every 65 536 triangles). Under
@@ -274,20 +276,15 @@ pub fn build_with_count_budget(
             None => {
                 let mut counts = Counts::new();
                 triangles_beside(src, &mut |t| {
-                    count_children(&params, &points, depth, Some(&parents), &t, &mut counts);
+                    let q = t.map(|x| points.get(x));
+                    count_children(&params, depth, Some(&parents), &q, &mut counts);
                 })?;
                 counts
             }
         };
         for &i in &isolated {
-            count_children(
-                &params,
-                &points,
-                depth,
-                Some(&parents),
-                &[i],
-                &mut child_counts,
-            );
+            let q = [points.get(i)];
+            count_children(&params, depth, Some(&parents), &q, &mut child_counts);
         }
         let mut children: Vec<(u64, u64)> = child_counts.into_map().into_iter().collect();
         children.sort_unstable();
@@ -499,20 +496,20 @@ pub fn worth_splitting(params: &Params, sum: u64, nonempty: u64) -> bool {
 /// 318 -> 33 cells, 12.81 -> 12.09 b/v; 4 gives the same trees on the shared meshes.
 pub const CHILD_SHARE: u64 = 8;
 
-/// Adds simplex `vertices` to the counts of the cells at `depth + 1` it belongs to (each once)
-/// whose parent is in `parents` (every cell when `None`); returns how many cells it added.
+/// Adds the simplex whose vertices are at grid points `grid` to the counts of the cells at
+/// `depth + 1` it belongs to (each once) whose parent is in `parents` (every cell when `None`);
+/// returns how many cells it added.
 fn count_children(
     params: &Params,
-    points: &Points,
     depth: u32,
     parents: Option<&FxHashMap<u64, usize>>,
-    vertices: &[u32],
+    grid: &[[u32; 3]],
     counts: &mut Counts,
 ) -> u64 {
     let mut cells = [[0u32; 3]; 3];
     let mut added = 0;
-    for (k, &x) in vertices.iter().enumerate() {
-        let c = params.cell_at(depth + 1, points.get(x));
+    for (k, &q) in grid.iter().enumerate() {
+        let c = params.cell_at(depth + 1, q);
         cells[k] = c;
         if cells[..k].contains(&c) {
             continue;
