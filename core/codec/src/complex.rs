@@ -308,20 +308,28 @@ impl Complex {
         decoded: &[(Simplex, u8)],
         work: &mut Weld,
     ) {
-        let Weld { keys, slots, high } = work;
-        keys.clear();
-        keys.extend(coarse_slots.iter().map(|&slot| {
-            let c = self.simplices[slot as usize].expect("listed slots are live");
-            (pack(&c), slot, 0)
-        }));
-        keys.sort_unstable_by_key(|e| e.0);
+        let Weld {
+            slots,
+            high,
+            coarse,
+            at,
+            ..
+        } = work;
+        // each coarse simplex's slot, found by a hash of the simplex
+        coarse.clear();
+        coarse.extend(
+            coarse_slots
+                .iter()
+                .map(|&slot| self.simplices[slot as usize].expect("listed slots are live")),
+        );
+        at.build(coarse.iter());
         slots.clear();
         high.clear();
         for &(c, mask) in decoded {
-            let k = keys
-                .binary_search_by_key(&pack(&c), |e| e.0)
+            let k = at
+                .find(&c, |k| coarse[k] == c)
                 .expect("a coarse simplex of v");
-            let mut reuse = Some(keys[k].1);
+            let mut reuse = Some(coarse_slots[k]);
             preimages(&c, v, v2, mask, |f| {
                 let made = self.made;
                 self.made += 1;
@@ -554,6 +562,9 @@ pub struct Weld {
     slots: Vec<u32>,
     /// A split's slots holding its high child.
     high: Vec<u32>,
+    /// A split's coarse simplices, and where each lies among them.
+    coarse: Vec<Simplex>,
+    at: Positions,
 }
 
 /// The preimage masks of a merge's coarse simplices, sorted by simplex, with a small hash table
@@ -579,20 +590,50 @@ fn hash(c: &Simplex) -> u32 {
     .wrapping_add(u32::from(c.kind).wrapping_mul(0x2545_f491))
 }
 
+impl Positions {
+    /// Builds the table of the positions of `items` (at most half full).
+    fn build<'a>(&mut self, items: impl ExactSizeIterator<Item = &'a Simplex>) {
+        let bits = (2 * items.len())
+            .max(16)
+            .next_power_of_two()
+            .trailing_zeros();
+        self.at.clear();
+        self.at.resize(1 << bits, 0);
+        self.shift = 32 - bits;
+        let wrap = self.at.len() - 1;
+        for (k, c) in items.enumerate() {
+            let mut i = (hash(c) >> self.shift) as usize;
+            while self.at[i] != 0 {
+                i = (i + 1) & wrap;
+            }
+            self.at[i] = k as u32 + 1;
+        }
+    }
+
+    /// The position of `c`, given whether the item at a position is `c`.
+    fn find(&self, c: &Simplex, is: impl Fn(usize) -> bool) -> Option<usize> {
+        if self.at.is_empty() {
+            return None;
+        }
+        let wrap = self.at.len() - 1;
+        let mut i = (hash(c) >> self.shift) as usize;
+        while self.at[i] != 0 {
+            let k = self.at[i] as usize - 1;
+            if is(k) {
+                return Some(k);
+            }
+            i = (i + 1) & wrap;
+        }
+        None
+    }
+}
+
 impl MaskList {
     /// The position of coarse simplex `c`.
     fn find(&self, c: &Simplex) -> Option<usize> {
-        let at = &self.1.at;
-        if !at.is_empty() {
-            let wrap = at.len() - 1;
-            let mut i = (hash(c) >> self.1.shift) as usize;
-            while at[i] != 0 {
-                let k = at[i] as usize - 1;
-                if self.0.get(k).is_some_and(|e| e.0 == *c) {
-                    return Some(k);
-                }
-                i = (i + 1) & wrap;
-            }
+        let list = &self.0;
+        if let Some(k) = self.1.find(c, |k| list.get(k).is_some_and(|e| e.0 == *c)) {
+            return Some(k);
         }
         if self.0.len() <= 16 {
             self.0.iter().position(|e| e.0 == *c)
@@ -603,20 +644,7 @@ impl MaskList {
 
     /// Builds the hash table of the entries' positions (at most half full).
     fn hash_positions(&mut self) {
-        let n = self.0.len();
-        let bits = (2 * n).max(16).next_power_of_two().trailing_zeros();
-        let at = &mut self.1.at;
-        at.clear();
-        at.resize(1 << bits, 0);
-        self.1.shift = 32 - bits;
-        let wrap = at.len() - 1;
-        for (k, e) in self.0.iter().enumerate() {
-            let mut i = (hash(&e.0) >> self.1.shift) as usize;
-            while at[i] != 0 {
-                i = (i + 1) & wrap;
-            }
-            at[i] = k as u32 + 1;
-        }
+        self.1.build(self.0.iter().map(|e| &e.0));
     }
 
     /// Sorts the `(coarse simplex, candidate bit)` pairs pushed so far and merges the pairs of
