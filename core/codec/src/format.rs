@@ -25,8 +25,10 @@ use crate::varint;
 
 /// First bytes of every `.tsc` file.
 pub const MAGIC: [u8; 4] = *b"TSC\x1a";
-/// Format version this crate writes and reads.
-pub const VERSION: u16 = 2;
+/// Format version this crate writes and reads. Version 3 has version 2's layout; its
+/// connectivity codes come in another order with other contexts (`connectivity`), so a
+/// version-2 chunk would decode to garbage.
+pub const VERSION: u16 = 3;
 /// The longest head: magic, version, packed parameters, grid mask, four f64s and a 10-byte
 /// varint.
 pub const MAX_HEAD_LEN: usize = 9 + 32 + 10;

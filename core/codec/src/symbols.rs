@@ -20,23 +20,25 @@ pub enum Family {
     /// slot holds the neighbours' density (5) × the star's tangent plane (3) instead of the level.
     Split = 0,
     /// Where a triangle holding the split vertex once goes: 0 = the predicted child, 1 = the
-    /// other, 2 = both. Sub-context: which children its other vertices are already linked to by
+    /// other, 2 = both; coded with the midpoints farthest from the split plane first. Sub-context: which children its other vertices are already linked to by
     /// decoded triangles, whether they are pivots, the midpoint's side and distance from the
     /// split plane, which child closes more of their unmatched fine edges, and which children hold
     /// a once-held triangle already; the level in four bands of precision.
     TriangleOnce = 1,
     /// The preimages of a triangle holding the split vertex twice, as a mask of four candidates
-    /// minus one. Sub-context: the links of its third vertex, the orientation its neighbours
-    /// imply, whether `(v, v, v)` exists, whether a once-held triangle went to both children,
+    /// minus one (those whose third vertex is linked to one child first). Sub-context: the links
+    /// of its third vertex, the orientation its neighbours imply, whether `(v, v, v)` exists,
     /// and (third vertex linked to both) which children held a collapsed triangle before and
-    /// how many once-held triangles of each child hold the third vertex.
+    /// how many once-held triangles of each child hold the third vertex (0, 1, 2+).
     Twice = 2,
     /// The preimages of a triangle made of the split vertex alone (mask of four, minus one).
-    /// Sub-context: whether either child already holds a collapsed edge, whether a once-held
-    /// triangle went to both children, and the number of twice-held triangles; the level in four
-    /// bands of precision.
+    /// Sub-context: how many collapsed edges `(c, c, x)` each child holds (0–3+, from the
+    /// twice-held triangles) and whether a twice-held triangle went to `(v1, v2, x)` or
+    /// `(v2, v1, x)`; the level in four bands of precision.
     Thrice = 3,
-    /// Where an isolated point goes: 0 = low child, 1 = high child, 2 = both.
+    /// Where an isolated point goes (coded after the triangles): 0 = the predicted child, 1 =
+    /// the other, 2 = both. Sub-context: which children the triangles already hold (a child
+    /// none holds needs the point).
     Point = 4,
     /// kd-cell subdivision coded ahead of the connectivity (§6.4, `--ahead`): values as
     /// [`Family::Split`]. Contexts as [`Family::Split`]'s, on the star of the vertex holding the
@@ -72,9 +74,9 @@ impl Family {
         match self {
             Family::Split => 42, // split_context::SPLIT_SUBS
             Family::TriangleOnce => 4320,
-            Family::Twice => 2304,
+            Family::Twice => 648,
             Family::Thrice => 32,
-            Family::Point => 1,
+            Family::Point => 4,
             Family::Ahead => 42, // split_context::SPLIT_SUBS
         }
     }

@@ -13,7 +13,7 @@ fn refusal(bytes: &[u8]) -> (u64, String) {
     match Tsc::open(bytes) {
         Err(CodecError::Corrupt { offset, why }) => (offset, why),
         Err(e) => panic!("not a corrupt-file error: {e}"),
-        Ok(_) => panic!("a version-1 file of {} bytes was opened", bytes.len()),
+        Ok(_) => panic!("an old file of {} bytes was opened", bytes.len()),
     }
 }
 
@@ -25,7 +25,7 @@ fn a_version_1_file_is_refused_naming_its_version() {
     assert_eq!(offset, 4);
     assert_eq!(
         why,
-        "written by format version 1 (an older tessd); this reader reads version 2: compress \
+        "written by format version 1 (an older tessd); this reader reads version 3: compress \
          the mesh again"
     );
     let shown = Tsc::open(V1).err().unwrap().to_string();
@@ -34,6 +34,31 @@ fn a_version_1_file_is_refused_naming_its_version() {
     for len in [6, 9, 40, 127] {
         assert_eq!(refusal(&V1[..len]), (offset, why.clone()), "{len} bytes");
     }
+}
+
+/// suzanne.obj at 10 bits, written by the version-2 tessd (commit 38cf6e1e): 1 852 bytes. Its
+/// layout is version 3's, its connectivity contexts are not: read, it would decode to garbage.
+const V2: &[u8] = include_bytes!("data/suzanne_v2_p10.tsc");
+
+#[test]
+fn a_version_2_file_is_refused_naming_its_version() {
+    assert_eq!(&V2[..4], b"TSC\x1a");
+    assert_eq!(u16::from_le_bytes([V2[4], V2[5]]), 2);
+    let (offset, why) = refusal(V2);
+    assert_eq!(offset, 4);
+    assert_eq!(
+        why,
+        "written by format version 2 (an older tessd); this reader reads version 3: compress \
+         the mesh again"
+    );
+    for len in [6, 9, 40] {
+        assert_eq!(refusal(&V2[..len]), (offset, why.clone()), "{len} bytes");
+    }
+    // the same file with version 3 in its head opens (the layout is the same): only the version
+    // keeps its old codes from being decoded
+    let mut relabelled = V2.to_vec();
+    relabelled[4..6].copy_from_slice(&format::VERSION.to_le_bytes());
+    assert!(Tsc::open(&relabelled).is_ok());
 }
 
 #[test]
