@@ -29,10 +29,10 @@ BEFORE = Path(__file__).resolve().parents[1] / "results" / "codec_budget_before.
 
 
 def tsc_layout(path):
-    """(head bytes, trailer bytes with its tail, tables bytes: none in version 2) of a version-2
+    """(head bytes, trailer bytes with its tail, tables bytes: none since version 2) of a version-2 or -3
     .tsc file (see core/codec/src/format.rs), or None for another version."""
     b = Path(path).read_bytes()
-    if len(b) < 13 or b[:4] != b"TSC\x1a" or struct.unpack_from("<H", b, 4)[0] != 2:
+    if len(b) < 13 or b[:4] != b"TSC\x1a" or struct.unpack_from("<H", b, 4)[0] not in (2, 3):
         return None
     mask = b[8]
     at = 9 + sum(4 if mask >> i & 1 else 8 for i in range(4))

@@ -4,10 +4,12 @@
 //!
 //! ```text
 //! cargo run --release -p tessd-codec --example tsc_digest -- MESH OUT.tsc [--bits 12]
-//!     [--min-cell 8000] [--ahead 0] [--threads N] [--decode] [--max-bits B]
+//!     [--min-cell 8000] [--ahead 0] [--threads N] [--decode] [--max-bits B] [--ply]
 //! ```
 //! Prints `bytes <fnv64> <len>`, and with `--decode` (or `--max-bits`, a partial decode)
-//! `decoded <fnv64> <corners> <triangles>` plus the compress and decode seconds.
+//! `decoded <fnv64> <corners> <triangles>` plus the compress and decode seconds; with `--ply`,
+//! `ply <fnv64> <len>` of `Tsc::write_ply`'s output (the decoder's own triangle order, which a
+//! change to the decoder's complex must keep).
 
 use std::io::Cursor;
 use std::time::Instant;
@@ -102,5 +104,15 @@ fn main() {
             d.triangles.len()
         );
         println!("decode {secs:.3} s, user {user:.2} s");
+    }
+    if args.iter().any(|a| a == "--ply") {
+        let mut ply = Vec::new();
+        Tsc::open(&bytes)
+            .expect("opens")
+            .write_ply(&mut ply, &|_| true)
+            .expect("written");
+        let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+        h.eat(&ply);
+        println!("ply {:016x} {}", h.0, ply.len());
     }
 }

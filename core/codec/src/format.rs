@@ -1,5 +1,5 @@
-//! The `.tsc` file layout, version 2 (paper 003 §5.1 "Ecriture de l'en-tête", §5.3 "Ecriture
-//! finale"):
+//! The `.tsc` file layout, version 3 (version 2's layout, other connectivity codes; paper 003
+//! §5.1 "Ecriture de l'en-tête", §5.3 "Ecriture finale"):
 //!
 //! ```text
 //! head      written first, known before any code: magic, version (u16 at bytes 4..6), the packed
