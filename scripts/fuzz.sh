@@ -6,8 +6,8 @@
 #                                    written: new inputs go to a fresh temporary folder. Prints per
 #                                    target executions/s, coverage (libFuzzer's `cov:` edges),
 #                                    corpus size and crashes; exits non-zero when any target
-#                                    leaves a crash, timeout (> 1 s; the B-Rep target 10 s, see
-#                                    below) or out-of-memory (> 2 GB)
+#                                    leaves a crash, timeout (> 1 s; the B-Rep target 10 s and
+#                                    the codec 5 s, see below) or out-of-memory (> 2 GB)
 #                                    artefact (their paths are printed).
 #   bash scripts/fuzz.sh cmin        minimise every kept corpus (`cargo fuzz cmin`), after adding
 #                                    what long runs found under $FUZZ_WORK_DIR/<target>/ if set.
@@ -40,9 +40,12 @@ declare -A DICT=([frame]=json [envelope]=json [mesh_obj]=obj [mesh_ply]=ply [mes
 # The B-Rep target's tessellation runs 30-80x slower instrumented than in a release build (the
 # sanitizer, coverage counters, and spade's own debug checks of its triangulation): a document
 # that tessellates in 60 ms takes 2-5 s here, so its limit is 10 s, which is ~0.2 s of release.
+# The codec target decodes each input three times (whole, to a precision, one view): a 1 KB file
+# whose index claims a cell of ~36 000 symbols with geometry ahead decodes in ~75 ms in release
+# and 2.8 s here (coverage counters on every comparison of the star walks), so its limit is 5 s.
 COMMON=(-rss_limit_mb=2048 -print_final_stats=1)
 declare -A EXTRA=([frame]=-malloc_limit_mb=4100 [envelope]=-malloc_limit_mb=4100
-  [brep]=-timeout=10)
+  [brep]=-timeout=10 [codec]=-timeout=5)
 # Tessellation runs its faces on rayon: one worker keeps runs reproducible and the cores free.
 export RAYON_NUM_THREADS=1
 
