@@ -77,6 +77,17 @@ impl Simplex {
         self.map(|x| if x == from { to } else { x })
     }
 
+    /// Its distinct vertices, each once, in corner order (a point's one, a collapsed
+    /// triangle's one or two): the vertices whose incidence lists hold its slot.
+    #[inline]
+    pub fn corners(self) -> impl Iterator<Item = u32> {
+        let n = if self.kind == POINT { 1 } else { 3 };
+        let v = self.v;
+        (0..n)
+            .filter(move |&i| !v[..i].contains(&v[i]))
+            .map(move |i| v[i])
+    }
+
     /// How many of its corners are `v` (points count once).
     pub fn multiplicity(&self, v: u32) -> usize {
         match self.kind {
@@ -111,8 +122,8 @@ pub struct Vertex {
 }
 
 /// Bits along `axis` of a cell at kd `level`.
-pub fn axis_bits(level: usize, axis: usize) -> u32 {
-    (level / 3 + usize::from(axis < level % 3)) as u32
+pub const fn axis_bits(level: usize, axis: usize) -> u32 {
+    (level / 3 + (axis < level % 3) as usize) as u32
 }
 
 impl Vertex {
@@ -273,11 +284,8 @@ impl Complex {
         self.born.push(self.made);
         self.made += 1;
         self.live += 1;
-        let n = if s.kind == POINT { 1 } else { 3 };
-        for (i, &x) in s.v[..n].iter().enumerate() {
-            if !s.v[..i].contains(&x) {
-                self.incident.push(x, slot);
-            }
+        for x in s.corners() {
+            self.incident.push(x, slot);
         }
     }
 
@@ -287,11 +295,8 @@ impl Complex {
             return;
         };
         self.live -= 1;
-        let n = if s.kind == POINT { 1 } else { 3 };
-        for (i, &x) in s.v[..n].iter().enumerate() {
-            if !s.v[..i].contains(&x) {
-                self.incident.remove(x, slot);
-            }
+        for x in s.corners() {
+            self.incident.remove(x, slot);
         }
     }
 
@@ -344,11 +349,9 @@ impl Complex {
                         self.simplices.push(Some(f));
                         self.born.push(made);
                         self.live += 1;
-                        let n = if f.kind == POINT { 1 } else { 3 };
-                        for (i, &x) in f.v[..n].iter().enumerate() {
-                            if x != v && x != v2 && !f.v[..i].contains(&x) {
-                                self.incident.push(x, slot);
-                            }
+                        // v's and v2's lists are rebuilt below
+                        for x in f.corners().filter(|&x| x != v && x != v2) {
+                            self.incident.push(x, slot);
                         }
                         slot
                     }
@@ -380,11 +383,8 @@ impl Complex {
                 continue;
             };
             self.live -= 1;
-            let n = if s.kind == POINT { 1 } else { 3 };
-            for (i, &x) in s.v[..n].iter().enumerate() {
-                if !stars.contains(&x) && !s.v[..i].contains(&x) {
-                    self.incident.remove(x, slot);
-                }
+            for x in s.corners().filter(|x| !stars.contains(x)) {
+                self.incident.remove(x, slot);
             }
         }
     }
@@ -432,11 +432,8 @@ impl Complex {
                 masks.0.last_mut().expect("the image's first preimage").1 |= bit;
                 self.simplices[slot as usize] = None;
                 self.live -= 1;
-                let n = if image.kind == POINT { 1 } else { 3 };
-                for (i, &x) in image.v[..n].iter().enumerate() {
-                    if x != v1 && !image.v[..i].contains(&x) {
-                        self.incident.remove(x, slot);
-                    }
+                for x in image.corners().filter(|&x| x != v1) {
+                    self.incident.remove(x, slot);
                 }
             } else {
                 masks.0.push((image, bit));

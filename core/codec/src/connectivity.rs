@@ -319,8 +319,8 @@ fn code_with(
     // third vertex is linked to one child (nearly always `(c, c, x)`: they tell which children
     // hold collapsed edges), then those linked to both, which that tells most about (on the
     // bunny at 12 bits 1.28 -> 1.15 b/v, fandisk 1.35 -> 1.24)
-    let (mut collapsed_low, mut collapsed_high) = (false, false);
     let mut bridged = false;
+    // the collapsed edges (c, c, x) decoded so far, per child
     let mut collapsed = [0usize; 2];
     for both in [false, true] {
         for &(key, i) in &s.order {
@@ -344,11 +344,8 @@ fn code_with(
             // c and the other (then its cell holds several vertices: more collapsed triangles)
             // and how many once-held fine triangles of each child hold x (0, 1, 2+)
             let (seen, around) = if lx == 3 {
-                let (p, o) = if flip {
-                    (collapsed_high, collapsed_low)
-                } else {
-                    (collapsed_low, collapsed_high)
-                };
+                let [low, high] = collapsed.map(|n| n > 0);
+                let (p, o) = if flip { (high, low) } else { (low, high) };
                 let [n1, n2] = s.held_by[l].map(|n| n.min(2) as usize);
                 let (np, no) = if flip { (n2, n1) } else { (n1, n2) };
                 (usize::from(p) * 2 + usize::from(o), np * 3 + no)
@@ -369,8 +366,6 @@ fn code_with(
                     flip,
                 },
             )?;
-            collapsed_low |= mask & 1 != 0;
-            collapsed_high |= mask & 8 != 0;
             collapsed[0] += usize::from(mask & 1 != 0);
             collapsed[1] += usize::from(mask & 8 != 0);
             // (v1, v1, x), (v1, v2, x), (v2, v1, x) hold the low child, all but the first the

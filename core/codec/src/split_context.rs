@@ -23,7 +23,7 @@
 //!   means the same at every precision and on every mesh, so a handful of classes suffice.
 
 use crate::coding::Coding;
-use crate::complex::{Complex, Vertex};
+use crate::complex::{Complex, Vertex, axis_bits};
 use crate::kd_cell::half;
 use crate::symbols::{Family, MAX_LEVELS, context};
 
@@ -55,7 +55,7 @@ const AXIS_BITS: [[u8; 3]; 256] = {
     while level < 256 {
         let mut a = 0;
         while a < 3 {
-            t[level][a] = (level / 3 + (a < level % 3) as usize) as u8;
+            t[level][a] = axis_bits(level, a) as u8;
             a += 1;
         }
         level += 1;
@@ -526,7 +526,7 @@ mod tests {
     fn the_axis_table_is_axis_bits() {
         for (level, row) in AXIS_BITS.iter().enumerate() {
             for (a, &b) in row.iter().enumerate() {
-                assert_eq!(b as u32, crate::complex::axis_bits(level, a));
+                assert_eq!(b as u32, axis_bits(level, a));
             }
         }
         let w = Vertex {
