@@ -6,14 +6,14 @@ operators and menus. All geometry is computed by the `tessd` daemon, reached thr
 `tessd` Python client that build.py bundles as the `vendor` subpackage.
 
 Scripting contract (public API): bpy.ops.tessd.simplify, generate_lods, subdivide, export_usd,
-import_compressed.
+import_compressed, view_compressed.
 """
 
 from . import (daemon, jobs, menus, ops_export, ops_import_compressed, ops_lods, ops_simplify,
-               ops_subdivide, preferences)
+               ops_subdivide, ops_view_compressed, preferences)
 
 _MODULES = (preferences, jobs, ops_simplify, ops_lods, ops_subdivide, ops_export,
-            ops_import_compressed, menus)
+            ops_import_compressed, ops_view_compressed, menus)
 
 
 def register():

@@ -16,6 +16,7 @@ class VIEW3D_MT_tessd(bpy.types.Menu):
         layout.separator()
         layout.operator("tessd.export_usd", text="Export USD via tessd…")
         layout.operator("tessd.import_compressed", text="Import compressed mesh (view-dependent)…")
+        layout.operator("tessd.view_compressed", text="View compressed mesh live…")
 
 
 def _draw(self, context):
@@ -25,6 +26,7 @@ def _draw(self, context):
 
 def _draw_import(self, context):
     self.layout.operator("tessd.import_compressed", text="Compressed mesh (.tsc, view-dependent)")
+    self.layout.operator("tessd.view_compressed", text="Compressed mesh, live (.tsc)")
 
 
 def register():
