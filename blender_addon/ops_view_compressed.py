@@ -29,9 +29,12 @@ polls a :class:`jobs.Job`), swaps the mesh when the reply comes, and then sends 
 it is *now* if it moved meanwhile (latest wins; nothing queues up behind a slow decode).
 The status bar shows each refinement's progress, as it does for the add-on's jobs.
 
-**Headless.** In background mode (or with :data:`SYNCHRONOUS` set) the handlers refine in
-place before returning, so a script stepping frames with ``scene.frame_set(f)`` reads each
-frame's mesh right after. :func:`refine_now` does the same on demand.
+**Headless, and renders.** In background mode (or with :data:`SYNCHRONOUS` set) the handlers
+refine in place before returning, so a script stepping frames with ``scene.frame_set(f)``
+reads each frame's mesh right after. :func:`refine_now` does the same on demand. A render's
+frames refine the same way (the camera read from the render's depsgraph; Blender evaluates
+the frame again when a ``frame_change_post`` handler changed data): headless always, from
+the UI when Render > Lock Interface is on.
 
 **The mesh swap.** ``mesh.clear_geometry()`` and the new arrays written through the
 attributes' ``foreach_set`` into the same mesh: the object keeps its mesh, its name, its
@@ -40,10 +43,12 @@ Measured on a 69 k-triangle view (Blender 5.0): 10 ms, the same as a new mesh pl
 ``meshes.remove`` of the old one (whose removal remaps users across the whole file, so it
 grows with the file), and 9× faster than ``from_pydata`` (87 ms, Python lists).
 
-**Stopping.** The handlers prune states whose object is gone (deleted, undone, its token
-property removed) and unregister themselves when no live object remains; loading a file
-drops them (they are not persistent) and a non-persistent ``load_pre`` handler closes what
-was in flight; unregistering the add-on stops everything. A problem (no camera, a lost
+**Stopping and going on.** The handlers prune states whose object is gone (deleted, undone,
+its token property removed) and unregister themselves when no live object remains; loading
+a file drops them (they are not persistent) and a non-persistent ``load_pre`` handler closes
+what was in flight; unregistering the add-on stops everything. Live objects come back to
+life when a file that holds them is opened or an undo / redo restores them (:func:`_adopt`,
+persistent on ``load_post``, ``undo_post`` and ``redo_post``). A problem (no camera, a lost
 daemon, Edit Mode) is shown in the status bar and printed once, not per frame.
 """
 
@@ -107,11 +112,11 @@ class _Live:
             return None
         return obj
 
-    def view(self, scene, obj):
+    def view(self, scene, obj, depsgraph=None):
         """(params, key) for the object seen by the scene's camera now, or (None, None) with
         ``problem`` set."""
         try:
-            params, key = view_params(scene, obj)
+            params, key = view_params(scene, obj, depsgraph)
         except UserError as e:
             self._problem(str(e))
             return None, None
@@ -178,12 +183,30 @@ def _print_once(message):
         print(message)
 
 
-def view_params(scene, obj):
+class _Evaluated:
+    """The scene as :func:`camera_params` reads it, with the camera as ``depsgraph``
+    evaluated it."""
+
+    def __init__(self, scene, depsgraph):
+        self.render = scene.render
+        self.camera = scene.camera.evaluated_get(depsgraph) if scene.camera else None
+
+
+def view_params(scene, obj, depsgraph=None):
     """`codec.view`'s params for ``obj`` seen by the scene's camera, the camera taken into the
     file's frame (the object's local one), and a key that changes only when the request
-    would; raises UserError when there is no perspective camera."""
-    cam = camera_params(scene)
-    inv = obj.matrix_world.inverted_safe()
+    would; raises UserError when there is no perspective camera.
+
+    With ``depsgraph`` (a handler's) the camera and the object are read as it evaluated them:
+    a render evaluates frames in a depsgraph of its own and never writes its matrices back to
+    the scene's objects, so these would show the frame the UI was on."""
+    if depsgraph is not None:
+        cam = camera_params(_Evaluated(scene, depsgraph))
+        matrix = obj.evaluated_get(depsgraph).matrix_world
+    else:
+        cam = camera_params(scene)
+        matrix = obj.matrix_world
+    inv = matrix.inverted_safe()
     eye = inv @ Vector(cam["eye"])
     target = inv @ Vector(cam["target"])
     up = inv.to_3x3() @ Vector(cam["up"])
@@ -275,9 +298,13 @@ def _synchronous():
     return bpy.app.background if SYNCHRONOUS is None else bool(SYNCHRONOUS)
 
 
-def refine_now(scene=None, context=None):
+def _rendering(depsgraph):
+    return depsgraph is not None and depsgraph.mode == 'RENDER'
+
+
+def refine_now(scene=None, context=None, depsgraph=None):
     """Refines every live object of ``scene`` for its camera now, blocking (the headless
-    path); returns how many meshes changed."""
+    path; ``depsgraph``: the one a handler was given); returns how many meshes changed."""
     scene = scene or bpy.context.scene
     changed = 0
     for state, obj in _alive():
@@ -286,7 +313,7 @@ def refine_now(scene=None, context=None):
         if state.job is not None:  # sent from the UI before: wait for it
             state.job.run(context)
             changed += state.take(obj)
-        params, key = state.view(scene, obj)
+        params, key = state.view(scene, obj, depsgraph)
         if key is None or key == state.key or not state.can_change(obj):
             continue
         state.send(params, key, context)
@@ -296,8 +323,9 @@ def refine_now(scene=None, context=None):
     return changed
 
 
-def _changed(scene):
-    """What both handlers do: prune, then refine (headless) or schedule the timer."""
+def _changed(scene, depsgraph):
+    """What both handlers do: prune, then refine (headless, or a render's frame) or schedule
+    the timer."""
     global _busy
     if _busy:
         return
@@ -307,8 +335,17 @@ def _changed(scene):
         if not live:
             _disarm()
             return
+        if _rendering(depsgraph) and not bpy.app.background:
+            # A render's frame, from its thread: a blocking refine, only when the interface
+            # is locked (Blender's rule for handlers that change data while rendering).
+            if scene.render.use_lock_interface:
+                refine_now(scene, depsgraph=depsgraph)
+            else:
+                _print_once("%s: the render does not refine live objects per frame; turn on "
+                            "Render > Lock Interface for that" % TITLE)
+            return
         if _synchronous():
-            refine_now(scene)
+            refine_now(scene, depsgraph=depsgraph)
             return
         for state, obj in live:
             if state.job is not None or obj.name not in scene.objects or obj.mode == 'EDIT':
@@ -325,16 +362,42 @@ def _changed(scene):
 
 
 def _on_frame_change(scene, depsgraph=None):
-    _changed(scene)
+    _changed(scene, depsgraph)
 
 
 def _on_depsgraph_update(scene, depsgraph=None):
-    _changed(scene)
+    _changed(scene, depsgraph)
 
 
 def _on_load_pre(*_args):
     """A file is being loaded: its objects are not ours; close what is in flight."""
     stop_all()
+
+
+@bpy.app.handlers.persistent
+def _adopt(*_args):
+    """A file was opened, or an undo or redo brought objects back: the live objects among
+    them (their ``tessd_live`` property is saved with them) go on refining, from the next
+    frame change or camera move (a command-line render of a saved file refines each frame),
+    or at once in the UI. Always registered while the add-on is: a scan of the objects per
+    load, undo and redo."""
+    try:
+        for obj in bpy.data.objects:
+            token = obj.get(PROP_LIVE)
+            if (not isinstance(token, str) or token in _LIVE or obj.get(PROP_TSC) is None
+                    or obj.type != 'MESH' or not obj.users_scene):
+                continue
+            _LIVE[token] = _Live(token, obj.name)  # no view sent yet: the next update sends
+        if _LIVE:
+            _arm()
+            if not _synchronous() and not bpy.app.timers.is_registered(_tick):
+                bpy.app.timers.register(_tick, first_interval=DEBOUNCE)
+    except Exception as e:
+        _print_once("%s: %s: %s" % (TITLE, type(e).__name__, e))
+
+
+#: Where :func:`_adopt` is registered (persistent, with the add-on).
+_ADOPT_ON = ("load_post", "undo_post", "redo_post")
 
 
 def _tick():
@@ -515,9 +578,18 @@ class TESSD_OT_view_compressed(JobOperator, ImportHelper, bpy.types.Operator):
 def register():
     bpy.utils.register_class(TESSD_OT_view_compressed)
     bpy.types.STATUSBAR_HT_header.append(_draw_status)
+    for name in _ADOPT_ON:
+        handlers = getattr(bpy.app.handlers, name)
+        for h in [h for h in handlers if getattr(h, "__module__", None) == __name__]:
+            handlers.remove(h)  # left by an earlier load of this module
+        handlers.append(_adopt)
 
 
 def unregister():
     stop_all()
+    for name in _ADOPT_ON:
+        handlers = getattr(bpy.app.handlers, name)
+        for h in [h for h in handlers if getattr(h, "__module__", None) == __name__]:
+            handlers.remove(h)
     bpy.types.STATUSBAR_HT_header.remove(_draw_status)
     bpy.utils.unregister_class(TESSD_OT_view_compressed)
