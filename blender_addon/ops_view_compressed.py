@@ -302,6 +302,17 @@ def _rendering(depsgraph):
     return depsgraph is not None and depsgraph.mode == 'RENDER'
 
 
+def _render_running():
+    """A render runs in the UI: its thread's handlers own the refinement until it ends (the
+    main thread's timer and handlers keep out of its way)."""
+    if bpy.app.background:
+        return False
+    try:
+        return bpy.app.is_job_running('RENDER')
+    except (AttributeError, TypeError, ValueError):
+        return False
+
+
 def refine_now(scene=None, context=None, depsgraph=None):
     """Refines every live object of ``scene`` for its camera now, blocking (the headless
     path; ``depsgraph``: the one a handler was given); returns how many meshes changed."""
@@ -327,7 +338,7 @@ def _changed(scene, depsgraph):
     """What both handlers do: prune, then refine (headless, or a render's frame) or schedule
     the timer."""
     global _busy
-    if _busy:
+    if _busy or (_render_running() and not _rendering(depsgraph)):
         return
     _busy = True
     try:
@@ -404,6 +415,8 @@ def _tick():
     """The UI's timer: polls the requests in flight, swaps meshes, sends the latest view of
     each object whose view changed; runs again while a request is in flight."""
     global _busy
+    if _render_running():
+        return DEBOUNCE
     _busy = True
     try:
         scene = bpy.context.scene
