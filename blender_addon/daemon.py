@@ -57,7 +57,7 @@ BUNDLED_BINARY = os.path.join(ADDON_DIR, "bin", "tessd.exe" if sys.platform == "
 PREFERENCES_PLACE = "Preferences \u203a Add-ons \u203a tessd"
 
 #: Operations the add-on sends; a daemon without one of them is treated like an old version.
-REQUIRED_OPS = frozenset({"simplify", "lod", "subdivide", "mesh.convert", "session.hold",
+REQUIRED_OPS = frozenset({"simplify", "lod", "subdivide", "mesh.convert", "codec.view", "session.hold",
                           "session.release"})
 
 #: The daemon version the add-on expects. None: what its binary reports (``tessd --version``).

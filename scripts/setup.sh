@@ -80,8 +80,9 @@ if [ "${1:-}" = "--demo" ]; then
 else
   # System packages the tests need (none are needed by the build itself yet): the renderer's
   # Vulkan (lavapipe), as for the demo; useradd and mount/umount for tests/reliability (a
-  # second user, a tmpfs).
-  APT_PACKAGES=("${DEMO_APT_PACKAGES[@]}" passwd mount)
+  # second user, a tmpfs); an X server with no screen (Xvfb) and xdotool for `tessd view`'s
+  # real windows and real key presses (tests/view).
+  APT_PACKAGES=("${DEMO_APT_PACKAGES[@]}" passwd mount xvfb xauth xdotool)
   apt_install "${APT_PACKAGES[@]}"
   make_venv .venv python/requirements-test.txt
   make_venv .venv-bench bench/requirements-bench.txt

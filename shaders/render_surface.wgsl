@@ -16,7 +16,9 @@ struct Params {
     shading: u32,
     // Unit vector towards the key light (world).
     light: vec3<f32>,
-    // 1: overlay triangle edges.
+    // Bit 0: overlay triangle edges. Bits 1-2: the draw mode, 0 solid, 1 wireframe (only
+    // the pixels within a pixel of an edge), 2 points (only those within two pixels of a
+    // corner): `tessd view`'s `W`.
     edges: u32,
 };
 
@@ -71,15 +73,26 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     n = normalize(n);
     var color = shade(params.shading, in.face_id, n, view, params.light);
 
+    let mode = params.edges >> 1u;
     if (params.edges != 0u) {
         // Distance to the nearest triangle edge, in pixels: a line about one pixel wide.
         // Faded out on triangles only a few pixels across (a scan's dense mesh would turn
         // solid dark), where the lines would carry no information.
         let d = in.bary / max(bary_w, vec3<f32>(1e-12));
         let e = min(d.x, min(d.y, d.z));
-        let small = max(bary_w.x, max(bary_w.y, bary_w.z));
-        let a = (1.0 - smoothstep(0.5, 1.5, e)) * (1.0 - smoothstep(0.15, 0.4, small));
-        color = mix(color, vec3<f32>(0.08, 0.08, 0.1), 0.85 * a);
+        if (mode == 1u && e > 1.0) {
+            discard;
+        }
+        // A corner is where the two other coordinates vanish.
+        let corner = min(max(d.y, d.z), min(max(d.x, d.z), max(d.x, d.y)));
+        if (mode == 2u && corner > 2.0) {
+            discard;
+        }
+        if ((params.edges & 1u) != 0u && mode == 0u) {
+            let small = max(bary_w.x, max(bary_w.y, bary_w.z));
+            let a = (1.0 - smoothstep(0.5, 1.5, e)) * (1.0 - smoothstep(0.15, 0.4, small));
+            color = mix(color, vec3<f32>(0.08, 0.08, 0.1), 0.85 * a);
+        }
     }
 
     var out: FragmentOut;

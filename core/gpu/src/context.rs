@@ -35,6 +35,55 @@ impl GpuContext {
         pollster::block_on(Self::open_async(label))
     }
 
+    /// Opens a device that can present to `window` (the interactive viewer, `tessd view`), and
+    /// the window's surface: the same adapter preference and limits as [`open`](Self::open),
+    /// among the adapters that support the surface. Unlike [`open`](Self::open)'s instance,
+    /// this one keeps the window-system extensions: a window needs them.
+    ///
+    /// # Errors
+    /// [`GpuError::NoAdapter`] when no adapter can draw on the window (the message says
+    /// which packages give the software one), [`GpuError::DeviceRequest`] when every such
+    /// adapter refuses a device, [`GpuError::Wgpu`] when the surface cannot be created.
+    /// The surface's formats on the chosen adapter come with it.
+    #[allow(clippy::type_complexity)]
+    pub fn open_for_window<W>(
+        label: &str,
+        window: W,
+    ) -> Result<(Self, wgpu::Surface<'static>, Vec<wgpu::TextureFormat>), GpuError>
+    where
+        W: wgpu::WindowHandle + wgpu::wgt::WgpuHasDisplayHandle + Clone + 'static,
+    {
+        let instance = window_instance(&window);
+        let surface = instance
+            .create_surface(window)
+            .map_err(|e| GpuError::Wgpu(format!("cannot draw on the window: {e}")))?;
+        pollster::block_on(async {
+            let mut adapters: Vec<wgpu::Adapter> = instance
+                .enumerate_adapters(wgpu::Backends::all())
+                .await
+                .into_iter()
+                .filter(|a| a.is_surface_supported(&surface))
+                .collect();
+            if adapters.is_empty() {
+                return Err(GpuError::NoAdapter(
+                    "no adapter can draw on this window".to_string(),
+                ));
+            }
+            adapters.sort_by_key(|a| preference(a.get_info().device_type));
+            let mut first_error = None;
+            for adapter in adapters {
+                let formats = surface.get_capabilities(&adapter).formats;
+                match Self::open_on(adapter, label).await {
+                    Ok(context) => return Ok((context, surface, formats)),
+                    Err(e) => {
+                        first_error.get_or_insert(e);
+                    }
+                }
+            }
+            Err(first_error.expect("at least one adapter was tried"))
+        })
+    }
+
     /// [`open`](Self::open), as a future (for callers already inside one).
     ///
     /// # Errors
@@ -125,7 +174,7 @@ fn preference(kind: wgpu::DeviceType) -> u8 {
 }
 
 /// The window-system surface extensions a headless instance leaves out (see
-/// [`vulkan_without_window_systems`]).
+/// [`vulkan_without`]).
 #[cfg(all(unix, not(target_vendor = "apple")))]
 const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
     c"VK_KHR_wayland_surface",
@@ -135,7 +184,7 @@ const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] = [
 
 /// A wgpu instance for offscreen work: the backends of this build (and `WGPU_BACKEND`,
 /// `WGPU_VALIDATION`... from the environment). On Linux and the BSDs its Vulkan instance is
-/// created without the window-system surface extensions ([`vulkan_without_window_systems`]);
+/// created without the window-system surface extensions ([`vulkan_without`]);
 /// elsewhere (DX12 and Vulkan on Windows, Metal on macOS) wgpu creates it as it is, and the
 /// adapter request picks among all backends.
 ///
@@ -148,29 +197,62 @@ fn headless_instance() -> Result<wgpu::Instance, GpuError> {
     let desc = desc.with_env();
     #[cfg(all(unix, not(target_vendor = "apple")))]
     if desc.backends.contains(wgpu::Backends::VULKAN) {
-        return vulkan_without_window_systems(desc);
+        return vulkan_without(desc, &WINDOW_SYSTEM_EXTENSIONS, None);
     }
     Ok(wgpu::Instance::new(desc))
 }
 
-/// The Vulkan instance of `desc`, created through wgpu-hal without the window-system surface
-/// extensions (Wayland, XCB, Xlib), which only Unix desktops have.
+/// A wgpu instance that can draw on `window`. On Linux and the BSDs outside a Wayland session
+/// (no `WAYLAND_DISPLAY`: X11, or Xvfb), its Vulkan instance leaves out only the Wayland surface
+/// extension, for the reason [`vulkan_without`] gives; a Wayland session keeps it.
+fn window_instance<W>(window: &W) -> wgpu::Instance
+where
+    W: wgpu::wgt::WgpuHasDisplayHandle + Clone,
+{
+    let mut desc = wgpu::InstanceDescriptor::new_with_display_handle(Box::new(window.clone()));
+    desc.backends = wgpu::Instance::enabled_backend_features();
+    let desc = desc.with_env();
+    #[cfg(all(unix, not(target_vendor = "apple")))]
+    if desc.backends.contains(wgpu::Backends::VULKAN)
+        && std::env::var_os("WAYLAND_DISPLAY").is_none_or(|v| v.is_empty())
+    {
+        let display = window.display_handle().ok();
+        let plain = wgpu::InstanceDescriptor {
+            backends: desc.backends,
+            flags: desc.flags,
+            memory_budget_thresholds: desc.memory_budget_thresholds,
+            backend_options: desc.backend_options.clone(),
+            display: None,
+        };
+        if let Ok(instance) = vulkan_without(plain, &[c"VK_KHR_wayland_surface"], display) {
+            return instance;
+        }
+    }
+    wgpu::Instance::new(desc)
+}
+
+/// The Vulkan instance of `desc`, created through wgpu-hal without the surface extensions
+/// `leave_out` (for offscreen work, all the window systems': Wayland, XCB, Xlib), with the
+/// display `display` (a window's).
 ///
 /// wgpu enables every surface extension the loader offers, and Mesa's device-selection layer
 /// (an implicit layer of `mesa-vulkan-drivers`) takes `VK_KHR_wayland_surface` as a sign that
 /// the program draws on Wayland: it connects to the compositor to find the default GPU, and on a
 /// machine without a session (ssh, cron, CI, render nodes: no `XDG_RUNTIME_DIR`) libwayland
 /// prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` on stderr at every
-/// adapter enumeration (issue 32). tessd never presents, so it never needs them: wgpu-hal checks
-/// that an extension was enabled before creating a surface with it.
+/// adapter enumeration (issue 32). Offscreen work never presents, so it never needs them, and a
+/// window on X11 needs only X's: wgpu-hal checks that an extension was enabled before creating
+/// a surface with it.
 ///
 /// Should Vulkan fail while other backends are enabled (`WGPU_BACKEND`), those are used.
 ///
 /// # Errors
 /// As [`headless_instance`].
 #[cfg(all(unix, not(target_vendor = "apple")))]
-fn vulkan_without_window_systems(
+fn vulkan_without(
     desc: wgpu::InstanceDescriptor,
+    leave_out: &'static [&'static std::ffi::CStr],
+    display: Option<wgpu::rwh::DisplayHandle<'_>>,
 ) -> Result<wgpu::Instance, GpuError> {
     let hal_desc = wgpu::hal::InstanceDescriptor {
         name: "tessd",
@@ -178,16 +260,16 @@ fn vulkan_without_window_systems(
         memory_budget_thresholds: desc.memory_budget_thresholds,
         backend_options: desc.backend_options.clone(),
         telemetry: None,
-        display: None,
+        display,
     };
     let leave_out_window_systems: Box<wgpu::hal::vulkan::CreateInstanceCallback> =
-        Box::new(|args| {
-            args.extensions
-                .retain(|e| !WINDOW_SYSTEM_EXTENSIONS.contains(e));
+        Box::new(move |args| {
+            args.extensions.retain(|e| !leave_out.contains(e));
         });
-    // SAFETY: the descriptor is wgpu's own, from the environment. The callback removes only
-    // surface extensions, which wgpu-hal looks up before creating a surface (it then refuses
-    // the surface) and which tessd never creates; nothing else about the instance changes.
+    // SAFETY: the descriptor is wgpu's own, from the environment, and `display` (a window's)
+    // outlives the instance. The callback removes only surface extensions, which wgpu-hal looks
+    // up before creating a surface (it then refuses the surface) and which tessd never creates
+    // a surface with; nothing else about the instance changes.
     let hal = unsafe {
         wgpu::hal::vulkan::Instance::init_with_callback(&hal_desc, Some(leave_out_window_systems))
     };

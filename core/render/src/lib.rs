@@ -53,6 +53,7 @@ pub mod image_fill;
 pub mod object_fill;
 pub mod panels;
 pub mod patch_tessellation;
+pub mod present;
 pub mod ray_cast;
 pub mod scene;
 pub mod surface;
@@ -151,6 +152,38 @@ impl Shading {
     }
 }
 
+/// What a mesh's triangles are drawn as (`tessd view`'s `W`). B-Rep parts are always drawn
+/// solid; their wireframe is the edge overlay of their per-frame tessellation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrawMode {
+    /// Shaded surfaces.
+    #[default]
+    Solid = 0,
+    /// The triangles' edges only, about a pixel wide, hidden ones included.
+    Wireframe = 1,
+    /// The vertices only, dots about four pixels across.
+    Points = 2,
+}
+
+impl DrawMode {
+    /// Every mode, in `W`'s cycle order.
+    pub const ALL: [DrawMode; 3] = [DrawMode::Solid, DrawMode::Wireframe, DrawMode::Points];
+
+    /// The mode's name (`solid`, `wireframe`, `points`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DrawMode::Solid => "solid",
+            DrawMode::Wireframe => "wireframe",
+            DrawMode::Points => "points",
+        }
+    }
+
+    /// The mode named `s`.
+    pub fn parse(s: &str) -> Option<DrawMode> {
+        DrawMode::ALL.into_iter().find(|m| m.name() == s)
+    }
+}
+
 /// What to render besides the scene and the camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
@@ -163,6 +196,8 @@ pub struct RenderSettings {
     pub shading: Shading,
     /// Overlay the triangle edges (drawn from barycentric coordinates in the surface pass).
     pub edges: bool,
+    /// Surfaces, wireframe or points (meshes only).
+    pub mode: DrawMode,
 }
 
 impl RenderSettings {
@@ -173,6 +208,7 @@ impl RenderSettings {
             height,
             shading: Shading::Lit,
             edges: false,
+            mode: DrawMode::Solid,
         }
     }
 
@@ -185,6 +221,12 @@ impl RenderSettings {
     /// With or without the edge overlay.
     pub fn with_edges(mut self, edges: bool) -> Self {
         self.edges = edges;
+        self
+    }
+
+    /// With `mode`.
+    pub fn with_mode(mut self, mode: DrawMode) -> Self {
+        self.mode = mode;
         self
     }
 
@@ -292,6 +334,27 @@ impl Renderer {
             surface,
             brep: std::sync::OnceLock::new(),
         })
+    }
+
+    /// A renderer on an opened device: the viewer's, opened for its window
+    /// ([`GpuContext::open_for_window`]), so that its frames can be presented there.
+    ///
+    /// # Errors
+    /// [`RenderError::Gpu`] when the shaders do not compile.
+    pub fn with_context(gpu: GpuContext) -> Result<Renderer, RenderError> {
+        let scopes = ErrorScopes::push(&gpu.device);
+        let surface = surface::SurfacePass::new(&gpu.device);
+        scopes.pop_blocking()?;
+        Ok(Renderer {
+            gpu,
+            surface,
+            brep: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// The device and queue (a window presents the frames on them).
+    pub fn context(&self) -> &GpuContext {
+        &self.gpu
     }
 
     /// The B-Rep passes, compiled on first use.

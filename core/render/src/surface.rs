@@ -52,7 +52,7 @@ impl Params {
                 Shading::FaceIds => 3,
             },
             light: light.as_vec3().to_array(),
-            edges: settings.edges as u32,
+            edges: settings.edges as u32 | (settings.mode as u32) << 1,
         }
     }
 }

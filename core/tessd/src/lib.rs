@@ -9,3 +9,4 @@
 pub mod demo;
 pub mod logging;
 pub mod ops;
+pub mod view;

@@ -321,6 +321,9 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Open a window on meshes, B-Rep parts and compressed meshes: orbit, subdivide, stream
+    /// (Blender's keys; H lists them; --script plays actions).
+    View(tessd::view::ViewArgs),
     /// Render a mesh (OBJ, PLY, STL, OFF, USD .usda: a LOD stage's levels side by side) or a
     /// B-Rep (a .json document or an OpenCASCADE .brep file) to a PNG, headless on the GPU (lavapipe without one).
     Render {
@@ -853,6 +856,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             })
         }
+        Command::View(args) => tessd::view::run(args.options()?),
         Command::Render {
             input,
             output,

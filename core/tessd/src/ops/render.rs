@@ -406,7 +406,7 @@ fn prefixed(what: &str, mut error: OpError) -> OpError {
 }
 
 /// The B-Rep frames' time per step of paper 001 table 1, summed over the frames, ms.
-fn step_timings(reports: &[BrepReport]) -> Value {
+pub fn step_timings(reports: &[BrepReport]) -> Value {
     let mut t = StepTimings::default();
     for r in reports {
         let s = &r.timings;
