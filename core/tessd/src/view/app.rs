@@ -96,9 +96,16 @@ impl ApplicationHandler for App {
         }
     }
 
-    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
-        if let Some(v) = &self.state {
-            v.window.request_redraw();
+    /// Draws again while anything moves (input, background work, a script, playing frames);
+    /// a still scene waits for events instead of spinning.
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(v) = &mut self.state {
+            if v.needs_frame() {
+                v.window.request_redraw();
+                event_loop.set_control_flow(ControlFlow::Poll);
+            } else {
+                event_loop.set_control_flow(ControlFlow::Wait);
+            }
         }
     }
 }
@@ -147,6 +154,8 @@ struct Viewer {
     cursor: Option<(f64, f64)>,
     modifiers: ModifiersState,
     screenshots: u32,
+    /// An event since the last frame may have changed the picture.
+    dirty: bool,
     /// The LOD step asked for while the chain was being built.
     lod_step_pending: isize,
     last_frame: Option<Frame>,
@@ -265,6 +274,7 @@ impl Viewer {
             modifiers: ModifiersState::empty(),
             screenshots: 0,
             lod_step_pending: 0,
+            dirty: true,
             last_frame: None,
             messages: Vec::new(),
         };
@@ -275,7 +285,21 @@ impl Viewer {
     }
 
     /// One window event.
+    /// Whether the next frame can differ from the last one.
+    fn needs_frame(&mut self) -> bool {
+        let dirty = std::mem::take(&mut self.dirty);
+        dirty
+            || self.next_action < self.script.len()
+            || self.wait > 0
+            || self.until_idle
+            || self.playing
+            || self.busy()
+            || self.last_frame.is_none()
+    }
+
     fn event(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) -> Result<()> {
+        // anything but a redraw may change the picture
+        self.dirty |= !matches!(event, WindowEvent::RedrawRequested);
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
@@ -630,7 +654,7 @@ impl Viewer {
     }
 
     /// Runs the script's actions up to the next one that needs frames. Returns false to quit.
-    fn run_script(&mut self, shots: &mut Vec<(PathBuf, Option<PathBuf>)>) -> Result<bool> {
+    fn run_script(&mut self, shots: &mut Vec<Shot>) -> Result<bool> {
         if self.wait > 0 {
             self.wait -= 1;
             return Ok(true);
@@ -666,9 +690,17 @@ impl Viewer {
                     self.until_idle = true;
                     return Ok(true);
                 }
-                Action::Screenshot { color, face_ids } => {
+                Action::Screenshot {
+                    color,
+                    face_ids,
+                    overlay,
+                } => {
                     // taken from the frame drawn next, after the actions before it
-                    shots.push((color, face_ids));
+                    shots.push(Shot {
+                        color,
+                        face_ids,
+                        overlay,
+                    });
                     return Ok(true);
                 }
                 Action::Stats(path) => {
@@ -821,13 +853,9 @@ impl Viewer {
             }
             offset += item_faces(item);
         }
-        for (color, face_ids) in std::mem::take(&mut shots) {
-            self.last_frame = Some(frame.clone());
-            self.screenshot(&color, face_ids.as_deref())?;
-        }
         let mut shown = frame.color.clone();
         self.last_frame = Some(frame);
-        let mut lines = vec![self.hud_line(start)];
+        let mut lines = self.hud_lines();
         lines.extend(self.messages.iter().cloned());
         let mut canvas = Canvas {
             rgba: &mut shown,
@@ -839,49 +867,56 @@ impl Viewer {
             let help: Vec<String> = HELP.iter().map(|s| s.to_string()).collect();
             canvas.block(h as usize / 3, &help);
         }
+        for shot in shots {
+            self.screenshot(&shot.color, shot.face_ids.as_deref())?;
+            if shot.overlay {
+                tessd_render::image::write_png(&shot.color, w, h, &shown)?;
+            }
+        }
         self.presenter
             .present(self.renderer.context(), w, h, &shown)?;
         Ok(go_on)
     }
 
-    /// The heads-up line: what is drawn, how, and the last frame's steps.
-    fn hud_line(&self, start: Instant) -> String {
-        let mut line = format!(
-            "{} tris  {}  {}{}  subdiv {}",
+    /// The heads-up lines: what is drawn and how, each B-Rep part's steps, each `.tsc`'s
+    /// reading.
+    fn hud_lines(&self) -> Vec<String> {
+        let last = self.stats.frame_ms.last().copied().unwrap_or(0.0);
+        let mut lines = vec![format!(
+            "{} tris  {}  {}{}  subdiv {}  LOD {}  {last:.0} ms/frame  (H: keys)",
             self.triangles(),
             self.settings.mode.name(),
             self.settings.shading.name(),
             if self.settings.edges { "+edges" } else { "" },
             self.shown_level,
-        );
+            self.lod,
+        )];
+        let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
         for item in &self.items {
             if let Item::Brep(b) = item {
                 let t = &b.report.timings;
-                let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-                line += &format!(
-                    "  B-Rep {} faces: tess {:.1} trim {:.1} cracks {:.1} fill {:.1} ms ({})",
+                lines.push(format!(
+                    "B-Rep {} faces, cracks {}: tessellate {:.1}  trim {:.1}  detect {:.1}  fill {:.1} ms",
                     b.faces,
+                    self.cracks.name(),
                     ms(t.tessellation),
                     ms(t.initial),
                     ms(t.crack_detection),
                     ms(t.image_fill + t.depth_mask + t.object_fill + t.composite),
-                    self.cracks.name()
-                );
+                ));
             }
         }
         for t in &self.tsc {
             let r = &t.refinement;
-            line += &format!(
-                "  tsc: {} B read, {} cells{}",
+            lines.push(format!(
+                "tsc: {} bytes read, {} cells, {} triangles shown{}",
                 r.bytes_read,
                 r.cells,
+                self.items[t.item].triangles(),
                 if r.in_flight > 0 { ", refining" } else { "" }
-            );
+            ));
         }
-        let last = self.stats.frame_ms.last().copied().unwrap_or(0.0);
-        line += &format!("  {last:.0} ms/frame  (H: keys)");
-        let _ = start;
-        line
+        lines
     }
 
     /// Shows frame `frame_index` of `--frames` at the subdivision level asked for (its
@@ -890,6 +925,13 @@ impl Viewer {
         self.set_level(self.level);
         Ok(())
     }
+}
+
+/// A screenshot a script asked for.
+struct Shot {
+    color: PathBuf,
+    face_ids: Option<PathBuf>,
+    overlay: bool,
 }
 
 /// Faces an item's ids run over (the next item's ids start after them).

@@ -2,7 +2,9 @@
 //! benchmarks and recorded flights. Each action is an object with one key:
 //! `{"wait": FRAMES}`, `{"camera": {"eye", "target", "up", "fov"}}`, `{"orbit": [DX, DY]}`
 //! (degrees), `{"zoom": FACTOR}`, `{"key": "w"}`, `{"until_idle": true}`,
-//! `{"screenshot": PATH, "face_ids": PATH}`, `{"stats": PATH}`, `{"quit": true}`.
+//! `{"screenshot": PATH, "face_ids": PATH, "overlay": true}` (`face_ids` and `overlay`, the
+//! heads-up text and help as the window shows them, optional), `{"stats": PATH}`,
+//! `{"quit": true}`.
 
 use anyhow::{Context, Result, bail};
 use serde_json::Value;
@@ -38,6 +40,8 @@ pub enum Action {
         color: PathBuf,
         /// The face-id PNG.
         face_ids: Option<PathBuf>,
+        /// With the heads-up text and help, as the window shows them (else the bare frame).
+        overlay: bool,
     },
     /// Write the statistics so far as JSON.
     Stats(PathBuf),
@@ -98,7 +102,7 @@ fn parse(item: &Value) -> Result<Action> {
     };
     let key = map
         .keys()
-        .find(|k| *k != "face_ids")
+        .find(|k| *k != "face_ids" && *k != "overlay")
         .with_context(|| format!("an empty action {item}"))?;
     let v = &map[key];
     Ok(match key.as_str() {
@@ -141,6 +145,11 @@ fn parse(item: &Value) -> Result<Action> {
                 .get("face_ids")
                 .map(|p| path(p, "face_ids"))
                 .transpose()?,
+            overlay: match map.get("overlay") {
+                None => false,
+                Some(Value::Bool(b)) => *b,
+                Some(other) => bail!("`overlay` must be true or false, got {other}"),
+            },
         },
         "stats" => Action::Stats(path(v, "stats")?),
         "quit" => Action::Quit,
@@ -170,7 +179,8 @@ mod tests {
             one(r#"{"screenshot": "a.png", "face_ids": "b.png"}"#).unwrap(),
             Action::Screenshot {
                 color: "a.png".into(),
-                face_ids: Some("b.png".into())
+                face_ids: Some("b.png".into()),
+                overlay: false
             }
         );
         let c = one(r#"{"camera": {"eye": [0,0,5], "target": [0,0,0], "up": [0,1,0]}}"#);
