@@ -610,7 +610,9 @@ impl Viewer {
             "lod": self.lod,
             "partition": self.show_partition,
             "triangles_near_target": self.triangles_near_target(),
-            "sessions": self.tsc.len(),
+            "sessions": self.tsc.iter().map(|t| {
+                t.refinement.sessions.load(std::sync::atomic::Ordering::Relaxed)
+            }).sum::<u64>(),
             "frame_index": self.frame_index,
             "frames_total": self.frames.len(),
             "bytes_read": bytes,

@@ -114,8 +114,11 @@ impl Background {
     pub fn refiner(&self, item: usize, tsc: Arc<Tsc>, pixel_error: f64) -> Refinement {
         let (cams, rx) = channel::<tessd_codec::Camera>();
         let tx = self.tx.clone();
+        let sessions = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let counter = sessions.clone();
         std::thread::spawn(move || {
             let mut session = ViewSession::new(tsc);
+            counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             while let Ok(mut camera) = rx.recv() {
                 // only the newest camera matters
                 while let Ok(newer) = rx.try_recv() {
@@ -142,6 +145,7 @@ impl Background {
             views: 0,
             bytes_read: 0,
             cells: 0,
+            sessions,
         }
     }
 }
@@ -170,6 +174,8 @@ pub struct Refinement {
     pub bytes_read: u64,
     /// Cells shown by the last view.
     pub cells: usize,
+    /// View sessions the worker opened (one for its life: every camera refines the same one).
+    pub sessions: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl Refinement {
