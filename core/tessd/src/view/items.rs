@@ -66,8 +66,8 @@ pub fn is_tsc(path: &Path) -> bool {
 
 /// An input read and checked, before the window and its device exist.
 pub enum Prepared {
-    /// A mesh file.
-    Mesh(PathBuf, Box<Mesh>),
+    /// A mesh file, and the further LOD levels of a USD stage's variants (or `UsdLod` levels).
+    Mesh(PathBuf, Box<Mesh>, Vec<Mesh>),
     /// A B-Rep part with its trim structures.
     Brep(PathBuf, Box<BrepScene>, usize),
     /// A compressed mesh.
@@ -111,11 +111,19 @@ pub fn prepare(path: &Path) -> Result<Prepared> {
             doc.faces.len(),
         ));
     }
-    let mesh = read_mesh_file(path, &Default::default()).map_err(|e| named(e.message))?;
-    if mesh.face_count() == 0 {
+    // a LOD stage's levels (`tessd lod`'s schemas): the first shown, `]` steps to the others
+    let mut levels = if crate::ops::mesh_arrays::is_usd_input(path) {
+        let stage = tessd_usd::read_usda(path).map_err(|e| named(e.to_string()))?;
+        let panels = stage.variant_panels().map_err(|e| named(e.to_string()))?;
+        panels.into_iter().map(|(_, m)| m).collect()
+    } else {
+        vec![read_mesh_file(path, &Default::default()).map_err(|e| named(e.message))?]
+    };
+    if levels.is_empty() || levels[0].face_count() == 0 {
         return Err(named("the mesh has no faces to draw".into()));
     }
-    Ok(Prepared::Mesh(path.to_path_buf(), Box::new(mesh)))
+    let mesh = levels.remove(0);
+    Ok(Prepared::Mesh(path.to_path_buf(), Box::new(mesh), levels))
 }
 
 /// Puts a prepared mesh or B-Rep part on the device (a `.tsc` is the refiner's).
@@ -124,8 +132,12 @@ pub fn prepare(path: &Path) -> Result<Prepared> {
 /// The device refuses the buffers.
 pub fn upload(prepared: Prepared, renderer: &Renderer) -> Result<Item> {
     match prepared {
-        Prepared::Mesh(path, mesh) => {
+        Prepared::Mesh(path, mesh, levels) => {
             let mut item = MeshItem::new(path, *mesh);
+            if !levels.is_empty() {
+                // a stage's own levels have no partition to show
+                item.lods = Some(levels.into_iter().map(|m| (m, Vec::new())).collect());
+            }
             let cage = item.cage.clone();
             item.show(&cage, renderer)?;
             Ok(Item::Mesh(Box::new(item)))
@@ -170,7 +182,7 @@ impl MeshItem {
         cells: Option<&[tessd_simplify::Cell]>,
         renderer: &Renderer,
     ) -> Result<()> {
-        self.partition = match cells {
+        self.partition = match cells.filter(|c| !c.is_empty()) {
             Some(c) => {
                 let colored = super::partition_colors::colored_by_cell(&self.cage, c);
                 Some(renderer.upload(&Scene::from_mesh(&colored))?)
