@@ -188,7 +188,7 @@ def test_key_w_changes_the_f12_screenshot(viewer, tmp_path, shared_data):
     shutil.copy(shared_data / "mesh" / "spot_control_mesh.obj", mesh)
     v = viewer([mesh, "--size", "320x240"])
     v.wait_line(r"^view: adapter ")
-    time.sleep(0.3)
+    time.sleep(0.5)  # a frame drawn for F12 to save
     v.key("F12")
     v.wait_line(r"^view: screenshot .*spot_control_mesh_view_001\.png$")
     v.key("w")
