@@ -47,15 +47,6 @@ impl Domain {
         }
     }
 
-    /// How many rows an attribute of this domain has on `mesh`.
-    pub fn rows_on(self, mesh: &crate::Mesh) -> usize {
-        match self {
-            Domain::Point => mesh.vertex_count(),
-            Domain::Corner => mesh.face_indices.len(),
-            Domain::Face => mesh.face_count(),
-        }
-    }
-
     /// Splits a protocol name such as `"point:weight"` into its domain and name; `None` when
     /// it has none of the three prefixes.
     pub fn split_label(label: &str) -> Option<(Domain, &str)> {

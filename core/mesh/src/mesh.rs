@@ -6,7 +6,7 @@
 //! what subdivision needs for UV seams.
 
 use crate::MeshError;
-use crate::attribute::Attribute;
+use crate::attribute::{Attribute, Domain};
 use crate::block_scan::{first_at_or_above, first_non_finite, steps_at_least};
 
 /// A face-varying attribute: `values`, and for each face corner (same order as
@@ -75,6 +75,18 @@ impl Default for Mesh {
             group_names: Vec::new(),
             attributes: Vec::new(),
             sharp_edges: Vec::new(),
+        }
+    }
+}
+
+impl Domain {
+    /// How many rows an attribute of this domain has on `mesh` (here, beside the mesh it
+    /// counts, so that `attribute.rs` needs nothing of the mesh).
+    pub fn rows_on(self, mesh: &Mesh) -> usize {
+        match self {
+            Domain::Point => mesh.vertex_count(),
+            Domain::Corner => mesh.face_indices.len(),
+            Domain::Face => mesh.face_count(),
         }
     }
 }

@@ -6,56 +6,12 @@
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Instant;
-use tessd_codec::{Tsc, ViewMesh, ViewSession};
+use tessd_codec::{Tsc, ViewSession};
 use tessd_mesh::Mesh;
-use tessd_simplify::{Cell, Method, SimplifyOptions};
+use tessd_simplify::{Method, SimplifyOptions};
 
+pub use super::done::Done;
 use super::subdivision::{self, Device, Job};
-
-/// What background work hands back to the render thread.
-pub enum Done {
-    /// Item `item` subdivided `level` times.
-    Subdivided {
-        /// The item.
-        item: usize,
-        /// The level.
-        level: u32,
-        /// The refined mesh.
-        mesh: Box<Mesh>,
-        /// The scheme's name.
-        scheme: &'static str,
-        /// Where the apply phase ran (`CPU`, `GPU`).
-        device: &'static str,
-        /// Whether the topology phase ran for this request (not for a frame of the same cage).
-        topology_built: bool,
-        /// The frame of `--frames` refined (none: the cage).
-        frame: Option<usize>,
-        /// Topology (when built) and apply, ms.
-        ms: f64,
-    },
-    /// A subdivision request superseded by a newer one for the same item.
-    Skipped,
-    /// Item `item`'s LOD chain (coarser and coarser), with each level's partition cells.
-    Lods {
-        /// The item.
-        item: usize,
-        /// The levels.
-        levels: Vec<(Mesh, Vec<Cell>)>,
-        /// Time, ms.
-        ms: f64,
-    },
-    /// A refinement of item `item` for the camera it was asked for.
-    Refined {
-        /// The item.
-        item: usize,
-        /// The mesh to show and what was read.
-        view: Box<ViewMesh>,
-        /// Decode time, ms.
-        ms: f64,
-    },
-    /// Work that failed, with why.
-    Failed(String),
-}
 
 /// The channel background work answers on, and how much of it is still running.
 pub struct Background {

@@ -9,6 +9,7 @@
 
 pub mod app;
 pub mod background;
+pub mod done;
 pub mod hud;
 pub mod items;
 pub mod navigation;

@@ -12,7 +12,7 @@ use std::time::Instant;
 use tessd_mesh::Mesh;
 use tessd_subdiv::{Refiner, Scheme, SubdivOptions};
 
-use super::background::Done;
+use super::done::Done;
 
 /// Where the apply phase runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
