@@ -9,7 +9,8 @@
 //! masks but is still carried down (decremented per level) so that the refined mesh keeps its
 //! creases.
 
-use crate::catmull_clark::{self, Boundary};
+use crate::boundary::Boundary;
+use crate::catmull_clark;
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};
 use crate::topology::{Faces, Topology};

@@ -28,7 +28,7 @@
 //! `(x, y)`. Weights still sum to 1, linear data are reproduced exactly (the grid stays a
 //! lattice up to its border), and the two sides of a crease never read each other.
 
-use crate::catmull_clark::Boundary;
+use crate::boundary::Boundary;
 use crate::crease_rules::{self, Phase, Rule};
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};

@@ -15,32 +15,13 @@
 //! between a level and the next, the point blends the two masks by the fractional sharpness
 //! (semi-sharp creases, integer and fractional).
 
+use crate::boundary::Boundary;
 use crate::halfedges::Halfedges;
 use crate::level::table_for;
+use crate::sharpness::decrement;
 use crate::stencil::StencilTable;
-use crate::topology::{Faces, INFINITELY_SHARP, NONE, Topology};
+use crate::topology::{Faces, NONE, Topology};
 use rayon::prelude::*;
-
-/// How boundary vertices of one face (valence 2) behave, as OpenSubdiv's
-/// `VTX_BOUNDARY_EDGE_ONLY` / `VTX_BOUNDARY_EDGE_AND_CORNER` and Blender's "Smooth, keep
-/// corners" option.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Boundary {
-    /// Boundary curves are smooth (B-spline) everywhere, corners included.
-    #[default]
-    EdgeOnly,
-    /// Boundary vertices with a single face are corners: they keep their position.
-    EdgeAndCorner,
-}
-
-/// Sharpness one level down (uniform creasing: minus one, infinite stays infinite).
-pub fn decrement(s: f32) -> f32 {
-    if s >= INFINITELY_SHARP {
-        INFINITELY_SHARP
-    } else {
-        (s - 1.0).max(0.0)
-    }
-}
 
 /// A vertex's rule, by how many sharp edges meet there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]

@@ -3,10 +3,12 @@
 //! and fractional blending, the same rules [`crate::catmull_clark`] applies (paper 002,
 //! section 1.4.7 surveys the schemes; the sharpness rules are OpenSubdiv's).
 //!
-//! Kept apart from `catmull_clark.rs` so that its internals can change freely; only its
-//! public [`Boundary`] and [`decrement`] are read here.
+//! Kept apart from `catmull_clark.rs` so that its internals can change freely; the shared
+//! vocabulary it reads ([`Boundary`], [`decrement`]) lives below both, in [`crate::boundary`]
+//! and [`crate::sharpness`].
 
-use crate::catmull_clark::{Boundary, decrement};
+use crate::boundary::Boundary;
+use crate::sharpness::decrement;
 use crate::topology::Topology;
 
 /// Which level's sharpness a rule reads: where a rule changes between a level and the next,
@@ -166,8 +168,9 @@ pub fn split_creases(topo: &Topology) -> Vec<([u32; 2], f32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sharpness::INFINITELY_SHARP;
     use crate::test_meshes::hex_fan as fan;
-    use crate::topology::{Faces, INFINITELY_SHARP};
+    use crate::topology::Faces;
 
     #[test]
     fn edge_weights_follow_uniform_creasing() {

@@ -41,7 +41,7 @@
 
 use std::f64::consts::PI;
 
-use crate::catmull_clark::Boundary;
+use crate::boundary::Boundary;
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};
 use crate::topology::{Faces, NONE, Topology};

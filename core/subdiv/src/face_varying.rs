@@ -35,11 +35,13 @@
 //! Like Blender's converter, corners of one vertex with equal UVs are one value (see
 //! [`weld_by_value`]); Blender welds within 1e-4 while we weld exact equals only.
 
-use crate::catmull_clark::{self, Boundary, decrement};
+use crate::boundary::Boundary;
+use crate::catmull_clark;
 use crate::error::SubdivError;
 use crate::level::{RowBuilder, table_for};
+use crate::sharpness::{INFINITELY_SHARP, decrement};
 use crate::stencil::StencilTable;
-use crate::topology::{Faces, INFINITELY_SHARP, NONE, Topology};
+use crate::topology::{Faces, NONE, Topology};
 use crate::{Refiner, Scheme, SubdivOptions};
 use tessd_mesh::{FaceVarying, Mesh};
 

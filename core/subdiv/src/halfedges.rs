@@ -9,7 +9,8 @@
 //! is sorted once (through [`Topology::build`]) to pair its corners into twins.
 
 use crate::error::SubdivError;
-use crate::topology::{Faces, INFINITELY_SHARP, NONE, Topology};
+use crate::sharpness::{INFINITELY_SHARP, decrement};
+use crate::topology::{Faces, NONE, Topology};
 use rayon::prelude::*;
 
 /// Elements per parallel task: each is a few loads and stores.
@@ -238,7 +239,7 @@ impl Halfedges {
             let c = self.edge_corner[e];
             edge_corner[2 * e] = 4 * c;
             edge_corner[2 * e + 1] = 4 * self.next(c) + 3;
-            let s = crate::catmull_clark::decrement(self.edge_sharpness[e]);
+            let s = decrement(self.edge_sharpness[e]);
             edge_sharpness[2 * e] = s;
             edge_sharpness[2 * e + 1] = s;
         }
@@ -306,7 +307,7 @@ impl Halfedges {
         );
         let mut out = Vec::new();
         for e in 0..self.edge_count() as u32 {
-            let s = crate::catmull_clark::decrement(self.edge_sharpness[e as usize]);
+            let s = decrement(self.edge_sharpness[e as usize]);
             if s > 0.0 && !self.is_boundary(e) {
                 let c = self.edge_corner[e as usize];
                 let (a, b) = (self.vert(c), self.vert(self.next(c)));

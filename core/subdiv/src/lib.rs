@@ -8,6 +8,7 @@
 
 pub mod attributes;
 pub mod bilinear;
+pub mod boundary;
 pub mod butterfly;
 pub mod catmull_clark;
 pub mod crease_rules;
@@ -19,6 +20,7 @@ pub mod level;
 pub mod loop_scheme;
 pub mod normals;
 pub mod sharp_edges;
+pub mod sharpness;
 pub mod sqrt3;
 pub mod stencil;
 pub mod topology;
@@ -26,7 +28,7 @@ pub mod topology;
 #[cfg(test)]
 mod test_meshes;
 
-pub use catmull_clark::Boundary;
+pub use boundary::Boundary;
 pub use error::SubdivError;
 pub use face_varying::UvInterpolation;
 use halfedges::Halfedges;

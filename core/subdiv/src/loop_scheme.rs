@@ -15,7 +15,7 @@
 //!   or more (or a corner) stays put; semi-sharp creases lose one per level and blend by their
 //!   fractional sharpness, as in [`crate::catmull_clark`] (rules in [`crate::crease_rules`]).
 
-use crate::catmull_clark::Boundary;
+use crate::boundary::Boundary;
 use crate::crease_rules::{self, Phase, Rule};
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};

@@ -16,7 +16,8 @@
 
 use std::collections::HashSet;
 
-use crate::topology::{INFINITELY_SHARP, edge_key};
+use crate::sharpness::INFINITELY_SHARP;
+use crate::topology::edge_key;
 use rayon::prelude::*;
 use tessd_mesh::{FaceVarying, Mesh};
 

@@ -32,10 +32,11 @@
 
 use std::f64::consts::PI;
 
-use crate::catmull_clark::{Boundary, decrement};
+use crate::boundary::Boundary;
 use crate::doo_sabin::edge_sides;
 use crate::error::SubdivError;
 use crate::level::{Level, RowBuilder, table_for};
+use crate::sharpness::decrement;
 use crate::topology::{Faces, NONE, Topology};
 
 /// `αₙ`, the share of the neighbours' average in a relaxed vertex of valence `n`.

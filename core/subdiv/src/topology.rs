@@ -4,12 +4,9 @@
 //! Built by one sort of the face corners' edge keys, so it costs O(corners log corners) and a
 //! few flat arrays, no hashing.
 
-use crate::catmull_clark::Boundary;
+use crate::boundary::Boundary;
 use crate::error::SubdivError;
-
-/// Sharpness at or above which an edge is infinitely sharp (OpenSubdiv's
-/// `Sdc::Crease::SHARPNESS_INFINITE`); boundary edges get it.
-pub const INFINITELY_SHARP: f32 = 10.0;
+use crate::sharpness::INFINITELY_SHARP;
 
 /// A polygon mesh's faces, without positions: what refinement changes level to level.
 #[derive(Clone, Debug, Default, PartialEq)]
