@@ -63,6 +63,21 @@ pub fn brep_layout(device: &wgpu::Device, visibility: wgpu::ShaderStages) -> wgp
     })
 }
 
+/// Bind group 0 of the passes that draw the frame's grid: the shading block, the patches,
+/// the cells and the grid vertices.
+pub(crate) fn grid_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[
+            uniform(0, vf),
+            storage(1, true, vf),
+            storage(2, true, vf),
+            storage(3, true, vf),
+        ],
+    })
+}
+
 /// A bind group of `buffers` at bindings 0, 1, ... of `layout`.
 pub fn bind_buffers(
     device: &wgpu::Device,

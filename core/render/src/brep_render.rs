@@ -16,21 +16,22 @@
 //! hundred microseconds of submission overhead per step, against milliseconds of work).
 
 use crate::bindings::read_words;
-use crate::brep_scene::{BrepScene, GpuBrep};
+use crate::brep_scene::{BrepScene, GpuBrep, brep_group};
 use crate::crack_detect::{CrackDetectPass, count_flags, default_d_min};
 use crate::frame_buffers::{FrameBuffers, GatherPass};
 use crate::image_fill::ImageFillPass;
 use crate::object_fill::ObjectFillPass;
-use crate::patch_tessellation::{FrameTessellation, PIXEL_ACCURACY, TessellationPass, brep_group};
+use crate::patch_tessellation::{FrameTessellation, PIXEL_ACCURACY, TessellationPass};
 use crate::ray_cast::RayCastPass;
-use crate::ray_cast::RaySeeds;
+use crate::ray_seeds::RaySeeds;
+use crate::step_timing::{StepTimings, step};
 use crate::targets::Targets;
 use crate::triangle_classification::{CellDecision, ClassificationPass};
 use crate::trimmed_surface::TrimmedSurfacePass;
 use crate::{Camera, Frame, RenderError, RenderSettings, bindings, check_size};
 use std::sync::OnceLock;
-use std::time::{Duration, Instant};
-use tessd_gpu::{ErrorScopes, GpuContext, GpuError};
+use std::time::Instant;
+use tessd_gpu::{ErrorScopes, GpuContext};
 
 /// How cracks between faces are handled (paper 001 §3.3–3.4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -60,43 +61,6 @@ impl Cracks {
     /// The mode named `s`.
     pub fn parse(s: &str) -> Option<Cracks> {
         Cracks::ALL.into_iter().find(|m| m.name() == s)
-    }
-}
-
-/// Wall times of one B-Rep frame by step (paper 001 table 1's rows; zero for steps not run).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StepTimings {
-    /// Factors on the CPU, grid evaluation and triangle classification on the GPU.
-    pub tessellation: Duration,
-    /// Step 1: the trimmed raster pass and the gather into the per-pixel buffers.
-    pub initial: Duration,
-    /// Step 2.
-    pub crack_detection: Duration,
-    /// Image-space filling.
-    pub image_fill: Duration,
-    /// Step 3: the depth mask.
-    pub depth_mask: Duration,
-    /// Step 4: ray casting at the crack pixels.
-    pub object_fill: Duration,
-    /// Step 5: the composite.
-    pub composite: Duration,
-    /// Full-scene ray casting (instead of steps 1–5).
-    pub ray_cast: Duration,
-    /// Reading the buffers back.
-    pub readback: Duration,
-}
-
-impl StepTimings {
-    /// The frame's time on the device (everything but the read-back).
-    pub fn frame(&self) -> Duration {
-        self.tessellation
-            + self.initial
-            + self.crack_detection
-            + self.image_fill
-            + self.depth_mask
-            + self.object_fill
-            + self.composite
-            + self.ray_cast
     }
 }
 
@@ -374,29 +338,4 @@ fn check_frame(
         )));
     }
     Ok(())
-}
-
-/// Records one step with `record`, submits it, waits for the device, and adds the wall time
-/// to `time`.
-pub(crate) fn step<T>(
-    gpu: &GpuContext,
-    time: &mut Duration,
-    record: impl FnOnce(&mut wgpu::CommandEncoder) -> T,
-) -> Result<T, RenderError> {
-    let start = Instant::now();
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("step"),
-        });
-    let out = record(&mut encoder);
-    let index = gpu.queue.submit([encoder.finish()]);
-    gpu.device
-        .poll(wgpu::PollType::Wait {
-            submission_index: Some(index),
-            timeout: None,
-        })
-        .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-    *time += start.elapsed();
-    Ok(out)
 }

@@ -13,9 +13,9 @@
 use crate::RenderError;
 use crate::bindings;
 use crate::camera::{Bounds, Vec3};
-use crate::ray_cast::RaySeeds;
+use crate::classification_level::classification_level;
+use crate::ray_seeds::RaySeeds;
 use crate::surface_pack::SurfacePack;
-use crate::triangle_classification::classification_level;
 use tessd_brep::{Document, Face};
 use tessd_gpu::ErrorScopes;
 use tessd_trim::TrimStructure;
@@ -297,4 +297,25 @@ impl GpuBrep {
         })
         .collect()
     }
+}
+
+/// The bind group 1 of the B-Rep passes for `brep` (layout [`bindings::brep_layout`]).
+pub fn brep_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    brep: &GpuBrep,
+) -> wgpu::BindGroup {
+    bindings::bind_buffers(
+        device,
+        "brep buffers",
+        layout,
+        &[
+            &brep.surf_headers,
+            &brep.surf_words,
+            &brep.trim_headers,
+            &brep.trim_nodes,
+            &brep.trim_curves,
+            &brep.trim_lines,
+        ],
+    )
 }

@@ -46,16 +46,20 @@ pub mod bindings;
 pub mod brep_render;
 pub mod brep_scene;
 pub mod camera;
+pub mod classification_level;
 pub mod crack_detect;
 pub mod frame_buffers;
 pub mod image;
 pub mod image_fill;
+pub mod newton;
 pub mod object_fill;
 pub mod panels;
 pub mod patch_tessellation;
 pub mod present;
 pub mod ray_cast;
+pub mod ray_seeds;
 pub mod scene;
+pub mod step_timing;
 pub mod surface;
 pub mod surface_pack;
 pub mod targets;
@@ -65,10 +69,11 @@ pub mod trimmed_surface;
 #[cfg(test)]
 mod wgsl_check;
 
-pub use brep_render::{BrepReport, Cracks, GpuBrepScene, StepTimings};
+pub use brep_render::{BrepReport, Cracks, GpuBrepScene};
 pub use brep_scene::BrepScene;
 pub use camera::{Bounds, Camera, UpAxis, View};
 pub use scene::Scene;
+pub use step_timing::StepTimings;
 pub use trim_walk::TrimWalk;
 
 use std::time::{Duration, Instant};

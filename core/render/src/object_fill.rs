@@ -7,13 +7,13 @@
 //! depth-and-colour word: the atomic min runs on a depth-and-face key, and a second pass over
 //! the winning faces' fragments writes the winners' (u, v), depth and colour.
 
-use crate::brep_render::{StepTimings, step};
 use crate::camera::Vec3;
 use crate::frame_buffers::FrameBuffers;
+use crate::newton::NEWTON_TOLERANCE;
 use crate::patch_tessellation::GpuTessellation;
+use crate::step_timing::{StepTimings, step};
 use crate::surface::Params;
 use crate::targets::DEPTH_FORMAT;
-use crate::trimmed_surface::grid_layout;
 use crate::{Camera, RenderError, RenderSettings, bindings};
 use bytemuck::{Pod, Zeroable};
 use tessd_gpu::GpuContext;
@@ -31,10 +31,6 @@ pub const FILL_SHADER: &str = patch_grid_shader!(
 
 /// The WGSL of step 5.
 pub const COMPOSITE_SHADER: &str = include_str!("../../../shaders/object_fill_composite.wgsl");
-
-/// Newton's convergence tolerance relative to the part's box diagonal (paper 001 figure 18
-/// uses 0.001 mm on parts of some 100 mm: 10⁻⁵).
-pub const NEWTON_TOLERANCE: f64 = 1e-5;
 
 /// `Mask` of step 3 and `Composite` of step 5 (16 bytes).
 #[repr(C)]
@@ -132,7 +128,7 @@ impl ObjectFillPass {
             wgpu::PrimitiveTopology::TriangleList,
             (true, wgpu::CompareFunction::Always),
         );
-        let grid_layout = grid_layout(device, "object_fill grid");
+        let grid_layout = bindings::grid_layout(device, "object_fill grid");
         let fill_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("object_fill"),
             entries: &[

@@ -20,7 +20,7 @@
 //! 2^[`MAX_LEVEL`]. Faces whose box lies outside the view frustum get no grid.
 
 use crate::bindings::{self, dispatch_1d};
-use crate::brep_scene::{BrepScene, GpuBrep, MAX_LEVEL};
+use crate::brep_scene::{BrepScene, MAX_LEVEL};
 use crate::camera::{Camera, Vec3};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -337,27 +337,6 @@ impl TessellationPass {
             vertex_count: frame.vertices,
         }
     }
-}
-
-/// The bind group 1 of the B-Rep passes for `brep`.
-pub fn brep_group(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    brep: &GpuBrep,
-) -> wgpu::BindGroup {
-    bindings::bind_buffers(
-        device,
-        "brep buffers",
-        layout,
-        &[
-            &brep.surf_headers,
-            &brep.surf_words,
-            &brep.trim_headers,
-            &brep.trim_nodes,
-            &brep.trim_curves,
-            &brep.trim_lines,
-        ],
-    )
 }
 
 #[cfg(test)]

@@ -25,26 +25,11 @@ pub struct TrimmedSurfacePass {
     pipeline: wgpu::RenderPipeline,
 }
 
-/// Bind group 0 of the passes that draw the frame's grid: the shading block, the patches,
-/// the cells and the grid vertices.
-pub(crate) fn grid_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-    let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &[
-            bindings::uniform(0, vf),
-            bindings::storage(1, true, vf),
-            bindings::storage(2, true, vf),
-            bindings::storage(3, true, vf),
-        ],
-    })
-}
-
 impl TrimmedSurfacePass {
     /// Compiles the shader; `brep` is the layout of bind group 1.
     pub fn new(device: &wgpu::Device, brep: &wgpu::BindGroupLayout) -> TrimmedSurfacePass {
         let module = bindings::shader_module(device, "trimmed_surface.wgsl", SHADER);
-        let layout = grid_layout(device, "trimmed_surface");
+        let layout = bindings::grid_layout(device, "trimmed_surface");
         let pipeline = bindings::render_pipeline(
             device,
             "trimmed_surface",

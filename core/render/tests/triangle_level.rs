@@ -12,8 +12,8 @@ use common::{PARTS, doc, renderer};
 
 use tessd_render::BrepScene;
 use tessd_render::brep_scene::MAX_CLASSIFICATION_LEVEL;
+use tessd_render::classification_level::{classification_level, decided_share};
 use tessd_render::patch_tessellation::FrameTessellation;
-use tessd_render::triangle_classification::{classification_level, decided_share};
 use tessd_trim::TrimStructure;
 
 #[test]
