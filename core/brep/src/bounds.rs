@@ -5,8 +5,9 @@
 //! larger than its trimmed region). Relative tolerances ("0.05 % of the part") are taken of
 //! its diagonal.
 
-use crate::model::{Curve, Document, Face, Point2, Point3};
+use crate::model::{Curve, Document, Face};
 use crate::vector::Point;
+use crate::vector::{Point2, Point3};
 
 /// Grid intervals per parameter direction over a face's `bounds` (17 × 17 points, those inside
 /// the trims kept).

@@ -9,8 +9,7 @@
 //! from `Σ_{j ≤ i} mults_j − m_0` on (modulo n), as a non-periodic curve uses them from
 //! `Σ_{j ≤ i} mults_j − degree − 1`.
 
-use crate::model::Point3;
-use crate::vector::Point;
+use crate::vector::{Point, Point3};
 use thiserror::Error;
 
 /// The highest degree accepted (OCP's `Geom_BSplineCurve::MaxDegree`), so that basis values

@@ -22,6 +22,7 @@
 pub mod bounds;
 pub mod bspline;
 pub mod curve;
+pub mod knot_cache;
 pub mod model;
 pub mod occt;
 pub mod stats;
@@ -31,7 +32,7 @@ pub mod validate;
 pub mod vector;
 
 pub use bounds::BoundingBox;
-/// The point / vector types of the model ([`model::Point2`], [`model::Point3`]), and glam itself,
+/// The point / vector types of the model ([`vector::Point2`], [`vector::Point3`]), and glam itself,
 /// so dependents use the very version the document types are made of.
 pub use glam::{self, DVec2, DVec3};
 pub use model::{

@@ -2,9 +2,12 @@
 //! loops, shared edges, and the surface / curve types, tagged on `type`. The types are plain
 //! data mirroring the JSON one to one, so what the exporter writes is what the evaluators use;
 //! invariants are checked by [`crate::validate`], not by the types. Points and vectors are
-//! glam's [`glam::DVec2`] / [`glam::DVec3`] ([`Point2`], [`Point3`]), which glam's `serde`
+//! glam's [`glam::DVec2`] / [`glam::DVec3`] ([`Point2`], [`Point3`], in [`crate::vector`]), which glam's `serde`
 //! feature reads and writes as the plain `[u, v]` / `[x, y, z]` arrays of the format.
 
+use crate::bspline::KnotVector;
+use crate::knot_cache::KnotCache;
+use crate::vector::{Point2, Point3};
 use serde::{Deserialize, Serialize};
 
 /// The value of the document's `format` field.
@@ -12,12 +15,6 @@ pub const FORMAT: &str = "tessd-brep";
 
 /// The format version this crate reads and writes.
 pub const VERSION: u64 = 1;
-
-/// A point of the parameter plane, (u, v) or a 2D curve's point; written `[u, v]` in JSON.
-pub type Point2 = glam::DVec2;
-
-/// A point or vector of space, in the document's units; written `[x, y, z]` in JSON.
-pub type Point3 = glam::DVec3;
 
 /// A whole exchange document: a list of faces and, when the source has topology, the edges
 /// they share.
@@ -300,7 +297,7 @@ pub struct BSplineSurface {
     pub periodic_v: bool,
     /// The knot vectors built on first evaluation (not part of the format).
     #[serde(skip)]
-    pub cache: crate::surface::KnotCache,
+    pub cache: KnotCache,
 }
 
 /// A curve of the parameter plane (a trim's pcurve).
@@ -391,5 +388,5 @@ pub struct BSplineCurve<P> {
     pub periodic: bool,
     /// The knot vector built on first evaluation (not part of the format).
     #[serde(skip)]
-    pub cache: crate::surface::KnotCache<crate::bspline::KnotVector>,
+    pub cache: KnotCache<KnotVector>,
 }

@@ -3,9 +3,8 @@
 //! a face's normal is the surface's turned over when the face is `reversed`.
 
 use crate::bspline::{KnotVector, eval_surface, eval_surface_point, surface_fits};
-use crate::model::Point3;
 use crate::model::{BSplineSurface, Face, Frame, Surface};
-use crate::vector::combine;
+use crate::vector::{Point3, combine};
 
 /// A surface point with its first partial derivatives.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,44 +35,6 @@ fn radial(frame: &Frame, u: f64) -> (Point3, Point3) {
         combine(&[(c, frame.x_dir), (s, frame.y_dir)]),
         combine(&[(-s, frame.x_dir), (c, frame.y_dir)]),
     )
-}
-
-/// A B-spline's checked knot vectors (a surface's pair, a curve's one), built on the first
-/// evaluation and kept for every later one (evaluation is the tessellator's inner loop, and
-/// validation's: building them per point cost a fifth, resp. half, of their time). Equal
-/// whatever it holds, so B-splines still compare by their data; a clone starts empty, so a
-/// copy whose knots are then edited does not keep the original's.
-pub struct KnotCache<T = (KnotVector, KnotVector)>(Box<std::sync::OnceLock<Option<T>>>);
-
-impl<T> Default for KnotCache<T> {
-    fn default() -> Self {
-        KnotCache(Box::default())
-    }
-}
-
-impl<T> KnotCache<T> {
-    /// The cached value, built by `init` the first time.
-    pub fn get_or_init(&self, init: impl FnOnce() -> Option<T>) -> Option<&T> {
-        self.0.get_or_init(init).as_ref()
-    }
-}
-
-impl<T> Clone for KnotCache<T> {
-    fn clone(&self) -> Self {
-        KnotCache::default()
-    }
-}
-
-impl<T> PartialEq for KnotCache<T> {
-    fn eq(&self, _: &KnotCache<T>) -> bool {
-        true
-    }
-}
-
-impl<T> std::fmt::Debug for KnotCache<T> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("KnotCache")
-    }
 }
 
 impl BSplineSurface {

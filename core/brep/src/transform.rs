@@ -3,7 +3,8 @@
 //! far from the origin, where single-precision output loses the tolerance (issue 20, point 5),
 //! without changing anything else about it.
 
-use crate::model::{Curve, Curve3, Document, Point3, Surface};
+use crate::model::{Curve, Curve3, Document, Surface};
+use crate::vector::Point3;
 
 impl Document {
     /// The document moved by `d` (model units).

@@ -4,9 +4,9 @@
 
 use crate::bspline::{KnotError, KnotVector};
 use crate::model::{
-    BSplineCurve, BSplineSurface, Curve, Document, FORMAT, Frame, Point2, Surface, VERSION,
+    BSplineCurve, BSplineSurface, Curve, Document, FORMAT, Frame, Surface, VERSION,
 };
-use crate::vector::Point;
+use crate::vector::{Point, Point2};
 use std::collections::{HashMap, HashSet};
 use std::fmt;
 use thiserror::Error;

@@ -15,6 +15,12 @@ use glam::{DVec2, DVec3};
 use std::fmt::Debug;
 use std::ops::{Add, Mul, Sub};
 
+/// A point of the parameter plane, (u, v) or a 2D curve's point; written `[u, v]` in JSON.
+pub type Point2 = glam::DVec2;
+
+/// A point or vector of space, in the document's units; written `[x, y, z]` in JSON.
+pub type Point3 = glam::DVec3;
+
 /// A point or vector of the parameter plane ([`DVec2`]) or of space ([`DVec3`]): glam's
 /// operators, plus what a dimension-generic evaluator needs.
 pub trait Point:

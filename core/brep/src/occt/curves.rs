@@ -17,8 +17,9 @@ use std::f64::consts::{PI, TAU};
 use super::geometry::RawCurve;
 use super::locations::{Trsf, normalized};
 use super::segment::{periodic_segment, piece_poles};
-use crate::model::{BSplineCurve, Curve, Curve2, Curve3, Frame, Point2, Point3};
+use crate::model::{BSplineCurve, Curve, Curve2, Curve3, Frame};
 use crate::vector::Point;
+use crate::vector::{Point2, Point3};
 
 /// `(curve, t0, t1)`: `raw` on `[t0, t1]` as a format curve with the same parameter, or why it
 /// has none.

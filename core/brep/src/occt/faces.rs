@@ -20,7 +20,8 @@ use super::locations::LocId;
 use super::surfaces::{Placed, place};
 use super::topology::{Data, EdgeRep, Kind, Orient};
 use super::{OcctError, syntax, unsupported};
-use crate::model::{Curve, Curve2, Face, Loop, Point2, Trim};
+use crate::model::{Curve, Curve2, Face, Loop, Trim};
+use crate::vector::Point2;
 
 /// Gaps between consecutive trims above this fraction of the bounds' size get a bridge
 /// (document.py `GAP_BRIDGE`).

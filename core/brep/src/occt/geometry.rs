@@ -12,8 +12,9 @@
 use super::OcctError;
 use super::lexer::Lexer;
 use super::locations::normalized;
-use crate::model::{BSplineCurve, BSplineSurface, Point2, Point3};
+use crate::model::{BSplineCurve, BSplineSurface};
 use crate::vector::Point;
+use crate::vector::{Point2, Point3};
 
 /// Records nest (trimmed, offset, extrusion, revolution): deeper than this is refused rather
 /// than recursed into.

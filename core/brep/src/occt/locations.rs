@@ -12,8 +12,8 @@ use std::collections::{HashMap, HashSet};
 
 use super::lexer::Lexer;
 use super::{OcctError, OcctErrorKind};
-use crate::model::Point3;
 use crate::vector::Point;
+use crate::vector::Point3;
 use glam::DMat3;
 
 /// An interned location (0 is the identity).

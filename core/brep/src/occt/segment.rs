@@ -207,7 +207,8 @@ pub(crate) fn periodic_segment<P: Point>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{Curve, Point2};
+    use crate::model::Curve;
+    use crate::vector::Point2;
 
     fn periodic_circle_like() -> BSplineCurve<Point2> {
         // A periodic rational quadratic: 4 poles on a square, weights 1, 0.5, 1, 0.5.
