@@ -12,8 +12,9 @@
 //! 2. [`triangulate`] — optional fan triangulation of polygons;
 //! 3. a partition of the bounding volume — regular (`grid_cells.rs`: a dense table of
 //!    4 × 4 × 4-cell bricks; `grid_partition.rs`'s hash where the box holds too many bricks), or
-//!    adaptive binary splitting driven by a quality or a complexity goal
-//!    (`adaptive_partition.rs`, sections 3–5);
+//!    adaptive binary splitting driven by a quality goal (`adaptive_quality.rs`) or a
+//!    complexity goal (`adaptive_complexity.rs`) over what both share (`adaptive_partition.rs`,
+//!    sections 3–5);
 //! 4. a representative per cell — weighted barycentre or heaviest vertex (the paper), or the
 //!    quadric minimiser (`representative.rs`, `quadric.rs`; Lindstrom 2000, every cluster's
 //!    quadric summed in one pass over the faces). The grid streams its sums into per-cluster
@@ -53,7 +54,9 @@
 //! ```
 #![warn(missing_docs)]
 
+mod adaptive_complexity;
 mod adaptive_partition;
+mod adaptive_quality;
 mod area_vector;
 mod attributes;
 mod blocks;
