@@ -25,6 +25,7 @@ mod atomic;
 mod obj;
 mod off;
 mod ply;
+mod ply_write;
 mod source;
 mod stl;
 pub mod stream;
@@ -290,7 +291,7 @@ fn write_named(
     let mut w = BufWriter::with_capacity(source::BUF_SIZE, w);
     match format {
         Format::Obj => obj::write(mesh, &mut w, f64_positions).map_err(io_err)?,
-        Format::Ply => ply::write(mesh, &mut w, f64_positions).map_err(io_err)?,
+        Format::Ply => ply_write::write(mesh, &mut w, f64_positions).map_err(io_err)?,
         Format::Stl => stl::write(mesh, &mut w, name)?,
         Format::Off => off::write(mesh, &mut w, f64_positions).map_err(io_err)?,
     }
