@@ -1,27 +1,15 @@
 //! Helpers several operations share: typed parameters, USD stage options, writing a mesh to
-//! the format its path names, and the USD writer's errors.
+//! the format its path names.
 
-use super::mesh_arrays::{admit_mesh, mesh_error, read_mesh_file, read_options};
+use super::library_errors::{mesh_error, usd_error};
+use super::mesh_arrays::{admit_mesh, read_mesh_file, read_options};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::error::OpError;
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::Request;
 use tessd_mesh::Mesh;
 use tessd_usd::{MeshPrimOptions, StageOptions, UpAxis};
-
-/// Maps a USD writer or reader error onto the protocol's codes (a stage that cannot be read
-/// is `invalid_mesh`, a binary crate file `unsupported`).
-pub fn usd_error(e: tessd_usd::UsdError) -> OpError {
-    let code = match e.code() {
-        "invalid_mesh" => ErrorCode::InvalidMesh,
-        "too_large" => ErrorCode::TooLarge,
-        "io" => ErrorCode::Io,
-        "unsupported" => ErrorCode::Unsupported,
-        _ => ErrorCode::InvalidRequest,
-    };
-    OpError::new(code, e.to_string())
-}
 
 /// Whether `path` names a USD stage (`.usda`, any case).
 pub fn is_usda(path: &Path) -> bool {
@@ -357,6 +345,7 @@ pub fn significant(x: f64) -> String {
 mod tests {
     use super::*;
     use serde_json::json;
+    use tessd_ipc::error::ErrorCode;
 
     #[test]
     fn amounts() {

@@ -3,7 +3,7 @@
 //! (docs/protocol.md, "Mesh arrays": also the generic `point:` / `corner:` / `face:`
 //! attributes and `sharp_edges`), and results as arrays or a written file.
 
-use super::common::usd_error;
+use super::library_errors::{mesh_error, usd_error};
 use std::path::{Path, PathBuf};
 use tessd_ipc::arrays::{Arrays, DType, Element, OwnedArray, TakenArray, TypedView};
 use tessd_ipc::error::{ErrorCode, OpError};
@@ -11,38 +11,7 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::Request;
 use tessd_mesh::attribute::{check_components, check_name, check_rows};
 use tessd_mesh::io::ReadOptions;
-use tessd_mesh::{Attribute, Crease, Domain, FaceVarying, Mesh, MeshError};
-
-/// Maps a mesh-crate error onto the protocol's codes. An unknown extension's message lists
-/// what tessd reads and writes, `.usda` stages included, and says that binary USD is not one
-/// of them.
-pub fn mesh_error(e: MeshError) -> OpError {
-    let code = match e.code() {
-        "too_large" => ErrorCode::TooLarge,
-        "unsupported" => ErrorCode::Unsupported,
-        "io" => ErrorCode::Io,
-        "cancelled" => ErrorCode::Cancelled,
-        _ => ErrorCode::InvalidMesh,
-    };
-    let mut message = e.to_string();
-    if let MeshError::Unsupported(m) = &e
-        && m.ends_with(tessd_mesh::io::EXPECTED_EXTENSIONS)
-    {
-        let binary_usd = ["'.usdc'", "'.usdz'", "'.usd'"]
-            .iter()
-            .any(|x| m.to_ascii_lowercase().contains(x));
-        let head = &m[..m.len() - tessd_mesh::io::EXPECTED_EXTENSIONS.len()];
-        message = format!("{head}{TESSD_EXTENSIONS}");
-        if binary_usd {
-            message += "; binary USD (.usdc, .usdz, .usd) is not supported: use .usda, USD's \
-                        text format (usdcat converts one into the other)";
-        }
-    }
-    OpError::new(code, message)
-}
-
-/// The mesh files tessd reads and writes, as an unknown extension's message lists them.
-pub const TESSD_EXTENSIONS: &str = "expected .obj, .ply, .stl, .off or .usda (a USD stage)";
+use tessd_mesh::{Attribute, Crease, Domain, FaceVarying, Mesh};
 
 fn invalid(message: String) -> OpError {
     OpError::new(ErrorCode::InvalidMesh, message)

@@ -7,6 +7,7 @@ pub mod common;
 pub mod compare;
 pub mod debug_echo;
 pub mod debug_sleep;
+pub mod library_errors;
 pub mod lod;
 pub mod mesh_arrays;
 pub mod mesh_convert;

@@ -8,7 +8,8 @@
 //! Parameters are described in docs/protocol.md ("render").
 
 use super::brep_load::{brep_error, is_brep_path, request_brep};
-use super::common::{bool_param, stem, u64_param, usd_error};
+use super::common::{bool_param, stem, u64_param};
+use super::library_errors::usd_error;
 use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file, read_options};
 use super::tessellate::parse_tolerance;
 use serde_json::{Value, json};

@@ -8,7 +8,8 @@ use super::common::{
     Amount, as_u64, bool_param, check_mesh_output, check_stage_options, file_dropped, parse_amount,
     stem, write_mesh_file,
 };
-use super::mesh_arrays::{input_mesh, mesh_error, mesh_to_arrays, output_path};
+use super::library_errors::mesh_error;
+use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::{Value, json};
 use std::path::Path;
 use tessd_ipc::arrays::OwnedArray;

@@ -5,8 +5,9 @@
 
 use super::common::{
     as_u64, bool_param, check_mesh_output, check_stage_options, file_dropped, is_usda, merge_names,
-    stage_options, stem, usd_error, write_mesh_file,
+    stage_options, stem, write_mesh_file,
 };
+use super::library_errors::usd_error;
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
 use serde_json::json;
 use std::time::Instant;

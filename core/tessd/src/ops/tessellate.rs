@@ -12,8 +12,9 @@
 //! Parameters are described in docs/protocol.md ("tessellate").
 
 use super::brep_load::{brep_error, request_brep};
-use super::common::{check_mesh_output, is_usda, plain_number, stage_options_in, stem, usd_error};
-use super::mesh_arrays::{mesh_error, mesh_to_arrays, output_path};
+use super::common::{check_mesh_output, is_usda, plain_number, stage_options_in, stem};
+use super::library_errors::{mesh_error, usd_error};
+use super::mesh_arrays::{mesh_to_arrays, output_path};
 use serde_json::{Value, json};
 use std::path::Path;
 use tessd_brep::{Document, Units};
