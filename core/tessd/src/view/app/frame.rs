@@ -38,32 +38,35 @@ impl Viewer {
                 height: h,
             });
         }
-        let mut frame = Frame {
-            width: w,
-            height: h,
-            color: [38u8, 38, 42, 255].repeat((w * h) as usize),
-            depth: vec![f32::INFINITY; (w * h) as usize],
-            face_id: vec![0; (w * h) as usize],
-            uv: vec![[0.0; 2]; (w * h) as usize],
-        };
+        // the first item's frame is the picture; the others are composited over it by depth
+        let mut picture: Option<Frame> = None;
         let mut offset = 0u32;
-        let mut first = true;
         for item in &mut self.items {
-            if let Some(f) = item.render(
+            let drawn = item.render(
                 &self.renderer,
                 &self.nav.camera,
                 &self.settings,
                 self.cracks,
-            )? {
-                if first {
-                    frame = f;
-                    first = false;
-                } else {
-                    items::composite(&mut frame, &f, offset);
-                }
+            )?;
+            match (&mut picture, drawn) {
+                (None, Some(f)) => picture = Some(f),
+                (Some(p), Some(f)) => items::composite(p, &f, offset),
+                (_, None) => {}
             }
             offset += item_faces(item);
         }
+        // nothing drawn yet (a .tsc's first view on its way): the renderer's background
+        let frame = picture.unwrap_or_else(|| {
+            let n = (w * h) as usize;
+            Frame {
+                width: w,
+                height: h,
+                color: tessd_render::surface::BACKGROUND.repeat(n),
+                depth: vec![f32::INFINITY; n],
+                face_id: vec![0; n],
+                uv: vec![[0.0; 2]; n],
+            }
+        });
         let mut shown = frame.color.clone();
         self.last_frame = Some(frame);
         let mut lines = self.hud_lines();
