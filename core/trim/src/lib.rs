@@ -12,6 +12,8 @@
 //! - [`quadtree`], [`separate`], [`winding`]: the quadtree with ≤ 2 curves per leaf,
 //!   separating lines, coverage bits, the depth-13 failures and the level k_i (4, 5.2,
 //!   5.3, 6, table 4);
+//! - [`trim_source`]: what a classifier reads of either structure (node kinds and records,
+//!   curve references, [`TrimSource`]);
 //! - [`classify`]: the CPU classifier with the multiresolution stop (5.3), the reference for
 //!   the GPU one, and triangle classification (6);
 //! - [`pack`]: the flat layout for GPU storage buffers and its size (7, table 3);
@@ -44,14 +46,16 @@ pub mod quadratic_fit;
 pub mod quadtree;
 pub mod separate;
 pub mod tolerance;
+pub mod trim_source;
 pub mod winding;
 
 pub use bezier::Quadratic;
-pub use classify::{Classification, TrimSource};
+pub use classify::Classification;
 pub use multi_pack::{CellHandoff, FaceHeader, MultiPack};
 pub use pack::PackedTrim;
-pub use quadtree::{MAX_DEPTH, NodeKind, Quadtree};
+pub use quadtree::{MAX_DEPTH, Quadtree};
 pub use tolerance::UvTolerance;
+pub use trim_source::{NodeKind, TrimSource};
 
 use std::time::{Duration, Instant};
 use tessd_brep::Face;

@@ -19,8 +19,8 @@
 //! quadtree's normalised coordinates, in f32: `x = scale.x · s + origin.x`, likewise y.
 
 use crate::TrimStructure;
-use crate::classify::REF_INDEX_BITS;
 use crate::pack::{CURVE_FLOATS, LINE_WORDS, NODE_INDEX_BITS, PackedTrim};
+use crate::trim_source::REF_INDEX_BITS;
 
 /// [`FaceHeader::k_i`] of a face without a triangle level (section 6).
 pub const NO_LEVEL: u32 = u32::MAX;

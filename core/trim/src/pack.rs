@@ -12,7 +12,7 @@
 //!   domain's normalised coordinates (`x = m0 s + m1 t + m2`, `y = m3 s + m4 t + m5`);
 //! - `lines`: 5 words per two-curve leaf (section 5.2): the separating line a, b, c as f32
 //!   bits (`a s + b t + c ≥ 0`: first curve), then the two curve references
-//!   ([`crate::classify::curve_ref`]: index in bits 0–29, kind in bits 30–31 — 0 line,
+//!   ([`crate::trim_source::curve_ref`]: index in bits 0–29, kind in bits 30–31 — 0 line,
 //!   1 convex, 2 concave).
 //!
 //! The paper gives no word layout (section 7 only says the quadtree and the curves live in
@@ -24,9 +24,9 @@
 //! [`PackedTrim`] implements [`TrimSource`], so the CPU classifier runs on the packed form
 //! unchanged — which is how the layout is tested.
 
-use crate::classify::{NodeRecord, TrimSource, curve_ref, ref_index, ref_kind};
 use crate::implicit::{Implicit, ImplicitKind};
-use crate::quadtree::{NONE, NodeKind, Quadtree};
+use crate::quadtree::{NONE, Quadtree};
+use crate::trim_source::{NodeKind, NodeRecord, TrimSource, curve_ref, ref_index, ref_kind};
 
 /// Words per node.
 pub const NODE_WORDS: usize = 1;

@@ -17,9 +17,10 @@
 //! curve.
 
 use crate::bezier::Quadratic;
-use crate::classify::{NodeRecord, TrimSource, curve_ref, leaf_point, leaf_triangle, ref_index};
+use crate::classify::{leaf_point, leaf_triangle};
 use crate::implicit::{Implicit, ImplicitKind};
 use crate::separate::{Ray, separating_line};
+use crate::trim_source::{NodeKind, NodeRecord, TrimSource, curve_ref, ref_index};
 use crate::winding::WindingIndex;
 
 /// The depth at which subdivision gives up (section 8, table 4).
@@ -37,24 +38,6 @@ const TRIANGLE_LEVELS: u32 = 3;
 
 /// No index.
 pub const NONE: u32 = u32::MAX;
-
-/// What a node is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeKind {
-    /// Has four children.
-    Internal = 0,
-    /// A leaf entirely off the face.
-    Off = 1,
-    /// A leaf entirely on the face.
-    On = 2,
-    /// A leaf crossed by one curve.
-    One = 3,
-    /// A leaf crossed by two curves, with a separating line.
-    Two = 4,
-    /// A leaf at depth 13 still crossed by more than two curves, or by two without a
-    /// separating line: a counted failure, answered by its coverage bit.
-    Failed = 5,
-}
 
 /// A quadtree node.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,9 +8,10 @@ use common::{Rng, exact_inside, line, plane, sampled_loops};
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 use tessd_brep::{BSplineCurve, Curve, DVec2, Document, Face, Frame, Loop, Surface, Trim};
 use tessd_trim::approximate::{approximate_loops, approximate_trim};
-use tessd_trim::classify::{TrimSource, classify};
+use tessd_trim::classify::classify;
 use tessd_trim::implicit::{Implicit, ImplicitKind};
 use tessd_trim::quadtree::NONE;
+use tessd_trim::trim_source::TrimSource;
 use tessd_trim::{MAX_DEPTH, NodeKind, Quadratic, TrimStructure};
 
 fn square() -> Loop {
