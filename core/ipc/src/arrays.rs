@@ -5,7 +5,7 @@
 //! e.g. into a mesh) without a copy. Arrays to send own their `Vec` and are written from it
 //! directly, so large meshes are never copied into an intermediate frame buffer.
 
-use crate::frame::FrameError;
+use crate::json_kind::json_kind;
 use bytemuck::Pod;
 use serde_json::{Value, json};
 
@@ -113,10 +113,7 @@ impl ArrayDesc {
     /// A message naming the entry and the field at fault.
     pub fn parse_table(v: &Value, payload_len: u64) -> Result<Vec<ArrayDesc>, String> {
         let Value::Array(items) = v else {
-            return Err(format!(
-                "`arrays` must be a list, got {}",
-                crate::frame::json_kind(v)
-            ));
+            return Err(format!("`arrays` must be a list, got {}", json_kind(v)));
         };
         let mut out: Vec<ArrayDesc> = Vec::with_capacity(items.len().min(1024));
         for (i, item) in items.iter().enumerate() {
@@ -160,7 +157,7 @@ impl ArrayDesc {
             Some(Value::String(s)) => DType::from_name(s).ok_or_else(|| {
                 format!(
                     "array {name:?} has unknown dtype {s:?}; expected one of {}",
-                    crate::frame::dtype_names().join(", ")
+                    dtype_names().join(", ")
                 )
             })?,
             _ => return Err(format!("array {name:?} needs a string `dtype`")),
@@ -285,54 +282,20 @@ pub struct Arrays {
 }
 
 impl Arrays {
-    /// Reads a payload of `len` bytes laid out as `descs` say (a checked table: in bounds, no
-    /// overlap), each array straight into its own buffer; gaps and trailing bytes are read and
-    /// dropped.
-    ///
-    /// # Errors
-    /// [`FrameError::Truncated`] when the stream ends early (with the payload bytes received),
-    /// [`FrameError::Io`].
-    pub(crate) fn read(
-        r: &mut impl std::io::Read,
-        descs: Vec<ArrayDesc>,
-        len: u64,
-    ) -> Result<Arrays, FrameError> {
-        let size = usize::try_from(len).map_err(|_| FrameError::PayloadTooLarge {
-            len,
-            max: usize::MAX as u64,
-        })?;
-        let mut bufs: Vec<Buffer> = descs
+    /// Zeroed buffers for the arrays of `descs` (a checked table), in a payload of `len`
+    /// bytes: the frame reader ([`crate::frame::read_frame`]) then reads each array straight
+    /// into [`Arrays::bytes_mut`].
+    pub(crate) fn zeroed(descs: Vec<ArrayDesc>, len: usize) -> Arrays {
+        let bufs: Vec<Buffer> = descs
             .iter()
             .map(|d| Buffer::zeroed(d.dtype, d.length as usize))
             .collect();
-        let mut order: Vec<usize> = (0..descs.len()).collect();
-        order.sort_unstable_by_key(|&i| descs[i].offset);
-        let mut pos = 0u64;
-        let truncated = |got: u64| FrameError::Truncated {
-            part: "payload",
-            expected: len,
-            got,
-        };
-        for i in order {
-            let skipped = skip(r, descs[i].offset - pos)?;
-            if skipped < descs[i].offset - pos {
-                return Err(truncated(pos + skipped));
-            }
-            let got = crate::frame::read_full(r, bufs[i].bytes_mut())? as u64;
-            if got < descs[i].length {
-                return Err(truncated(descs[i].offset + got));
-            }
-            pos = descs[i].offset + descs[i].length;
-        }
-        let skipped = skip(r, len - pos)?;
-        if skipped < len - pos {
-            return Err(truncated(pos + skipped));
-        }
-        Ok(Arrays {
-            bufs,
-            len: size,
-            descs,
-        })
+        Arrays { bufs, len, descs }
+    }
+
+    /// The bytes of array `i` (in table order), to be filled from the stream.
+    pub(crate) fn bytes_mut(&mut self, i: usize) -> &mut [u8] {
+        self.bufs[i].bytes_mut()
     }
 
     /// Builds received-style arrays from owned ones (used by in-process job runs, so that a job
@@ -419,11 +382,6 @@ fn dtype_mismatch<T: Element>(d: &ArrayDesc) -> String {
         d.dtype.name(),
         T::DTYPE.name()
     )
-}
-
-/// Reads and drops `n` bytes; returns how many were there.
-fn skip(r: &mut impl std::io::Read, n: u64) -> std::io::Result<u64> {
-    std::io::copy(&mut std::io::Read::take(r, n), &mut std::io::sink())
 }
 
 /// An array to send: its description and the buffer holding it.
@@ -544,4 +502,9 @@ pub fn layout(arrays: &[OwnedArray]) -> (Vec<ArrayDesc>, u64) {
         })
         .collect();
     (descs, offset)
+}
+
+/// The dtype names accepted on the wire, for messages.
+pub fn dtype_names() -> Vec<&'static str> {
+    DType::ALL.iter().map(|d| d.name()).collect()
 }

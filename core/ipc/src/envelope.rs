@@ -3,7 +3,7 @@
 //! server so that the fuzz target `envelope` runs the very checks the daemon runs.
 
 use crate::error::OpError;
-use crate::frame::json_kind;
+use crate::json_kind::json_kind;
 use serde_json::{Map, Value};
 
 /// A request's envelope, checked.

@@ -4,7 +4,8 @@
 //! aligned arrays. Decoding treats every byte as hostile: sizes are checked against
 //! [`Limits`] before anything is allocated, and each failure has its own [`FrameError`].
 
-use crate::arrays::{ArrayDesc, Arrays, DType, OwnedArray};
+use crate::arrays::{ArrayDesc, Arrays, OwnedArray, layout};
+use crate::json_kind::json_kind;
 use serde_json::{Map, Value};
 use std::io::{self, Read, Write};
 use thiserror::Error;
@@ -193,7 +194,7 @@ impl Header {
 }
 
 /// Reads as many bytes as are available up to `buf.len()`; returns how many.
-pub(crate) fn read_full(r: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+fn read_full(r: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         match r.read(&mut buf[got..]) {
@@ -246,8 +247,55 @@ pub fn read_frame(r: &mut impl Read, limits: &Limits) -> Result<Frame, FrameErro
         None => Vec::new(),
         Some(v) => ArrayDesc::parse_table(v, header.payload_len).map_err(FrameError::BadArrays)?,
     };
-    let arrays = Arrays::read(r, descs, header.payload_len)?;
+    let arrays = read_payload(r, descs, header.payload_len)?;
     Ok(Frame { json, arrays })
+}
+
+/// Reads a payload of `len` bytes laid out as `descs` say (a checked table: in bounds, no
+/// overlap), each array straight into its own buffer; gaps and trailing bytes are read and
+/// dropped.
+///
+/// # Errors
+/// [`FrameError::Truncated`] when the stream ends early (with the payload bytes received),
+/// [`FrameError::Io`].
+fn read_payload(r: &mut impl Read, descs: Vec<ArrayDesc>, len: u64) -> Result<Arrays, FrameError> {
+    let size = usize::try_from(len).map_err(|_| FrameError::PayloadTooLarge {
+        len,
+        max: usize::MAX as u64,
+    })?;
+    // Each array's (offset, length): the table itself moves into the arrays.
+    let spans: Vec<(u64, u64)> = descs.iter().map(|d| (d.offset, d.length)).collect();
+    let mut arrays = Arrays::zeroed(descs, size);
+    let mut order: Vec<usize> = (0..spans.len()).collect();
+    order.sort_unstable_by_key(|&i| spans[i].0);
+    let mut pos = 0u64;
+    let truncated = |got: u64| FrameError::Truncated {
+        part: "payload",
+        expected: len,
+        got,
+    };
+    for i in order {
+        let (offset, length) = spans[i];
+        let skipped = skip(r, offset - pos)?;
+        if skipped < offset - pos {
+            return Err(truncated(pos + skipped));
+        }
+        let got = read_full(r, arrays.bytes_mut(i))? as u64;
+        if got < length {
+            return Err(truncated(offset + got));
+        }
+        pos = offset + length;
+    }
+    let skipped = skip(r, len - pos)?;
+    if skipped < len - pos {
+        return Err(truncated(pos + skipped));
+    }
+    Ok(arrays)
+}
+
+/// Reads and drops `n` bytes; returns how many were there.
+fn skip(r: &mut impl Read, n: u64) -> io::Result<u64> {
+    io::copy(&mut Read::take(r, n), &mut io::sink())
 }
 
 /// Parses a JSON object from bytes.
@@ -262,18 +310,6 @@ pub fn parse_object(bytes: &[u8]) -> Result<Map<String, Value>, FrameError> {
     }
 }
 
-/// A human name of a JSON value's type, for messages.
-pub fn json_kind(v: &Value) -> &'static str {
-    match v {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
-
 /// Writes one frame: `json` (its `arrays` member is replaced by the table of `arrays`) followed
 /// by the arrays, each 8-byte aligned. Array bytes are written straight from their buffers.
 ///
@@ -284,7 +320,7 @@ pub fn write_frame(
     mut json: Map<String, Value>,
     arrays: &[OwnedArray],
 ) -> io::Result<()> {
-    let (descs, payload_len) = crate::arrays::layout(arrays);
+    let (descs, payload_len) = layout(arrays);
     if !arrays.is_empty() || json.contains_key("arrays") {
         json.insert(
             "arrays".into(),
@@ -313,11 +349,6 @@ pub fn write_frame(
         w.write_all(&PAD[..(b.len().next_multiple_of(8) - b.len())])?;
     }
     w.flush()
-}
-
-/// The dtype names accepted on the wire, for messages.
-pub fn dtype_names() -> Vec<&'static str> {
-    DType::ALL.iter().map(|d| d.name()).collect()
 }
 
 #[cfg(test)]

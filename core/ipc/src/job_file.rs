@@ -2,8 +2,8 @@
 //! registry as socket requests (docs/protocol.md, "Job files").
 
 use crate::error::OpError;
-use crate::frame::json_kind;
 use crate::job::JobContext;
+use crate::json_kind::json_kind;
 use crate::registry::{Registry, Request, Response};
 use serde_json::{Map, Value};
 use std::path::Path;

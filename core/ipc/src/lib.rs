@@ -25,6 +25,7 @@ pub mod frame;
 pub mod holders;
 pub mod job;
 pub mod job_file;
+pub mod json_kind;
 pub mod registry;
 pub mod server;
 pub mod socket;

@@ -40,7 +40,7 @@ impl Request {
             Some(Value::String(s)) => Ok(Some(s)),
             Some(v) => Err(OpError::request(format!(
                 "parameter `{key}` must be a string, got {}",
-                crate::frame::json_kind(v)
+                crate::json_kind::json_kind(v)
             ))),
         }
     }
@@ -55,7 +55,7 @@ impl Request {
             Some(Value::Number(n)) => Ok(n.as_f64()),
             Some(v) => Err(OpError::request(format!(
                 "parameter `{key}` must be a number, got {}",
-                crate::frame::json_kind(v)
+                crate::json_kind::json_kind(v)
             ))),
         }
     }

@@ -10,11 +10,10 @@
 use crate::arrays::{Arrays, OwnedArray};
 use crate::envelope::{Envelope, bool_param, holder_pid, parse_envelope};
 use crate::error::{ErrorCode, OpError};
-use crate::frame::{
-    Frame, FrameError, Limits, PROTOCOL_VERSION, json_kind, read_frame, write_frame,
-};
+use crate::frame::{Frame, FrameError, Limits, PROTOCOL_VERSION, read_frame, write_frame};
 use crate::holders::Holders;
 use crate::job::{CancelToken, JobContext, JobLimits, Progress};
+use crate::json_kind::json_kind;
 use crate::registry::{Registry, Request, Response, run_guarded, unknown_op};
 use crate::socket_watch::SocketWatch;
 use interprocess::local_socket::{Listener, Stream, traits::Listener as _};
