@@ -4,6 +4,8 @@ add-on starts the daemon itself (and stops it again when Blender exits); and the
 
 import bpy
 
+from . import binary
+
 #: The add-on's module name ("bl_ext.<repo>.tessd" as an extension).
 ADDON_ID = __package__
 
@@ -40,8 +42,7 @@ class TessdPreferences(bpy.types.AddonPreferences):
         row.prop(self, "auto_start")
         row.prop(self, "stop_on_exit")
         layout.prop(self, "timeout")
-        from . import daemon
-        layout.label(text="Binary: " + daemon.describe_binary(self))
+        layout.label(text="Binary: " + binary.describe_binary(self))
 
 
 class _Defaults:
