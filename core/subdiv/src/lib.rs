@@ -15,6 +15,7 @@ pub mod crease_rules;
 pub mod doo_sabin;
 pub mod error;
 pub mod face_varying;
+pub mod face_varying_rules;
 pub mod halfedges;
 pub mod level;
 pub mod loop_scheme;
@@ -30,7 +31,7 @@ mod test_meshes;
 
 pub use boundary::Boundary;
 pub use error::SubdivError;
-pub use face_varying::UvInterpolation;
+pub use face_varying_rules::UvInterpolation;
 use halfedges::Halfedges;
 pub use level::Level;
 pub use stencil::StencilTable;
