@@ -33,7 +33,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::UsdError;
-use crate::usda_parse::{ArcSpec, Item, Layer, MAX_DEPTH, PrimSpec, Specifier, Value};
+use crate::usda_parse::MAX_DEPTH;
+use crate::usda_spec::{ArcSpec, Item, Layer, PrimSpec, Specifier, Value};
 
 /// The most arcs nested in each other (a reference in a referenced file in ...).
 pub const MAX_ARC_DEPTH: usize = 32;

@@ -67,7 +67,8 @@ use std::path::Path;
 use tessd_mesh::{FaceVarying, Mesh};
 
 use crate::UsdError;
-use crate::usda_parse::{Item, Layer, PrimSpec, Specifier, Value, parse_layer};
+use crate::usda_parse::parse_layer;
+use crate::usda_spec::{Item, Layer, PrimSpec, Specifier, Value};
 use crate::xform_ops::{self, Mat4};
 
 /// One mesh prim of a stage, with the transform of its ancestors and itself applied.

@@ -4,7 +4,7 @@ use std::io::{self, Write};
 
 use tessd_mesh::{Crease, FaceVarying, Mesh};
 
-use crate::writer::{push_f32, push_f64};
+use crate::usda_out::{push_f32, push_f64};
 use crate::*;
 
 fn quad() -> Mesh {

@@ -6,7 +6,7 @@
 use tessd_mesh::{FaceVarying, Mesh};
 
 use crate::UsdError;
-use crate::usda_parse::{Item, PrimSpec, Specifier, Value};
+use crate::usda_spec::{Item, PrimSpec, Specifier, Value};
 use crate::xform_ops::{self, Mat4};
 
 /// Builds the mesh of the `Mesh` prim `p` at `path`, with its world transform (`None`:
