@@ -27,8 +27,10 @@ pub mod model;
 pub mod occt;
 pub mod stats;
 pub mod surface;
+pub mod tolerances;
 pub mod transform;
 pub mod validate;
+pub mod validation_error;
 pub mod vector;
 
 pub use bounds::BoundingBox;
@@ -41,7 +43,7 @@ pub use model::{
 };
 pub use stats::Stats;
 pub use surface::SurfacePoint;
-pub use validate::{Place, ValidationError};
+pub use validation_error::{Place, ValidationError};
 
 use serde::Deserialize;
 use serde_json::Value;
