@@ -19,6 +19,7 @@
 
 use std::sync::Arc;
 
+use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::ahead::Geometry;
@@ -226,47 +227,63 @@ impl ViewSession {
         if self.tsc.nodes.is_empty() {
             return Ok(out);
         }
-        let p = self.tsc.header.params.bits;
-        let mut visited: FxHashSet<usize> = FxHashSet::default();
-        let mut displayed: Vec<(usize, u32)> = Vec::new();
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
-            let (min, max) = self.cell_box(i);
-            if !frame.sees(min, max) {
-                continue;
+        let plan = self.plan(&frame, pixel_error);
+        // the cells are decoded a tree depth at a time, each depth's cells in parallel (paper
+        // 003 §5.4: cells are independent once their parent handed them over); what comes out
+        // does not depend on the order, only the counters are summed
+        let deepest = plan.iter().map(|v| v.depth).max().unwrap_or(0);
+        if !self.states.contains_key(&0) {
+            // only the root is created here; children come from their parent's hand-over
+            let state = self.tsc.cell_state(0, root_complex(&self.tsc.header))?;
+            self.states.insert(0, state);
+        }
+        for depth in 0..=deepest {
+            let visits: Vec<&Visit> = plan.iter().filter(|v| v.depth == depth).collect();
+            let mut work: Vec<(&Visit, CellState)> = visits
+                .iter()
+                .map(|v| {
+                    let state = self.states.remove(&v.cell);
+                    (*v, state.expect("handed over by its parent"))
+                })
+                .collect();
+            let tsc = &self.tsc;
+            let counted: Vec<Result<(u64, u64), CodecError>> = work
+                .par_iter_mut()
+                .map(|(v, state)| {
+                    let counts = refine(tsc, v.cell, state, v.target)?;
+                    if v.descend && state.parts.is_none() {
+                        state.parts = Some(tsc.partition(v.cell, &state.cx, &state.alive));
+                    }
+                    Ok(counts)
+                })
+                .collect();
+            for (v, state) in work {
+                self.states.insert(v.cell, state);
             }
-            visited.insert(i);
-            let tsc = self.tsc.clone();
-            let node = &tsc.nodes[i];
-            let leaf = node.children.is_empty();
-            let (_, end) = self.tsc.header.params.precision(node.depth);
-            let end = if leaf { p } else { end };
-            let need = self
-                .needed_bits(&frame, frame.distance(min, max), pixel_error)
-                .max(self.tsc.header.params.precision(node.depth).0);
-            let target = need.min(end);
-            self.refine(i, target, &mut out)?;
-            if need > end && !leaf {
-                let state = self.states.get_mut(&i).expect("refined above");
-                if state.parts.is_none() {
-                    state.parts = Some(self.tsc.partition(i, &state.cx, &state.alive));
+            // the first failure in the walk's order, whatever thread met it
+            for c in counted {
+                let (symbols, bytes) = c?;
+                out.symbols += symbols;
+                out.bytes_read += bytes;
+            }
+            for v in visits.iter().filter(|v| v.descend) {
+                let node = &self.tsc.nodes[v.cell];
+                for (k, &child) in node.children.iter().enumerate() {
+                    if !self.states.contains_key(&child) {
+                        let parts = self.states[&v.cell].parts.as_ref();
+                        let part = parts.expect("made above")[k].clone();
+                        let state = self.tsc.cell_state(child, part)?;
+                        self.states.insert(child, state);
+                    }
                 }
-                let missing: Vec<(usize, (Complex, Vec<u32>))> = node
-                    .children
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, child)| !self.states.contains_key(child))
-                    .map(|(k, &child)| (child, self.states[&i].parts.as_ref().unwrap()[k].clone()))
-                    .collect();
-                for (child, part) in missing {
-                    let state = self.tsc.cell_state(child, part)?;
-                    self.states.insert(child, state);
-                }
-                stack.extend(node.children.iter().copied());
-            } else {
-                displayed.push((i, target));
             }
         }
+        let visited: FxHashSet<usize> = plan.iter().map(|v| v.cell).collect();
+        let displayed: Vec<(usize, u32)> = plan
+            .iter()
+            .filter(|v| !v.descend)
+            .map(|v| (v.cell, v.target))
+            .collect();
         // the cells not visited are coarsened away: their memory is freed
         self.states.retain(|i, _| visited.contains(i));
         self.assemble(&displayed, &mut out);
@@ -274,59 +291,37 @@ impl ViewSession {
         Ok(out)
     }
 
-    /// Brings cell `i` to `bits` bits: onwards from its current state, or from its start when
-    /// it must coarsen.
-    fn refine(&mut self, i: usize, bits: u32, out: &mut ViewMesh) -> Result<(), CodecError> {
-        if !self.states.contains_key(&i) {
-            // only the root is created here; children come from their parent's hand-over
-            let state = self.tsc.cell_state(i, root_complex(&self.tsc.header))?;
-            self.states.insert(i, state);
+    /// The cells `frame` sees, in the order of a depth-first walk of the tree, each with the
+    /// precision it needs (§6.2) and whether its children are shown instead: all of it follows
+    /// from the camera and the tree, before anything is decoded.
+    fn plan(&self, frame: &Frame, pixel_error: f64) -> Vec<Visit> {
+        let p = self.tsc.header.params.bits;
+        let mut plan = Vec::new();
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let (min, max) = self.cell_box(i);
+            if !frame.sees(min, max) {
+                continue;
+            }
+            let node = &self.tsc.nodes[i];
+            let leaf = node.children.is_empty();
+            let (start, end) = self.tsc.header.params.precision(node.depth);
+            let end = if leaf { p } else { end };
+            let need = self
+                .needed_bits(frame, frame.distance(min, max), pixel_error)
+                .max(start);
+            let descend = need > end && !leaf;
+            plan.push(Visit {
+                cell: i,
+                depth: node.depth,
+                target: need.min(end),
+                descend,
+            });
+            if descend {
+                stack.extend(node.children.iter().copied());
+            }
         }
-        let tsc = &self.tsc;
-        let state = self.states.get_mut(&i).unwrap();
-        if bits < state.bits {
-            let fresh = tsc.cell_state(i, state.start.clone())?;
-            *state = fresh;
-        }
-        if bits > state.bits {
-            let node = &tsc.nodes[i];
-            let before = state.reader.read;
-            let bytes_before = if before == 0 {
-                0
-            } else {
-                state.reader.consumed_bytes()
-            };
-            let limits = Limits {
-                vertices: node.end_vertices as usize,
-                simplices: node.end_simplices as usize,
-            };
-            let params = &tsc.header.params;
-            let end = if node.children.is_empty() {
-                params.bits
-            } else {
-                params.precision(node.depth).1
-            };
-            let span = Span {
-                bits: params.bits,
-                lo: 3 * state.bits as usize,
-                hi: 3 * bits as usize,
-                end: 3 * end as usize,
-                advance: params.advance(),
-            };
-            kd_coder::decode(
-                &mut state.cx,
-                &mut state.alive,
-                span,
-                &mut state.reader,
-                limits,
-                &mut state.geometry,
-            )?;
-            out.symbols += state.reader.read - before;
-            out.bytes_read +=
-                state.reader.consumed_bytes().min(node.len) - bytes_before.min(node.len);
-            state.bits = bits;
-        }
-        Ok(())
+        plan
     }
 
     /// The displayed cells' simplices with the border rule of §6.3, welded into one mesh.
@@ -398,6 +393,62 @@ impl ViewSession {
             }
         }
     }
+}
+
+/// One cell of a view's walk.
+struct Visit {
+    cell: usize,
+    depth: u32,
+    /// Precision to decode it to, in bits.
+    target: u32,
+    /// Its children are shown instead of it.
+    descend: bool,
+}
+
+/// Brings cell `i`'s `state` to `bits` bits: onwards from where it is, or from its start when
+/// it must coarsen. Returns the symbols and the code bytes read.
+fn refine(tsc: &Tsc, i: usize, state: &mut CellState, bits: u32) -> Result<(u64, u64), CodecError> {
+    if bits < state.bits {
+        *state = tsc.cell_state(i, state.start.clone())?;
+    }
+    if bits <= state.bits {
+        return Ok((0, 0));
+    }
+    let node = &tsc.nodes[i];
+    let before = state.reader.read;
+    let bytes_before = if before == 0 {
+        0
+    } else {
+        state.reader.consumed_bytes()
+    };
+    let limits = Limits {
+        vertices: node.end_vertices as usize,
+        simplices: node.end_simplices as usize,
+    };
+    let params = &tsc.header.params;
+    let end = if node.children.is_empty() {
+        params.bits
+    } else {
+        params.precision(node.depth).1
+    };
+    let span = Span {
+        bits: params.bits,
+        lo: 3 * state.bits as usize,
+        hi: 3 * bits as usize,
+        end: 3 * end as usize,
+        advance: params.advance(),
+    };
+    kd_coder::decode(
+        &mut state.cx,
+        &mut state.alive,
+        span,
+        &mut state.reader,
+        limits,
+        &mut state.geometry,
+    )?;
+    state.bits = bits;
+    let bytes = state.reader.consumed_bytes().min(node.len) - bytes_before.min(node.len);
+    Ok((state.reader.read - before, bytes))
 }
 
 /// `corner` cleared below kd `level`: the corner of the kd-cell at that level holding it.
