@@ -13,9 +13,10 @@ use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
 
-use super::common::{check_stage_options, file_dropped, u64_param, write_mesh_file};
+use super::common::{check_stage_options, file_dropped, write_mesh_file};
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
-use super::render::{parse_size, vec3_param};
+use super::params::camera::{parse_size, vec3_param};
+use super::params::scalars::u64_param;
 
 /// A codec error as the protocol names it: bad parameters are the request's fault, a corrupt
 /// file the input's, the rest I/O.

@@ -4,7 +4,8 @@
 //!
 //! The parameters are described in docs/protocol.md ("compare").
 
-use super::common::{bool_param, read_mesh_param, u64_param};
+use super::common::read_mesh_param;
+use super::params::scalars::{bool_param, u64_param};
 use serde_json::{Value, json};
 use tessd_compare::{CompareError, CompareOptions, Comparison, Distance};
 use tessd_ipc::error::{ErrorCode, OpError};

@@ -1,9 +1,11 @@
-//! The library crates' errors in the protocol's terms: each `MeshError` and `UsdError` becomes an
-//! [`OpError`] with the code a client acts on. Below both `common` and `mesh_arrays`, which
-//! read and write meshes and stages and so raise both kinds.
+//! The library crates' errors in the protocol's terms: each `MeshError`, `UsdError`,
+//! `ValidationError` (B-Rep) and `RenderError` becomes an [`OpError`] with the code a client
+//! acts on. Below the ops and their parameters, which all raise them.
 
+use tessd_brep::ValidationError;
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_mesh::MeshError;
+use tessd_render::RenderError;
 
 /// Maps a mesh-crate error onto the protocol's codes. An unknown extension's message lists
 /// what tessd reads and writes, `.usda` stages included, and says that binary USD is not one
@@ -45,6 +47,24 @@ pub fn usd_error(e: tessd_usd::UsdError) -> OpError {
         "io" => ErrorCode::Io,
         "unsupported" => ErrorCode::Unsupported,
         _ => ErrorCode::InvalidRequest,
+    };
+    OpError::new(code, e.to_string())
+}
+
+/// Maps a refusal of the document to `invalid_brep`, its message naming the element.
+pub fn brep_error(e: ValidationError) -> OpError {
+    OpError::new(ErrorCode::InvalidBrep, e.to_string())
+}
+
+/// Maps a renderer error onto the protocol's codes.
+pub fn render_error(e: RenderError) -> OpError {
+    if matches!(e, RenderError::Cancelled) {
+        return OpError::cancelled();
+    }
+    let code = match &e {
+        RenderError::Size(_) | RenderError::Camera(_) => ErrorCode::InvalidRequest,
+        RenderError::Io(_) => ErrorCode::Io,
+        _ => ErrorCode::Internal,
     };
     OpError::new(code, e.to_string())
 }

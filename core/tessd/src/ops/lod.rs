@@ -6,11 +6,10 @@
 //!
 //! The parameters are described in docs/protocol.md ("lod").
 
-use super::common::{
-    as_u64, bool_param, file_dropped, is_usda, merge_names, stage_options, stem, write_mesh_file,
-};
+use super::common::{file_dropped, is_usda, merge_names, stage_options, stem, write_mesh_file};
 use super::library_errors::usd_error;
 use super::mesh_arrays::{input_mesh, mesh_to_prefixed_arrays, output_path};
+use super::params::scalars::{as_u64, bool_param};
 use super::simplify::{MethodKind, base_options, remove_all, report_json, simplify_error};
 use serde_json::{Value, json};
 use std::path::PathBuf;

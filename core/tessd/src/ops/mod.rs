@@ -12,6 +12,7 @@ pub mod lod;
 pub mod mesh_arrays;
 pub mod mesh_convert;
 pub mod mesh_stats;
+pub mod params;
 pub mod render;
 pub mod simplify;
 pub mod subdivide;

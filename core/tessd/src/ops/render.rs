@@ -7,11 +7,13 @@
 //!
 //! Parameters are described in docs/protocol.md ("render").
 
-use super::brep_load::{brep_error, is_brep_path, request_brep};
-use super::common::{bool_param, stem, u64_param};
-use super::library_errors::usd_error;
+use super::common::stem;
+use super::library_errors::{brep_error, render_error, usd_error};
 use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file, read_options};
-use super::tessellate::parse_tolerance;
+use super::params::brep_input::{is_brep_path, request_brep};
+use super::params::camera::{parse_size, vec3_param};
+use super::params::lengths::{Tolerance, parse_tolerance};
+use super::params::scalars::{bool_param, u64_param};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -26,9 +28,6 @@ use tessd_render::{
     Bounds, BrepReport, BrepScene, Camera, Cracks, Frame, RenderError, RenderSettings, Renderer,
     Scene, Shading, StepTimings, View, panels,
 };
-
-/// The default image size.
-pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
 
 /// The most turntable frames.
 pub const MAX_FRAMES: u64 = 3600;
@@ -48,71 +47,6 @@ fn renderer() -> Result<Arc<Renderer>, OpError> {
     let r = Arc::new(Renderer::new().map_err(render_error)?);
     *slot = Some(r.clone());
     Ok(r)
-}
-
-/// Maps a renderer error onto the protocol's codes.
-fn render_error(e: RenderError) -> OpError {
-    if matches!(e, RenderError::Cancelled) {
-        return OpError::cancelled();
-    }
-    let code = match &e {
-        RenderError::Size(_) | RenderError::Camera(_) => ErrorCode::InvalidRequest,
-        RenderError::Io(_) => ErrorCode::Io,
-        _ => ErrorCode::Internal,
-    };
-    OpError::new(code, e.to_string())
-}
-
-/// Parses `size`: `"WIDTHxHEIGHT"` or `[width, height]`, checked against the renderer's limits
-/// ([`tessd_render::check_size`]).
-///
-/// # Errors
-/// `invalid_request` naming the value.
-pub fn parse_size(v: Option<&Value>) -> Result<(u32, u32), OpError> {
-    let bad = |v: &Value| {
-        OpError::request(format!(
-            "`size` must be \"WIDTHxHEIGHT\" (such as \"1280x720\") or [width, height], got {v}"
-        ))
-    };
-    let (w, h) = match v {
-        None | Some(Value::Null) => DEFAULT_SIZE,
-        Some(v @ Value::String(s)) => {
-            let (a, b) = s.trim().split_once(['x', 'X']).ok_or_else(|| bad(v))?;
-            let parse = |t: &str| t.trim().parse::<u32>().map_err(|_| bad(v));
-            (parse(a)?, parse(b)?)
-        }
-        Some(v @ Value::Array(items)) if items.len() == 2 => {
-            let side = |x: &Value| {
-                x.as_u64()
-                    .and_then(|n| u32::try_from(n).ok())
-                    .ok_or_else(|| bad(v))
-            };
-            (side(&items[0])?, side(&items[1])?)
-        }
-        Some(v) => return Err(bad(v)),
-    };
-    tessd_render::check_size(w, h, tessd_render::MAX_SIDE).map_err(render_error)?;
-    Ok((w, h))
-}
-
-/// An optional `[x, y, z]` of finite numbers.
-pub fn vec3_param(request: &Request, key: &str) -> Result<Option<[f64; 3]>, OpError> {
-    match request.params.get(key) {
-        None | Some(Value::Null) => Ok(None),
-        Some(v) => {
-            let bad = || {
-                OpError::request(format!(
-                    "`{key}` must be [x, y, z] (finite numbers), got {v}"
-                ))
-            };
-            let items = v.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
-            let mut out = [0.0; 3];
-            for (k, item) in items.iter().enumerate() {
-                out[k] = item.as_f64().filter(|x| x.is_finite()).ok_or_else(bad)?;
-            }
-            Ok(Some(out))
-        }
-    }
 }
 
 /// How the camera is given: a standard view, or an explicit eye (with target and up).
@@ -506,8 +440,8 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         let cams = cameras(&p, axis, &bounds)?;
         let trim_tolerance = match &asked_tolerance {
             Some(v) => Some(match parse_tolerance(v, doc.units)? {
-                super::tessellate::Tolerance::Length(x) => x,
-                super::tessellate::Tolerance::Percent(pc) => pc / 100.0 * 2.0 * bounds.radius(),
+                Tolerance::Length(x) => x,
+                Tolerance::Percent(pc) => pc / 100.0 * 2.0 * bounds.radius(),
             }),
             None => None,
         };
@@ -797,24 +731,6 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sizes() {
-        assert_eq!(parse_size(None).unwrap(), (1280, 720));
-        assert_eq!(parse_size(Some(&json!("640x480"))).unwrap(), (640, 480));
-        assert_eq!(parse_size(Some(&json!([3, 2]))).unwrap(), (3, 2));
-        for (bad, shown) in [
-            (json!("0x0"), "0x0"),
-            (json!("100000x100000"), "100000x100000"),
-            (json!("12"), "\"12\""),
-            (json!("-1x5"), "\"-1x5\""),
-            (json!([1]), "[1]"),
-        ] {
-            let e = parse_size(Some(&bad)).unwrap_err();
-            assert_eq!(e.code, ErrorCode::InvalidRequest);
-            assert!(e.message.contains(shown), "{}", e.message);
-        }
-    }
 
     #[test]
     fn frame_names() {

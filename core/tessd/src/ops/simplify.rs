@@ -4,12 +4,11 @@
 //! The parameters are described in docs/protocol.md ("simplify"); this module also parses
 //! the settings the `lod` operation shares.
 
-use super::common::{
-    Amount, as_u64, bool_param, check_mesh_output, check_stage_options, file_dropped, parse_amount,
-    stem, write_mesh_file,
-};
+use super::common::{check_mesh_output, check_stage_options, file_dropped, stem, write_mesh_file};
 use super::library_errors::mesh_error;
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
+use super::params::lengths::{mesh_units, parse_length};
+use super::params::scalars::{Amount, as_u64, bool_param, parse_amount, plain_number};
 use serde_json::{Value, json};
 use std::path::Path;
 use tessd_ipc::arrays::OwnedArray;
@@ -210,9 +209,9 @@ pub fn report_json(r: &Report) -> Value {
 ///
 /// # Errors
 /// `invalid_request` for an unknown `units`, a unit-bearing length without `units`, or a
-/// length [`super::tessellate::parse_length`] refuses.
+/// length [`parse_length`] refuses.
 pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<(), OpError> {
-    let units = super::common::mesh_units(request)?;
+    let units = mesh_units(request)?;
     let convert = |key: &str, v: &mut Value| -> Result<(), OpError> {
         let Some(text) = v.as_str() else {
             return Ok(());
@@ -223,7 +222,7 @@ pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<()
                 .any(|c| c.is_ascii_alphabetic() && c != 'e' && c != 'E');
         if !has_unit {
             // A plain number written as text is a number in model units.
-            if let Some(x) = super::common::plain_number(t) {
+            if let Some(x) = plain_number(t) {
                 *v = json!(x);
             }
             return Ok(());
@@ -234,7 +233,7 @@ pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<()
                  of the mesh's coordinates: mm, cm, m or in), or a number in model units"
             )));
         };
-        *v = json!(super::tessellate::parse_length(key, v, units)?);
+        *v = json!(parse_length(key, v, units)?);
         Ok(())
     };
     for &key in keys {

@@ -4,11 +4,12 @@
 //! Parameters are described in docs/protocol.md ("subdivide").
 
 use super::common::{
-    as_u64, bool_param, check_mesh_output, check_stage_options, file_dropped, is_usda, merge_names,
-    stage_options, stem, write_mesh_file,
+    check_mesh_output, check_stage_options, file_dropped, is_usda, merge_names, stage_options,
+    stem, write_mesh_file,
 };
 use super::library_errors::usd_error;
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
+use super::params::scalars::{as_u64, bool_param};
 use serde_json::json;
 use std::time::Instant;
 use tessd_ipc::arrays::OwnedArray;

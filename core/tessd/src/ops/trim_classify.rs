@@ -9,8 +9,9 @@
 //!
 //! Parameters are described in docs/protocol.md ("trim.classify").
 
-use super::brep_load::{array_as_f64, brep_error, request_brep};
-use super::tessellate::parse_length;
+use super::library_errors::brep_error;
+use super::params::brep_input::{array_as_f64, request_brep};
+use super::params::lengths::parse_length;
 use serde_json::{Value, json};
 use std::time::Instant;
 use tessd_brep::Document;
