@@ -84,7 +84,10 @@ impl Background {
                 let done = match session.view(&camera, pixel_error) {
                     Ok(view) => Done::Refined {
                         item,
-                        view: Box::new(view),
+                        scene: Box::new(tessd_render::Scene::from_mesh(&view_mesh(&view))),
+                        cells: view.cells.len(),
+                        triangles: view.triangles.len(),
+                        bytes_read: view.bytes_read,
                         ms: t.elapsed().as_secs_f64() * 1e3,
                     },
                     Err(e) => Done::Failed(e.to_string()),
@@ -114,6 +117,18 @@ impl Drop for Background {
             let _ = handle.join();
         }
     }
+}
+
+/// A view-dependent decode as a mesh.
+fn view_mesh(view: &tessd_codec::ViewMesh) -> Mesh {
+    let mut mesh = Mesh {
+        positions: view.positions.iter().map(|p| p.map(|x| x as f32)).collect(),
+        ..Mesh::default()
+    };
+    for t in &view.triangles {
+        mesh.push_face(t);
+    }
+    mesh
 }
 
 /// The render thread's side of a `.tsc` item's worker.

@@ -2,7 +2,6 @@
 //! levels, LOD chains, `.tsc` refinements) or why it failed. Below both the workers
 //! ([`super::subdivision`], [`super::background`]) and the frame loop that takes it.
 
-use tessd_codec::ViewMesh;
 use tessd_mesh::Mesh;
 use tessd_simplify::Cell;
 
@@ -42,8 +41,14 @@ pub enum Done {
     Refined {
         /// The item.
         item: usize,
-        /// The mesh to show and what was read.
-        view: Box<ViewMesh>,
+        /// The triangles to draw, made on the worker (the render thread only uploads them).
+        scene: Box<tessd_render::Scene>,
+        /// Cells shown, triangles, and the code bytes this view read.
+        cells: usize,
+        /// Triangles of the view.
+        triangles: usize,
+        /// Bytes of code read for this view.
+        bytes_read: u64,
         /// Decode time, ms.
         ms: f64,
     },

@@ -197,7 +197,14 @@ impl MeshItem {
     /// # Errors
     /// The device refuses the buffer.
     pub fn show(&mut self, mesh: &Mesh, renderer: &Renderer) -> Result<()> {
-        let scene = Scene::from_mesh(mesh);
+        self.show_scene(Scene::from_mesh(mesh), renderer)
+    }
+
+    /// Shows triangles already laid out for the device (a `.tsc` worker makes them).
+    ///
+    /// # Errors
+    /// The device refuses the buffer.
+    pub fn show_scene(&mut self, scene: Scene, renderer: &Renderer) -> Result<()> {
         let gpu = renderer
             .upload(&scene)
             .with_context(|| format!("{}: upload", self.path.display()))?;

@@ -181,23 +181,26 @@ impl Viewer {
                         self.step_lod(step)?;
                     }
                 }
-                Done::Refined { item, view, ms } => {
-                    let mesh = view_mesh(&view);
+                Done::Refined {
+                    item,
+                    scene,
+                    cells,
+                    triangles,
+                    bytes_read,
+                    ms,
+                } => {
                     if let Some(Item::Mesh(m)) = self.items.get_mut(item) {
-                        m.show(&mesh, &self.renderer)?;
+                        m.show_scene(*scene, &self.renderer)?;
                     }
                     if let Some(t) = self.tsc.iter_mut().find(|t| t.item == item) {
                         let r = &mut t.refinement;
                         r.in_flight = 0;
                         r.views += 1;
-                        r.bytes_read += view.bytes_read;
-                        r.cells = view.cells.len();
+                        r.bytes_read += bytes_read;
+                        r.cells = cells;
                     }
                     self.say(format!(
-                        "refined: {} cells, {} triangles, {} bytes read ({ms:.0} ms)",
-                        view.cells.len(),
-                        view.triangles.len(),
-                        view.bytes_read
+                        "refined: {cells} cells, {triangles} triangles, {bytes_read} bytes read ({ms:.0} ms)"
                     ));
                 }
                 Done::Failed(why) => self.say(format!("failed: {why}")),
@@ -222,16 +225,4 @@ pub(super) fn item_faces(item: &Item) -> u32 {
         }),
         Item::Brep(b) => b.faces as u32,
     }
-}
-
-/// A view-dependent decode as a mesh.
-pub(super) fn view_mesh(view: &tessd_codec::ViewMesh) -> Mesh {
-    let mut mesh = Mesh {
-        positions: view.positions.iter().map(|p| p.map(|x| x as f32)).collect(),
-        ..Mesh::default()
-    };
-    for t in &view.triangles {
-        mesh.push_face(t);
-    }
-    mesh
 }
