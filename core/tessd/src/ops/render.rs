@@ -400,7 +400,32 @@ fn point(v: Vec3) -> Value {
     json!(v.to_array())
 }
 
-/// The operation.
+/// The inputs gathered for drawing: the part on the device, its cameras, and the time each
+/// step took (`prepare`: a B-Rep's trim structures; `device`: opening the renderer).
+struct Gathered {
+    part: Part,
+    cams: Vec<Camera>,
+    prepare_ms: f64,
+    device_ms: f64,
+    upload_ms: f64,
+}
+
+/// The frames drawn: the files written, and what the result reports of them.
+struct Rendered {
+    files: Vec<PathBuf>,
+    /// Pixels covered, per frame.
+    covered: Vec<usize>,
+    /// B-Rep parts: each frame's pipeline report.
+    steps: Vec<BrepReport>,
+    draw: Duration,
+    readback: Duration,
+    encode: Duration,
+    /// The last frame, returned as arrays when no file is asked for.
+    last: Option<Frame>,
+}
+
+/// The operation, in its steps: parse the request, gather the inputs (planning the cameras
+/// on their bounds), render and write each frame, then describe it all.
 ///
 /// # Errors
 /// `invalid_request` for bad parameters (naming them and the value), `unsupported` for
@@ -410,123 +435,161 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     let total = Instant::now();
     ctx.progress(0.0, "read", "")?;
     let p = parse(&request)?;
+    let mut result = json!({});
+    let gathered = if is_brep_request(&request) {
+        gather_brep(&mut request, &p, ctx, &mut result)?
+    } else {
+        gather_meshes(&mut request, &p, ctx, &mut result)?
+    };
+    let renderer = renderer()?;
+    let rendered = render_frames(&renderer, &p, &gathered, ctx)?;
+    describe(&mut result, &renderer, &p, &gathered, &rendered);
+    result["timings_ms"]["total"] = json!(ms(total.elapsed()));
+    ctx.progress(1.0, "done", "")?;
+    Ok(Response {
+        result,
+        arrays: frame_arrays(&p, rendered.last),
+        files: rendered.files,
+    })
+}
 
-    // The input: a B-Rep document (`brep`, or an `input` ending in .json) or a mesh.
-    let t = Instant::now();
-    let is_brep = request.params.get("brep").is_some_and(|v| !v.is_null())
+/// Whether the input is a B-Rep document (`brep`, or an `input` naming a B-Rep file) rather
+/// than a mesh.
+fn is_brep_request(request: &Request) -> bool {
+    request.params.get("brep").is_some_and(|v| !v.is_null())
         || request
             .params
             .get("input")
             .and_then(Value::as_str)
-            .is_some_and(|s| is_brep_path(Path::new(s)));
+            .is_some_and(|s| is_brep_path(Path::new(s)))
+}
+
+/// Gathers a B-Rep part: the document, its cameras, its trim structures (to the `tolerance`)
+/// and their upload to the device.
+fn gather_brep(
+    request: &mut Request,
+    p: &Params,
+    ctx: &JobContext,
+    result: &mut Value,
+) -> Result<Gathered, OpError> {
+    let t = Instant::now();
     let asked_tolerance = request
         .params
         .get("tolerance")
         .cloned()
         .filter(|v| !v.is_null());
-    let mut result = json!({});
-    let (part, cams, prepare_ms, device_ms, upload_ms) = if is_brep {
-        let doc = request_brep(&mut request)?;
-        doc.validate().map_err(brep_error)?;
-        let b = doc
-            .bounding_box()
-            .ok_or_else(|| OpError::request("the document has no faces to render"))?;
-        let bounds = Bounds {
-            min: b.min,
-            max: b.max,
-        };
-        let axis = p.up_axis.unwrap_or_default();
-        result["up_axis"] = json!(axis.name());
-        let cams = cameras(&p, axis, &bounds)?;
-        let trim_tolerance = match &asked_tolerance {
-            Some(v) => Some(match parse_tolerance(v, doc.units)? {
-                Tolerance::Length(x) => x,
-                Tolerance::Percent(pc) => pc / 100.0 * 2.0 * bounds.radius(),
-            }),
-            None => None,
-        };
-        let read_ms = ms(t.elapsed());
-        ctx.progress(0.05, "prepare", "trim structures")?;
-        let t = Instant::now();
-        let scene = BrepScene::new(&doc, trim_tolerance).map_err(render_error)?;
-        ctx.checkpoint()?;
-        result["tolerance"] = json!(scene.trim_tolerance);
-        result["units"] = json!(doc.units.name());
-        result["faces"] = json!(doc.faces.len());
-        if !scene.skipped.is_empty() {
-            result["warnings"] = json!(scene.skipped);
-        }
-        result["timings_ms"] = json!({"read": read_ms});
-        let prepare_ms = ms(t.elapsed());
-        ctx.progress(0.4, "upload", "")?;
-        let t = Instant::now();
-        let renderer = renderer()?;
-        let device_ms = ms(t.elapsed());
-        let t = Instant::now();
-        let gpu = renderer.upload_brep(scene).map_err(render_error)?;
-        result["trim_bytes"] = json!(gpu.trim_bytes());
-        (
-            Part::Brep(Box::new(gpu)),
-            cams,
-            prepare_ms,
-            device_ms,
-            ms(t.elapsed()),
-        )
-    } else {
-        if p.raycast {
-            return Err(OpError::new(
-                ErrorCode::Unsupported,
-                "`raycast` ray casts the exact surfaces of a B-Rep document; a mesh is \
-                 rasterised as it is",
-            ));
-        }
-        let (meshes, stage_axis) = mesh_panels(&mut request, ctx)?;
-        ctx.checkpoint()?;
-        // The request's axis, else the stage's own, else Z.
-        let axis = p.up_axis.or(stage_axis).unwrap_or_default();
-        result["up_axis"] = json!(axis.name());
-        // One camera for every panel, fitted to them all: the panels compare at one scale.
-        let mut scenes = Vec::with_capacity(meshes.len());
-        let mut bounds: Option<Bounds> = None;
-        for (label, mesh) in &meshes {
-            let scene = Scene::from_mesh(mesh);
-            let b = scene.bounds.ok_or_else(|| {
-                OpError::new(
-                    ErrorCode::InvalidMesh,
-                    format!("the mesh {label:?} has no faces to render"),
-                )
-            })?;
-            bounds = Some(bounds.map_or(b, |a| a.union(&b)));
-            scenes.push((label.clone(), scene));
-        }
-        drop(meshes);
-        let bounds = bounds.ok_or_else(|| OpError::request("no mesh to render"))?;
-        let cams = cameras(&p, axis, &bounds)?;
-        result["faces"] = json!(scenes.iter().map(|(_, s)| s.max_id).max().unwrap_or(0));
-        result["timings_ms"] = json!({"read": ms(t.elapsed())});
-        ctx.progress(0.4, "upload", "")?;
-        let t = Instant::now();
-        let renderer = renderer()?;
-        let device_ms = ms(t.elapsed());
-        let t = Instant::now();
-        let mut panels = Vec::with_capacity(scenes.len());
-        for (label, scene) in scenes {
-            panels.push(MeshPanel {
-                label,
-                gpu: renderer.upload(&scene).map_err(render_error)?,
-                triangles: scene.triangles(),
-            });
-        }
-        (Part::Meshes(panels), cams, 0.0, device_ms, ms(t.elapsed()))
+    let doc = request_brep(request)?;
+    doc.validate().map_err(brep_error)?;
+    let b = doc
+        .bounding_box()
+        .ok_or_else(|| OpError::request("the document has no faces to render"))?;
+    let bounds = Bounds {
+        min: b.min,
+        max: b.max,
     };
+    let axis = p.up_axis.unwrap_or_default();
+    result["up_axis"] = json!(axis.name());
+    let cams = cameras(p, axis, &bounds)?;
+    let trim_tolerance = match &asked_tolerance {
+        Some(v) => Some(match parse_tolerance(v, doc.units)? {
+            Tolerance::Length(x) => x,
+            Tolerance::Percent(pc) => pc / 100.0 * 2.0 * bounds.radius(),
+        }),
+        None => None,
+    };
+    let read_ms = ms(t.elapsed());
+    ctx.progress(0.05, "prepare", "trim structures")?;
+    let t = Instant::now();
+    let scene = BrepScene::new(&doc, trim_tolerance).map_err(render_error)?;
+    ctx.checkpoint()?;
+    result["tolerance"] = json!(scene.trim_tolerance);
+    result["units"] = json!(doc.units.name());
+    result["faces"] = json!(doc.faces.len());
+    if !scene.skipped.is_empty() {
+        result["warnings"] = json!(scene.skipped);
+    }
+    result["timings_ms"] = json!({"read": read_ms});
+    let prepare_ms = ms(t.elapsed());
+    ctx.progress(0.4, "upload", "")?;
+    let t = Instant::now();
     let renderer = renderer()?;
+    let device_ms = ms(t.elapsed());
+    let t = Instant::now();
+    let gpu = renderer.upload_brep(scene).map_err(render_error)?;
+    result["trim_bytes"] = json!(gpu.trim_bytes());
+    Ok(Gathered {
+        part: Part::Brep(Box::new(gpu)),
+        cams,
+        prepare_ms,
+        device_ms,
+        upload_ms: ms(t.elapsed()),
+    })
+}
 
-    let mut written = Written(Vec::new());
-    let (mut draw, mut readback, mut encode) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
-    let mut covered = Vec::with_capacity(cams.len());
-    let mut steps = Vec::with_capacity(cams.len());
-    let mut last: Option<Frame> = None;
-    let panel_count = match &part {
+/// Gathers the mesh panels: the meshes, one camera fitted to them all (the panels compare at
+/// one scale), and their upload to the device.
+fn gather_meshes(
+    request: &mut Request,
+    p: &Params,
+    ctx: &JobContext,
+    result: &mut Value,
+) -> Result<Gathered, OpError> {
+    let t = Instant::now();
+    if p.raycast {
+        return Err(OpError::new(
+            ErrorCode::Unsupported,
+            "`raycast` ray casts the exact surfaces of a B-Rep document; a mesh is \
+             rasterised as it is",
+        ));
+    }
+    let (meshes, stage_axis) = mesh_panels(request, ctx)?;
+    ctx.checkpoint()?;
+    // The request's axis, else the stage's own, else Z.
+    let axis = p.up_axis.or(stage_axis).unwrap_or_default();
+    result["up_axis"] = json!(axis.name());
+    let mut scenes = Vec::with_capacity(meshes.len());
+    let mut bounds: Option<Bounds> = None;
+    for (label, mesh) in &meshes {
+        let scene = Scene::from_mesh(mesh);
+        let b = scene.bounds.ok_or_else(|| {
+            OpError::new(
+                ErrorCode::InvalidMesh,
+                format!("the mesh {label:?} has no faces to render"),
+            )
+        })?;
+        bounds = Some(bounds.map_or(b, |a| a.union(&b)));
+        scenes.push((label.clone(), scene));
+    }
+    drop(meshes);
+    let bounds = bounds.ok_or_else(|| OpError::request("no mesh to render"))?;
+    let cams = cameras(p, axis, &bounds)?;
+    result["faces"] = json!(scenes.iter().map(|(_, s)| s.max_id).max().unwrap_or(0));
+    result["timings_ms"] = json!({"read": ms(t.elapsed())});
+    ctx.progress(0.4, "upload", "")?;
+    let t = Instant::now();
+    let renderer = renderer()?;
+    let device_ms = ms(t.elapsed());
+    let t = Instant::now();
+    let mut panels = Vec::with_capacity(scenes.len());
+    for (label, scene) in scenes {
+        panels.push(MeshPanel {
+            label,
+            gpu: renderer.upload(&scene).map_err(render_error)?,
+            triangles: scene.triangles(),
+        });
+    }
+    Ok(Gathered {
+        part: Part::Meshes(panels),
+        cams,
+        prepare_ms: 0.0,
+        device_ms,
+        upload_ms: ms(t.elapsed()),
+    })
+}
+
+/// The panels drawn side by side and the columns of their grid.
+fn panel_grid(p: &Params, part: &Part) -> (usize, usize) {
+    let panel_count = match part {
         Part::Meshes(m) => m.len(),
         Part::Brep(_) => 1,
     };
@@ -534,9 +597,27 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         .columns
         .unwrap_or_else(|| panels::default_columns(panel_count))
         .min(panel_count);
+    (panel_count, columns)
+}
+
+/// Renders each camera's frame and writes its PNGs (colour, face ids); the files written so
+/// far are removed when a later step fails.
+fn render_frames(
+    renderer: &Renderer,
+    p: &Params,
+    g: &Gathered,
+    ctx: &JobContext,
+) -> Result<Rendered, OpError> {
+    let cams = &g.cams;
+    let mut written = Written(Vec::new());
+    let (mut draw, mut readback, mut encode) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
+    let mut covered = Vec::with_capacity(cams.len());
+    let mut steps = Vec::with_capacity(cams.len());
+    let mut last: Option<Frame> = None;
+    let (_, columns) = panel_grid(p, &g.part);
     for (i, camera) in cams.iter().enumerate() {
         ctx.checkpoint()?;
-        let frame = match &part {
+        let frame = match &g.part {
             Part::Meshes(meshes) => {
                 let mut frames = Vec::with_capacity(meshes.len());
                 for m in meshes {
@@ -556,30 +637,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             }
             Part::Brep(gpu) => {
                 let (frame, report) = if p.raycast {
-                    // Progress and cancel between the ray caster's slices (~25 ms each).
-                    let mut stop = None;
-                    let frames = cams.len();
-                    let mut tell = |done: f64| {
-                        let at = 0.5 + 0.5 * (i as f64 + done) / frames as f64;
-                        let msg = format!(
-                            "frame {} of {frames}: ray cast {:.0} %",
-                            i + 1,
-                            100.0 * done
-                        );
-                        match ctx.progress(at.min(1.0), "render", &msg) {
-                            Ok(()) => true,
-                            Err(e) => {
-                                stop = Some(e);
-                                false
-                            }
-                        }
-                    };
-                    let cast =
-                        renderer.ray_cast_brep_with_progress(gpu, camera, &p.settings, &mut tell);
-                    if let (Err(RenderError::Cancelled), Some(e)) = (&cast, stop) {
-                        return Err(e);
-                    }
-                    cast
+                    ray_cast_frame(renderer, gpu, camera, p, i, cams.len(), ctx)?
                 } else {
                     renderer.render_brep(gpu, camera, &p.settings, p.cracks)
                 }
@@ -592,21 +650,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         };
         covered.push(frame.covered());
         let t = Instant::now();
-        for (path, ids) in [(&p.output, false), (&p.face_ids, true)] {
-            let Some(path) = path else { continue };
-            let path = frame_path(path, i as u32, p.frames);
-            ctx.checkpoint()?;
-            let encoded;
-            let rgba = if ids {
-                encoded = tessd_render::image::face_ids_to_rgba(&frame.face_id);
-                &encoded
-            } else {
-                &frame.color
-            };
-            tessd_render::image::write_png(&path, frame.width, frame.height, rgba)
-                .map_err(render_error)?;
-            written.0.push(path);
-        }
+        write_frame(p, &frame, i as u32, &mut written, ctx)?;
         encode += t.elapsed();
         let _ = ctx.progress(
             0.5 + 0.5 * (i + 1) as f64 / cams.len() as f64,
@@ -615,11 +659,88 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         );
         last = Some(frame);
     }
-    let files = std::mem::take(&mut written.0);
+    Ok(Rendered {
+        files: std::mem::take(&mut written.0),
+        covered,
+        steps,
+        draw,
+        readback,
+        encode,
+        last,
+    })
+}
 
-    let first = &cams[0];
+/// Ray casts frame `i` of `frames` (`raycast`), reporting progress and honouring a cancel
+/// between the ray caster's slices; the outer `Err` is the job's cancellation, the inner
+/// result the renderer's.
+fn ray_cast_frame(
+    renderer: &Renderer,
+    gpu: &tessd_render::GpuBrepScene,
+    camera: &Camera,
+    p: &Params,
+    i: usize,
+    frames: usize,
+    ctx: &JobContext,
+) -> Result<Result<(Frame, BrepReport), RenderError>, OpError> {
+    // Progress and cancel between the ray caster's slices (~25 ms each).
+    let mut stop = None;
+    let mut tell = |done: f64| {
+        let at = 0.5 + 0.5 * (i as f64 + done) / frames as f64;
+        let msg = format!(
+            "frame {} of {frames}: ray cast {:.0} %",
+            i + 1,
+            100.0 * done
+        );
+        match ctx.progress(at.min(1.0), "render", &msg) {
+            Ok(()) => true,
+            Err(e) => {
+                stop = Some(e);
+                false
+            }
+        }
+    };
+    let cast = renderer.ray_cast_brep_with_progress(gpu, camera, &p.settings, &mut tell);
+    if let (Err(RenderError::Cancelled), Some(e)) = (&cast, stop) {
+        return Err(e);
+    }
+    Ok(cast)
+}
+
+/// Writes frame `i`'s PNGs: the colour image to `output`, the face ids to `face_ids`.
+fn write_frame(
+    p: &Params,
+    frame: &Frame,
+    i: u32,
+    written: &mut Written,
+    ctx: &JobContext,
+) -> Result<(), OpError> {
+    for (path, ids) in [(&p.output, false), (&p.face_ids, true)] {
+        let Some(path) = path else { continue };
+        let path = frame_path(path, i, p.frames);
+        ctx.checkpoint()?;
+        let encoded;
+        let rgba = if ids {
+            encoded = tessd_render::image::face_ids_to_rgba(&frame.face_id);
+            &encoded
+        } else {
+            &frame.color
+        };
+        tessd_render::image::write_png(&path, frame.width, frame.height, rgba)
+            .map_err(render_error)?;
+        written.0.push(path);
+    }
+    Ok(())
+}
+
+/// The result: the image's size, the adapter, the view and camera, what was drawn (panels or
+/// the B-Rep pipeline's grid and cracks), the pixels covered, the files and the timings
+/// (`total` is added by [`run`]).
+fn describe(result: &mut Value, renderer: &Renderer, p: &Params, g: &Gathered, r: &Rendered) {
+    let steps = &r.steps;
+    let first = &g.cams[0];
     let a = renderer.adapter();
     let read_ms = result["timings_ms"]["read"].as_f64().unwrap_or(0.0);
+    let (panel_count, columns) = panel_grid(p, &g.part);
     let rows = panel_count.div_ceil(columns) as u32;
     result["width"] = json!(p.width * columns as u32);
     result["height"] = json!(p.height * rows);
@@ -637,7 +758,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
     });
     result["shading"] = json!(p.settings.shading.name());
     result["edges"] = json!(p.settings.edges);
-    match &part {
+    match &g.part {
         Part::Meshes(meshes) => {
             result["triangles"] = json!(meshes.iter().map(|m| m.triangles).sum::<usize>());
             if meshes.len() > 1 {
@@ -682,33 +803,35 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         }
     }
     result["pixels"] = json!(p.width as u64 * columns as u64 * p.height as u64 * rows as u64);
-    result["covered"] = json!(covered[0]);
+    result["covered"] = json!(r.covered[0]);
     if p.frames > 1 {
-        result["covered_per_frame"] = json!(covered);
+        result["covered_per_frame"] = json!(r.covered);
     }
     result["output"] = json!(p.output.as_ref().map(|o| o.display().to_string()));
     result["files"] = json!(
-        files
+        r.files
             .iter()
             .map(|f| f.display().to_string())
             .collect::<Vec<_>>()
     );
     result["timings_ms"] = json!({
         "read": read_ms,
-        "prepare": prepare_ms,
+        "prepare": g.prepare_ms,
         "tessellate": ms(steps.iter().map(|r| r.timings.tessellation).sum()),
-        "device": device_ms,
-        "upload": upload_ms,
-        "draw": ms(draw),
-        "readback": ms(readback),
-        "encode": ms(encode),
-        "total": ms(total.elapsed()),
+        "device": g.device_ms,
+        "upload": g.upload_ms,
+        "draw": ms(r.draw),
+        "readback": ms(r.readback),
+        "encode": ms(r.encode),
     });
-    if matches!(part, Part::Brep(_)) {
-        result["timings_ms"]["steps"] = step_timings(&steps);
+    if matches!(g.part, Part::Brep(_)) {
+        result["timings_ms"]["steps"] = step_timings(steps);
     }
-    ctx.progress(1.0, "done", "")?;
-    let arrays = match (&p.output, last) {
+}
+
+/// The last frame as arrays (`color`, `depth`, `face_id`, `uv`), when no file was asked for.
+fn frame_arrays(p: &Params, last: Option<Frame>) -> Vec<OwnedArray> {
+    match (&p.output, last) {
         (None, Some(f)) => {
             let (h, w) = (f.height as u64, f.width as u64);
             let uv: Vec<f32> = f.uv.iter().flatten().copied().collect();
@@ -720,12 +843,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
             ]
         }
         _ => Vec::new(),
-    };
-    Ok(Response {
-        result,
-        arrays,
-        files,
-    })
+    }
 }
 
 #[cfg(test)]
