@@ -1,11 +1,12 @@
 //! The library crates' errors in the protocol's terms: each `MeshError`, `UsdError`,
-//! `ValidationError` (B-Rep) and `RenderError` becomes an [`OpError`] with the code a client
+//! `ValidationError` (B-Rep), `RenderError` and `SimplifyError` becomes an [`OpError`] with the code a client
 //! acts on. Below the ops and their parameters, which all raise them.
 
 use tessd_brep::ValidationError;
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_mesh::MeshError;
 use tessd_render::RenderError;
+use tessd_simplify::SimplifyError;
 
 /// Maps a mesh-crate error onto the protocol's codes. An unknown extension's message lists
 /// what tessd reads and writes, `.usda` stages included, and says that binary USD is not one
@@ -67,4 +68,16 @@ pub fn render_error(e: RenderError) -> OpError {
         _ => ErrorCode::Internal,
     };
     OpError::new(code, e.to_string())
+}
+
+/// Maps a simplification error onto the protocol's codes; `what` names the parameter an
+/// invalid option comes from.
+pub fn simplify_error(e: SimplifyError, what: &str) -> OpError {
+    match e {
+        SimplifyError::InvalidMesh(m) => mesh_error(m),
+        SimplifyError::Empty => OpError::new(ErrorCode::InvalidMesh, "the mesh has no faces"),
+        SimplifyError::InvalidOption(msg) => OpError::request(format!("`{what}`: {msg}")),
+        SimplifyError::Cancelled => OpError::cancelled(),
+        other => OpError::new(ErrorCode::Internal, other.to_string()),
+    }
 }

@@ -7,10 +7,12 @@
 //! The parameters are described in docs/protocol.md ("lod").
 
 use super::common::{file_dropped, is_usda, merge_names, stage_options, stem, write_mesh_file};
-use super::library_errors::usd_error;
+use super::library_errors::{simplify_error, usd_error};
 use super::mesh_arrays::{input_mesh, mesh_to_prefixed_arrays, output_path};
+use super::params::clustering::{MethodKind, base_options};
+use super::params::lengths::lengths_in_model_units;
 use super::params::scalars::{as_u64, bool_param};
-use super::simplify::{MethodKind, base_options, remove_all, report_json, simplify_error};
+use super::simplify::{remove_all, report_json};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 use tessd_ipc::error::{ErrorCode, OpError};
@@ -235,7 +237,7 @@ pub fn run(mut request: Request, ctx: &JobContext) -> Result<Response, OpError> 
         }
     }
     if kind == MethodKind::Quality {
-        super::simplify::lengths_in_model_units(&mut request, &["levels"])?;
+        lengths_in_model_units(&mut request, &["levels"])?;
     }
     let values = level_values(&request)?;
     let methods = values

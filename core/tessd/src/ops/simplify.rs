@@ -5,152 +5,18 @@
 //! the settings the `lod` operation shares.
 
 use super::common::{check_mesh_output, check_stage_options, file_dropped, stem, write_mesh_file};
-use super::library_errors::mesh_error;
+use super::library_errors::{mesh_error, simplify_error};
 use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
-use super::params::lengths::{mesh_units, parse_length};
-use super::params::scalars::{Amount, as_u64, bool_param, parse_amount, plain_number};
+use super::params::clustering::{MethodKind, base_options};
+use super::params::lengths::lengths_in_model_units;
+use super::params::scalars::bool_param;
 use serde_json::{Value, json};
 use std::path::Path;
 use tessd_ipc::arrays::OwnedArray;
-use tessd_ipc::error::{ErrorCode, OpError};
+use tessd_ipc::error::OpError;
 use tessd_ipc::job::JobContext;
 use tessd_ipc::registry::{Request, Response};
-use tessd_simplify::{
-    Cell, Count, GridSize, Length, Method, Report, Representative, SimplifyError, SimplifyOptions,
-    Weighting,
-};
-
-/// The three partition methods, as named in requests.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MethodKind {
-    /// `"grid"`: a regular grid (`cells` or `cell_size`).
-    Grid,
-    /// `"quality"`: a tolerance (`max_error`).
-    Quality,
-    /// `"complexity"`: a vertex count (`target_vertices`).
-    Complexity,
-}
-
-impl MethodKind {
-    /// Parses `"grid"`, `"quality"` or `"complexity"`.
-    ///
-    /// # Errors
-    /// `invalid_request` naming the value.
-    pub fn parse(s: &str) -> Result<MethodKind, OpError> {
-        match s {
-            "grid" => Ok(MethodKind::Grid),
-            "quality" => Ok(MethodKind::Quality),
-            "complexity" => Ok(MethodKind::Complexity),
-            other => Err(OpError::request(format!(
-                "`method` must be \"grid\", \"quality\" or \"complexity\", got {other:?}"
-            ))),
-        }
-    }
-
-    /// The request name.
-    pub fn name(self) -> &'static str {
-        match self {
-            MethodKind::Grid => "grid",
-            MethodKind::Quality => "quality",
-            MethodKind::Complexity => "complexity",
-        }
-    }
-
-    /// The goal of this method from one value: cells per axis (grid), a tolerance (quality:
-    /// `"0.5%"` is a percentage of the largest side of the bounding box) or a vertex count
-    /// (complexity: `"20%"` of the input's vertices). `what` names the value in messages.
-    ///
-    /// # Errors
-    /// `invalid_request` naming `what` and the value.
-    pub fn goal(self, what: &str, v: &Value) -> Result<Method, OpError> {
-        match self {
-            MethodKind::Grid => {
-                let n = match v {
-                    Value::String(s) => s.trim().parse::<u64>().ok(),
-                    _ => as_u64(v),
-                };
-                let n = n.filter(|n| (1..=u64::from(u32::MAX)).contains(n));
-                n.map(|n| Method::Grid(GridSize::CellsPerAxis(n as u32)))
-                    .ok_or_else(|| {
-                        OpError::request(format!(
-                            "`{what}` must be a positive integer (cells per axis), got {v}"
-                        ))
-                    })
-            }
-            MethodKind::Quality => Ok(Method::Quality(match parse_amount(what, v)? {
-                Amount::Absolute(x) => Length::Absolute(x),
-                Amount::Percent(p) => Length::Relative(p / 100.0),
-            })),
-            MethodKind::Complexity => match parse_amount(what, v)? {
-                Amount::Percent(p) if p < 100.0 => {
-                    Ok(Method::Complexity(Count::Relative(p / 100.0)))
-                }
-                Amount::Percent(p) => Err(OpError::request(format!(
-                    "`{what}` must be below 100% of the input's vertices, got {p}%"
-                ))),
-                Amount::Absolute(x) if x.fract() == 0.0 && x < 2f64.powi(63) => {
-                    Ok(Method::Complexity(Count::Absolute(x as u64)))
-                }
-                Amount::Absolute(_) => Err(OpError::request(format!(
-                    "`{what}` must be an integer number of vertices or a percentage such as \
-                     \"20%\", got {v}"
-                ))),
-            },
-        }
-    }
-}
-
-/// The settings every level shares (`representative`, `weighting`, `triangulate`,
-/// `preserve_boundaries`), for `method`, with the job's cancel flag.
-///
-/// # Errors
-/// `invalid_request` naming the parameter and its value.
-pub fn base_options(
-    request: &Request,
-    method: Method,
-    ctx: &JobContext,
-) -> Result<SimplifyOptions, OpError> {
-    let representative = match request.str_param("representative")? {
-        None | Some("barycenter") => Representative::Barycenter,
-        Some("heaviest") => Representative::Heaviest,
-        Some("quadric") => Representative::Quadric,
-        Some(other) => {
-            return Err(OpError::request(format!(
-                "`representative` must be \"barycenter\", \"heaviest\" or \"quadric\", got \
-                 {other:?}"
-            )));
-        }
-    };
-    let weighting = match request.str_param("weighting")? {
-        None | Some("longest_edge") => Weighting::LongestEdge,
-        Some("curvature") => Weighting::Curvature,
-        Some("uniform") => Weighting::Uniform,
-        Some(other) => {
-            return Err(OpError::request(format!(
-                "`weighting` must be \"longest_edge\", \"curvature\" or \"uniform\", got \
-                 {other:?}"
-            )));
-        }
-    };
-    Ok(SimplifyOptions::new(method)
-        .with_representative(representative)
-        .with_weighting(weighting)
-        .with_triangulate(bool_param(request, "triangulate")?.unwrap_or(false))
-        .with_preserve_boundaries(bool_param(request, "preserve_boundaries")?.unwrap_or(false))
-        .with_cancel(ctx.cancel_token().flag()))
-}
-
-/// Maps a simplification error onto the protocol's codes; `what` names the parameter an
-/// invalid option comes from.
-pub fn simplify_error(e: SimplifyError, what: &str) -> OpError {
-    match e {
-        SimplifyError::InvalidMesh(m) => mesh_error(m),
-        SimplifyError::Empty => OpError::new(ErrorCode::InvalidMesh, "the mesh has no faces"),
-        SimplifyError::InvalidOption(msg) => OpError::request(format!("`{what}`: {msg}")),
-        SimplifyError::Cancelled => OpError::cancelled(),
-        other => OpError::new(ErrorCode::Internal, other.to_string()),
-    }
-}
+use tessd_simplify::{Cell, GridSize, Length, Method, Report, SimplifyError};
 
 /// Why a complexity goal was missed by more than 1 %, or `None` when it was met (or the
 /// method had no vertex target).
@@ -199,55 +65,6 @@ pub fn report_json(r: &Report) -> Value {
         "tolerance": r.tolerance,
         "target_vertices": r.target_vertices,
     })
-}
-
-/// Rewrites the length parameters `keys` (a value, or a list of values such as `lod`'s
-/// `levels`) given with a unit (`"5mm"`, `"0.2 in"`; mm, cm, m, in) as numbers in the mesh's
-/// model unit, which `params.units` names: a mesh file carries no unit, so a length with one
-/// needs it (refused otherwise, saying so). Plain numbers (`0.2`, `"0.2"`) are model units and
-/// percentages (`"1%"`) stay as they are.
-///
-/// # Errors
-/// `invalid_request` for an unknown `units`, a unit-bearing length without `units`, or a
-/// length [`parse_length`] refuses.
-pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<(), OpError> {
-    let units = mesh_units(request)?;
-    let convert = |key: &str, v: &mut Value| -> Result<(), OpError> {
-        let Some(text) = v.as_str() else {
-            return Ok(());
-        };
-        let t = text.trim();
-        let has_unit = !t.ends_with('%')
-            && t.chars()
-                .any(|c| c.is_ascii_alphabetic() && c != 'e' && c != 'E');
-        if !has_unit {
-            // A plain number written as text is a number in model units.
-            if let Some(x) = plain_number(t) {
-                *v = json!(x);
-            }
-            return Ok(());
-        }
-        let Some(units) = units else {
-            return Err(OpError::request(format!(
-                "`{key}` {text:?} has a unit, but a mesh file has none: give `units` (the unit \
-                 of the mesh's coordinates: mm, cm, m or in), or a number in model units"
-            )));
-        };
-        *v = json!(parse_length(key, v, units)?);
-        Ok(())
-    };
-    for &key in keys {
-        match request.params.get_mut(key) {
-            Some(Value::Array(items)) => {
-                for item in items {
-                    convert(key, item)?;
-                }
-            }
-            Some(v) => convert(key, v)?,
-            None => {}
-        }
-    }
-    Ok(())
 }
 
 /// Parameters that only one method takes.

@@ -4,7 +4,7 @@
 
 use super::scalars::plain_number;
 use crate::ops::library_errors::brep_error;
-use serde_json::Value;
+use serde_json::{Value, json};
 use tessd_brep::{Document, Units};
 use tessd_ipc::error::OpError;
 use tessd_ipc::registry::Request;
@@ -126,6 +126,55 @@ pub fn absolute_tolerance(asked: Tolerance, doc: &Document) -> Result<(f64, Opti
         doc.faces.len(),
         doc.units.name()
     )))
+}
+
+/// Rewrites the length parameters `keys` (a value, or a list of values such as `lod`'s
+/// `levels`) given with a unit (`"5mm"`, `"0.2 in"`; mm, cm, m, in) as numbers in the mesh's
+/// model unit, which `params.units` names: a mesh file carries no unit, so a length with one
+/// needs it (refused otherwise, saying so). Plain numbers (`0.2`, `"0.2"`) are model units and
+/// percentages (`"1%"`) stay as they are.
+///
+/// # Errors
+/// `invalid_request` for an unknown `units`, a unit-bearing length without `units`, or a
+/// length [`parse_length`] refuses.
+pub fn lengths_in_model_units(request: &mut Request, keys: &[&str]) -> Result<(), OpError> {
+    let units = mesh_units(request)?;
+    let convert = |key: &str, v: &mut Value| -> Result<(), OpError> {
+        let Some(text) = v.as_str() else {
+            return Ok(());
+        };
+        let t = text.trim();
+        let has_unit = !t.ends_with('%')
+            && t.chars()
+                .any(|c| c.is_ascii_alphabetic() && c != 'e' && c != 'E');
+        if !has_unit {
+            // A plain number written as text is a number in model units.
+            if let Some(x) = plain_number(t) {
+                *v = json!(x);
+            }
+            return Ok(());
+        }
+        let Some(units) = units else {
+            return Err(OpError::request(format!(
+                "`{key}` {text:?} has a unit, but a mesh file has none: give `units` (the unit \
+                 of the mesh's coordinates: mm, cm, m or in), or a number in model units"
+            )));
+        };
+        *v = json!(parse_length(key, v, units)?);
+        Ok(())
+    };
+    for &key in keys {
+        match request.params.get_mut(key) {
+            Some(Value::Array(items)) => {
+                for item in items {
+                    convert(key, item)?;
+                }
+            }
+            Some(v) => convert(key, v)?,
+            None => {}
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -4,5 +4,6 @@
 
 pub mod brep_input;
 pub mod camera;
+pub mod clustering;
 pub mod lengths;
 pub mod scalars;
