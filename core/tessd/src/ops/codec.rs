@@ -14,9 +14,10 @@ use tessd_ipc::registry::{Request, Response};
 use tessd_mesh::Mesh;
 
 use super::common::{check_stage_options, file_dropped, write_mesh_file};
-use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
+use super::mesh_arrays::{input_mesh, mesh_to_arrays};
 use super::params::camera::{parse_size, vec3_param};
-use super::params::scalars::u64_param;
+use super::params::paths::output_path;
+use super::params::scalars::{u32_param, u64_param};
 
 /// A codec error as the protocol names it: bad parameters are the request's fault, a corrupt
 /// file the input's, the rest I/O.
@@ -37,15 +38,6 @@ fn output_error(e: CodecError, context: &str, output: &std::path::Path) -> OpErr
     match e {
         CodecError::Io { context: c, source } if c == context => write_error(output, source),
         e => codec_error(e),
-    }
-}
-
-/// A `u32` parameter with a default.
-fn u32_param(request: &Request, key: &str, default: u32) -> Result<u32, OpError> {
-    match u64_param(request, key)? {
-        None => Ok(default),
-        Some(v) => u32::try_from(v)
-            .map_err(|_| OpError::request(format!("parameter `{key}` is too large: {v}"))),
     }
 }
 

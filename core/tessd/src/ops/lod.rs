@@ -8,9 +8,10 @@
 
 use super::common::{file_dropped, is_usda, merge_names, stage_options, stem, write_mesh_file};
 use super::library_errors::{simplify_error, usd_error};
-use super::mesh_arrays::{input_mesh, mesh_to_prefixed_arrays, output_path};
+use super::mesh_arrays::{input_mesh, mesh_to_prefixed_arrays};
 use super::params::clustering::{MethodKind, base_options};
 use super::params::lengths::lengths_in_model_units;
+use super::params::paths::output_path;
 use super::params::scalars::{as_u64, bool_param};
 use super::simplify::{remove_all, report_json};
 use serde_json::{Value, json};

@@ -4,7 +4,7 @@
 //! attributes and `sharp_edges`), and results as arrays or a written file.
 
 use super::library_errors::{mesh_error, usd_error};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use tessd_ipc::arrays::{Arrays, DType, Element, OwnedArray, TakenArray, TypedView};
 use tessd_ipc::error::{ErrorCode, OpError};
 use tessd_ipc::job::JobContext;
@@ -448,12 +448,4 @@ pub fn mesh_to_prefixed_arrays(mesh: Mesh, prefix: &str) -> Vec<OwnedArray> {
         out.push(OwnedArray::new(&named(&a.label()), shape, a.values));
     }
     out
-}
-
-/// The request's output path (`params.output`), resolved, if any.
-///
-/// # Errors
-/// `invalid_request` when `output` is not a string.
-pub fn output_path(request: &Request) -> Result<Option<PathBuf>, OpError> {
-    Ok(request.str_param("output")?.map(|p| request.resolve(p)))
 }

@@ -3,7 +3,8 @@
 //! format could not hold.
 
 use super::common::{check_mesh_output, check_stage_options, file_dropped, stem, write_mesh_file};
-use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
+use super::mesh_arrays::{input_mesh, mesh_to_arrays};
+use super::params::paths::output_path;
 use serde_json::json;
 use tessd_ipc::error::OpError;
 use tessd_ipc::job::JobContext;

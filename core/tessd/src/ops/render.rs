@@ -9,10 +9,11 @@
 
 use super::common::stem;
 use super::library_errors::{brep_error, render_error, usd_error};
-use super::mesh_arrays::{input_mesh, is_usd_input, output_path, read_mesh_file, read_options};
+use super::mesh_arrays::{input_mesh, is_usd_input, read_mesh_file, read_options};
 use super::params::brep_input::{is_brep_path, request_brep};
 use super::params::camera::{parse_size, vec3_param};
 use super::params::lengths::{Tolerance, parse_tolerance};
+use super::params::paths::output_path;
 use super::params::scalars::{bool_param, u64_param};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};

@@ -6,9 +6,10 @@
 
 use super::common::{check_mesh_output, check_stage_options, file_dropped, stem, write_mesh_file};
 use super::library_errors::{mesh_error, simplify_error};
-use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
+use super::mesh_arrays::{input_mesh, mesh_to_arrays};
 use super::params::clustering::{MethodKind, base_options};
 use super::params::lengths::lengths_in_model_units;
+use super::params::paths::output_path;
 use super::params::scalars::bool_param;
 use serde_json::{Value, json};
 use std::path::Path;

@@ -8,7 +8,8 @@ use super::common::{
     stem, write_mesh_file,
 };
 use super::library_errors::usd_error;
-use super::mesh_arrays::{input_mesh, mesh_to_arrays, output_path};
+use super::mesh_arrays::{input_mesh, mesh_to_arrays};
+use super::params::paths::output_path;
 use super::params::scalars::{as_u64, bool_param};
 use serde_json::json;
 use std::time::Instant;

@@ -13,9 +13,10 @@
 
 use super::common::{check_mesh_output, is_usda, stage_options_in, stem};
 use super::library_errors::{brep_error, mesh_error, usd_error};
-use super::mesh_arrays::{mesh_to_arrays, output_path};
+use super::mesh_arrays::mesh_to_arrays;
 use super::params::brep_input::request_brep;
 use super::params::lengths::parse_tolerance;
+use super::params::paths::output_path;
 // Re-exported where they lived: the fuzz target `brep` takes them from here.
 pub use super::params::lengths::{Tolerance, absolute_tolerance};
 use serde_json::{Value, json};

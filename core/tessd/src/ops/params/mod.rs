@@ -6,4 +6,5 @@ pub mod brep_input;
 pub mod camera;
 pub mod clustering;
 pub mod lengths;
+pub mod paths;
 pub mod scalars;

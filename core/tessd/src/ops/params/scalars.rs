@@ -36,6 +36,15 @@ pub fn u64_param(request: &Request, key: &str) -> Result<Option<u64>, OpError> {
     }
 }
 
+/// A `u32` parameter with a default.
+pub fn u32_param(request: &Request, key: &str, default: u32) -> Result<u32, OpError> {
+    match u64_param(request, key)? {
+        None => Ok(default),
+        Some(v) => u32::try_from(v)
+            .map_err(|_| OpError::request(format!("parameter `{key}` is too large: {v}"))),
+    }
+}
+
 /// `v` as a non-negative integer, when it is one (`8` or `8.0`).
 pub fn as_u64(v: &Value) -> Option<u64> {
     v.as_u64().or_else(|| {
