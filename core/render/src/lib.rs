@@ -330,15 +330,7 @@ impl Renderer {
     /// # Errors
     /// [`RenderError::Gpu`] when there is no adapter or the shaders do not compile.
     pub fn new() -> Result<Renderer, RenderError> {
-        let gpu = GpuContext::open("tessd-render")?;
-        let scopes = ErrorScopes::push(&gpu.device);
-        let surface = surface::SurfacePass::new(&gpu.device);
-        scopes.pop_blocking()?;
-        Ok(Renderer {
-            gpu,
-            surface,
-            brep: std::sync::OnceLock::new(),
-        })
+        Renderer::with_context(GpuContext::open("tessd-render")?)
     }
 
     /// A renderer on an opened device: the viewer's, opened for its window
