@@ -5,6 +5,8 @@
 //! Both the encoder (merging cells bottom-up) and the decoder (splitting them top-down) work on
 //! this structure, so that the two sides see exactly the same state between two codes.
 
+use crate::star_cache::StarCache;
+
 /// Marks an isolated point in [`Simplex::kind`].
 pub const POINT: u8 = 0;
 /// Marks a triangle in [`Simplex::kind`].
@@ -266,6 +268,9 @@ pub struct Complex {
     /// the decoder's output order does not depend on which slots were reused.
     born: Vec<u32>,
     made: u32,
+    /// The split contexts' cached stars ([`crate::star_cache`]): every method here that changes
+    /// a simplex first drops the records it could make stale, so that no caller can forget to.
+    pub(crate) star_cache: StarCache,
 }
 
 impl Complex {
@@ -273,12 +278,91 @@ impl Complex {
     pub fn add_vertex(&mut self, v: Vertex) -> u32 {
         self.vertices.push(v);
         self.incident.stars.push(Star::default());
-        (self.vertices.len() - 1) as u32
+        let id = (self.vertices.len() - 1) as u32;
+        self.star_cache.invalidate(id);
+        id
+    }
+
+    /// Drops the cached stars a change to the simplex `s` could make stale (before it is added
+    /// or removed): those of its corners, and the parallelograms of every vertex sharing a
+    /// simplex with one (`s` may lie across one of its far edges, whose ends are `s`'s corners).
+    fn drop_stars_of(&mut self, s: Simplex) {
+        if self.star_cache.is_empty() {
+            return;
+        }
+        let Complex {
+            star_cache,
+            incident,
+            simplices,
+            ..
+        } = self;
+        for x in s.corners() {
+            star_cache.invalidate(x);
+            for &slot in incident.list(x) {
+                if let Some(t) = simplices[slot as usize] {
+                    for y in t.v {
+                        star_cache.drop_far(y);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Drops the cached stars a change to every simplex holding a vertex of `seeds` could make
+    /// stale (before the change, whose simplices hold `seeds` and their neighbours only): the
+    /// stars of `seeds` and of their neighbours, and the parallelograms that read a vertex of
+    /// `seeds`. Those of a vertex `u` read `v` where a triangle `(u, x, y)` meets `(y, x, v)`
+    /// across the edge `x → y`, which is where `v`'s own parallelograms read `u`: they are
+    /// `v`'s record's far corners when it has them, else the corners of the triangles holding
+    /// the far edges of `v`'s star.
+    fn drop_stars_around(&mut self, seeds: &[u32]) {
+        if self.star_cache.is_empty() {
+            return;
+        }
+        let Complex {
+            star_cache,
+            incident,
+            simplices,
+            ..
+        } = self;
+        for &v in seeds {
+            let readers = star_cache.far_corners(v);
+            if let Some(ids) = readers {
+                for y in ids {
+                    star_cache.drop_far(y);
+                }
+            }
+            star_cache.invalidate(v);
+            for &slot in incident.list(v) {
+                let Some(s) = simplices[slot as usize] else {
+                    continue;
+                };
+                for y in s.v {
+                    star_cache.invalidate(y);
+                }
+                if readers.is_some() || s.kind == POINT || s.multiplicity(v) != 1 {
+                    continue;
+                }
+                // the star triangle (v, a, b): the triangles (b, a, u) across its far edge
+                let (a, b) = s.after(v);
+                if a == b {
+                    continue;
+                }
+                for &t in incident.list(b) {
+                    if let Some(t) = simplices[t as usize] {
+                        for u in t.v {
+                            star_cache.drop_far(u);
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Adds `s`, which the caller knows is not there yet (no duplicate check: every caller adds
     /// distinct simplices, and [`crate::encode`]'s union of cells removes its duplicates first).
     pub fn add(&mut self, s: Simplex) {
+        self.drop_stars_of(s);
         let slot = self.simplices.len() as u32;
         self.simplices.push(Some(s));
         self.born.push(self.made);
@@ -291,9 +375,11 @@ impl Complex {
 
     /// Removes the simplex in `slot`, and its slot from its vertices' lists.
     pub fn remove(&mut self, slot: u32) {
-        let Some(s) = self.simplices[slot as usize].take() else {
+        let Some(s) = self.simplices[slot as usize] else {
             return;
         };
+        self.drop_stars_of(s);
+        self.simplices[slot as usize] = None;
         self.live -= 1;
         for x in s.corners() {
             self.incident.remove(x, slot);
@@ -313,6 +399,7 @@ impl Complex {
         decoded: &[(Simplex, u8)],
         work: &mut Weld,
     ) {
+        self.drop_stars_around(&[v, v2]);
         let Weld {
             slots,
             high,
@@ -375,6 +462,17 @@ impl Complex {
     /// long). The coder's merges and splits reuse slots instead ([`Complex::weld`],
     /// [`Complex::split`]); this is the plain form, which the tests check them against.
     pub fn remove_stars(&mut self, slots: &[u32], stars: &[u32]) {
+        self.drop_stars_around(stars);
+        if !self.star_cache.is_empty() {
+            // (the slots should all hold a vertex of `stars`; any other is dropped around too)
+            for &slot in slots {
+                if let Some(s) = self.simplices[slot as usize]
+                    && !s.v.iter().any(|x| stars.contains(x))
+                {
+                    self.drop_stars_of(s);
+                }
+            }
+        }
         for &x in stars {
             self.incident.clear(x);
         }
@@ -397,6 +495,7 @@ impl Complex {
     /// image with its preimage mask (a bit per preimage, numbered by [`candidate_of`]), sorted
     /// by image.
     pub fn weld(&mut self, v1: u32, v2: u32, masks: &mut MaskList, work: &mut Weld) {
+        self.drop_stars_around(&[v1, v2]);
         let Weld { keys, slots, .. } = work;
         keys.clear();
         slots.clear();
@@ -494,6 +593,7 @@ impl Complex {
             live: 0,
             born: Vec::with_capacity(self.live),
             made: 0,
+            star_cache: StarCache::default(),
         };
         // a vertex's simplices, in the order they were made
         let mut owned: Vec<(u32, Simplex)> = Vec::new();
@@ -525,6 +625,8 @@ impl Complex {
         if out.live != self.live {
             return;
         }
+        // the same stars under the new ids (cheaper than walking them all again)
+        out.star_cache = self.star_cache.renumbered(alive, &new_id);
         *self = out;
         for (i, v) in alive.iter_mut().enumerate() {
             *v = i as u32;

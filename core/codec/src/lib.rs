@@ -51,6 +51,7 @@ mod positional_io;
 pub mod quantize;
 pub mod source;
 mod split_context;
+mod star_cache;
 pub mod symbols;
 mod varint;
 pub mod view;

@@ -25,6 +25,7 @@
 use crate::coding::Coding;
 use crate::complex::{Complex, Vertex, axis_bits};
 use crate::kd_cell::half;
+use crate::star_cache::{ENTRIES, RecordBuilder, TRIANGLES};
 use crate::symbols::{Family, MAX_LEVELS, context};
 
 /// Margin classes of the centroid: none, then its distance from the split plane in half-cells
@@ -72,7 +73,7 @@ fn doubled(w: &Vertex, bits: u32) -> [i64; 3] {
 
 /// What the decoder knows around a vertex, summed in integers (doubled grid units for a
 /// complex's vertices; the geometry ahead uses its own fixed-point units).
-#[derive(Default)]
+#[derive(Default, Debug, PartialEq, Eq)]
 pub(crate) struct Star {
     /// Neighbour positions counted (a neighbour once per star edge reaching it).
     pub(crate) count: i64,
@@ -99,6 +100,19 @@ impl Star {
             far = far.max((p[a] - pv[a]).abs());
         }
         self.reach += far;
+    }
+
+    /// Adds a neighbour at `p` counted `w` times, the vertex being at `pv` (`w` calls of
+    /// [`Star::neighbour`], in integers).
+    #[inline]
+    fn neighbours(&mut self, w: i64, p: [i64; 3], pv: [i64; 3]) {
+        self.count += w;
+        let mut far = 0;
+        for a in 0..3 {
+            self.sum[a] += w * p[a];
+            far = far.max((p[a] - pv[a]).abs());
+        }
+        self.reach += w * far;
     }
 
     /// Adds the oriented triangle `(v, x, y)` at `pv`, `px`, `py` to the normal.
@@ -193,15 +207,101 @@ pub(crate) const FAR: i64 = 64;
 
 /// The star of `v` (whose split halves are `h` wide): its neighbours' centroid and reach, its
 /// oriented normal, the parallelograms across its far edges, and whether it holds a collapsed
-/// triangle.
+/// triangle. Its ids come from `v`'s cached record ([`crate::star_cache`], made from a walk when
+/// there is none), its sums from the current positions.
 fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
+    let st = star_cached(cx, v, bits, h);
+    // the record must be what a walk of the complex finds now (a missed invalidation shows here)
+    #[cfg(debug_assertions)]
+    assert_eq!(
+        st,
+        star_walk(cx, v, bits, h, None),
+        "the cached star of vertex {v}"
+    );
+    st
+}
+
+/// [`star`] from `v`'s cached record, made (by the walk) when there is none.
+fn star_cached(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
+    let Some(&r) = cx.star_cache.get(v) else {
+        let mut b = RecordBuilder::new();
+        let st = star_walk(cx, v, bits, h, Some(&mut b));
+        cx.star_cache.store(v, b.done());
+        return st;
+    };
+    if r.walk() {
+        return star_walk(cx, v, bits, h, None);
+    }
+    let pv = doubled(&cx.vertices[v as usize], bits);
+    let mut p = [[0i64; 3]; ENTRIES];
+    let mut st = Star {
+        collapsed: r.collapsed(),
+        ..Star::default()
+    };
+    let base = r.base as usize;
+    for ((q, &id), &w) in p.iter_mut().zip(&r.ids[..base]).zip(&r.weight) {
+        *q = doubled(&cx.vertices[id as usize], bits);
+        st.neighbours(w as i64, *q, pv);
+    }
+    for &[i, j] in &r.tri[..r.tris as usize] {
+        st.triangle(pv, p[i as usize], p[j as usize]);
+    }
+    if !st.near(2 * h) {
+        return st;
+    }
+    let r = if r.far() {
+        r
+    } else {
+        // the parallelograms, wanted for the first time since the record was made
+        let mut b = RecordBuilder::far(&r);
+        let edges: [(u32, u32); TRIANGLES] =
+            std::array::from_fn(|t| (r.ids[r.tri[t][0] as usize], r.ids[r.tri[t][1] as usize]));
+        across_edges(cx, v, &edges[..r.tris as usize], |t, z| {
+            b.parallelogram(t, z)
+        });
+        let far = b.done();
+        cx.star_cache.store(v, far);
+        if far.walk() {
+            return star_walk(cx, v, bits, h, None);
+        }
+        far
+    };
+    let len = r.len as usize;
+    for (q, &id) in p[base..len].iter_mut().zip(&r.ids[base..len]) {
+        *q = doubled(&cx.vertices[id as usize], bits);
+    }
+    for (q, &c) in p[..len].iter().zip(&r.par) {
+        let c = c as i64;
+        for (sum, x) in st.parallelogram.iter_mut().zip(q) {
+            *sum += c * x;
+        }
+        // each parallelogram adds 1 + 1 − 1 to the coefficients
+        st.parallelograms += c;
+    }
+    st
+}
+
+/// A far edge `x → y` and its ends' positions.
+type FarEdge = ((u32, u32), [[i64; 3]; 2]);
+
+/// [`star`] by a walk of the complex: `v`'s incidence list, and its neighbours' for the
+/// parallelograms; what it finds also goes to `record` when given (the parallelograms only if
+/// they were looked for).
+fn star_walk(
+    cx: &Complex,
+    v: u32,
+    bits: u32,
+    h: i64,
+    mut record: Option<&mut RecordBuilder>,
+) -> Star {
     let pv = doubled(&cx.vertices[v as usize], bits);
     let mut st = Star::default();
-    // the far edges of the star's triangles, on the stack while they are few (the usual case)
-    type Edge = (u32, u32, [[i64; 3]; 2]);
-    let mut few = [(0u32, 0u32, [[0i64; 3]; 2]); 16];
+    // the far edges of the star's triangles and their ends' positions, on the stack while they
+    // are few (the usual case)
+    let mut few = [(0u32, 0u32); 16];
+    let mut at = [[[0i64; 3]; 2]; 16];
     let mut count = 0;
-    let mut many: Vec<Edge> = Vec::new();
+    let mut many: Vec<FarEdge> = Vec::new();
     for (x, y) in cx.star(v) {
         match (x == v, y == v) {
             (false, false) => {
@@ -212,55 +312,95 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
                 st.neighbour(p[0], pv);
                 st.neighbour(p[1], pv);
                 st.triangle(pv, p[0], p[1]);
+                if let Some(b) = record.as_mut() {
+                    b.neighbour(x, 1);
+                    b.neighbour(y, 1);
+                }
+                // a triangle (v, x, x) has no far edge (and a zero normal)
                 if x != y {
+                    if let Some(b) = record.as_mut() {
+                        b.triangle(x, y);
+                    }
                     if count < few.len() {
-                        few[count] = (x, y, p);
+                        few[count] = (x, y);
+                        at[count] = p;
                         count += 1;
                     } else {
-                        many.push((x, y, p));
+                        many.push(((x, y), p));
                     }
                 }
             }
-            (true, true) => st.collapsed = true,
+            (true, true) => {
+                st.collapsed = true;
+                if let Some(b) = record.as_mut() {
+                    b.collapsed();
+                }
+            }
             _ => {
                 st.collapsed = true;
                 let x = if x == v { y } else { x };
                 let p = doubled(&cx.vertices[x as usize], bits);
                 st.neighbour(p, pv);
                 st.neighbour(p, pv);
+                if let Some(b) = record.as_mut() {
+                    b.collapsed();
+                    b.neighbour(x, 2);
+                }
             }
         }
     }
     if !st.near(2 * h) {
         return st;
     }
-    if !many.is_empty() {
-        for &(x, y, p) in few[..count].iter().chain(&many) {
-            across(cx, v, x, y, |z| {
-                st.parallelogram(p[0], p[1], doubled(&cx.vertices[z as usize], bits))
-            });
+    let mut add = |k: usize, p: [[i64; 3]; 2], z: u32| {
+        st.parallelogram(p[0], p[1], doubled(&cx.vertices[z as usize], bits));
+        if let Some(b) = record.as_mut() {
+            b.parallelogram(k, z);
         }
-        return st;
+    };
+    if many.is_empty() {
+        across_edges(cx, v, &few[..count], |k, z| add(k, at[k], z));
+    } else {
+        let edges: Vec<(u32, u32)> = few[..count]
+            .iter()
+            .copied()
+            .chain(many.iter().map(|e| e.0))
+            .collect();
+        let p = |k: usize| if k < count { at[k] } else { many[k - count].1 };
+        across_edges(cx, v, &edges, |k, z| add(k, p(k), z));
     }
-    // every far edge read once, two at a time where they meet: an edge x → y with the edge
-    // ending at x (x's list serves both) or the one starting at y (y's list). On a fan of k
-    // triangles that is about k/2 list passes instead of k. The edges are found by their
-    // ends' low bits; where two ends share them one is not found and its edge is read alone.
-    let edges = &few[..count];
+    if let Some(b) = record {
+        b.far_done();
+    }
+    st
+}
+
+/// Calls `f(k, z)` for every `z` that [`across`] finds across the far edge `edges[k]` of `v`'s
+/// star. Up to 16 edges, every far edge is read once, two at a time where they meet: an edge
+/// x → y with the edge ending at x (x's list serves both) or the one starting at y (y's list).
+/// On a fan of k triangles that is about k/2 list passes instead of k. The edges are found by
+/// their ends' low bits; where two ends share them one is not found and its edge is read alone.
+fn across_edges(cx: &Complex, v: u32, edges: &[(u32, u32)], mut f: impl FnMut(usize, u32)) {
+    if edges.len() > 16 {
+        for (k, &(x, y)) in edges.iter().enumerate() {
+            across(cx, v, x, y, |z| f(k, z));
+        }
+        return;
+    }
     let (mut x_at, mut y_at) = ([NONE; 32], [NONE; 32]);
     let (mut x_edge, mut y_edge) = ([0u8; 32], [0u8; 32]);
-    for (k, &(x, y, _)) in edges.iter().enumerate() {
+    for (k, &(x, y)) in edges.iter().enumerate() {
         x_at[x as usize & 31] = x;
         x_edge[x as usize & 31] = k as u8;
         y_at[y as usize & 31] = y;
         y_edge[y as usize & 31] = k as u8;
     }
     // the edges not read yet, taken lowest first (a loop per list pass, not per edge)
-    let mut open = (1u32 << count) - 1;
+    let mut open = (1u32 << edges.len()) - 1;
     while open != 0 {
         let i = open.trailing_zeros() as usize;
         open &= open - 1;
-        let (x, y, _) = edges[i];
+        let (x, y) = edges[i];
         let into_x = y_edge[x as usize & 31] as usize;
         let from_y = x_edge[y as usize & 31] as usize;
         let pair_x = (y_at[x as usize & 31] == x) & (open >> into_x & 1 != 0);
@@ -280,11 +420,9 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
         };
         open &= !(1u32 << out) & !(1u32 << (inn & 31));
         across_both(cx, v, w, edges[out].1, xw, |side, z| {
-            let p = edges[if side == 0 { out } else { inn }].2;
-            st.parallelogram(p[0], p[1], doubled(&cx.vertices[z as usize], bits))
+            f(if side == 0 { out } else { inn }, z)
         });
     }
-    st
 }
 
 /// Whether `n` points along axis `a` (|n_a| ≥ 0.7 |n|), in integers: the components are first
@@ -520,6 +658,127 @@ mod tests {
             pairs += n;
         }
         assert!(pairs > 100);
+    }
+
+    /// Every vertex's star from the cache against a walk of the complex, at a spread of cell
+    /// sizes (so that the parallelograms are sometimes wanted, sometimes not); fills the cache.
+    fn check_all_stars(cx: &mut Complex, bits: u32, step: usize) {
+        for v in 0..cx.vertices.len() as u32 {
+            for h in [1i64 << 12, 1, 1 << 6] {
+                let cached = star_cached(cx, v, bits, h);
+                assert_eq!(
+                    cached,
+                    star_walk(cx, v, bits, h, None),
+                    "vertex {v} (h {h}) after step {step}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn cached_stars_equal_walked_ones_through_random_splits_merges_and_renumberings() {
+        use crate::complex::{MaskList, Weld, candidates};
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rand = move |n: usize| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % n as u64) as usize
+        };
+        let bits = 16;
+        for round in 0..6 {
+            let mut cx = Complex::default();
+            let n = 12 + 6 * round;
+            for _ in 0..n {
+                let corner = [0, 0, 0].map(|_| rand(1 << 16) as u32);
+                cx.add_vertex(Vertex {
+                    corner,
+                    level: rand(40) as u8,
+                });
+            }
+            // a grid-like fan plus random, degenerate and non-manifold triangles; a hub whose
+            // star does not fit a record
+            let mut all: Vec<Simplex> = Vec::new();
+            for i in 0..n as u32 - 2 {
+                all.push(Simplex::triangle(i, i + 1, i + 2));
+                all.push(Simplex::triangle(i + 2, i + 1, (i + 5) % n as u32));
+            }
+            for _ in 0..2 * n {
+                let t = [0; 3].map(|_| rand(n) as u32);
+                all.push(Simplex::triangle(t[0], t[1], t[2]));
+            }
+            for i in 1..n as u32 - 1 {
+                if round % 2 == 0 {
+                    all.push(Simplex::triangle(0, i, i + 1));
+                }
+            }
+            all.push(Simplex::point(3));
+            all.push(Simplex::triangle(4, 4, 4));
+            all.sort();
+            all.dedup();
+            for s in all {
+                cx.add(s);
+            }
+            let (mut masks, mut work) = (MaskList::default(), Weld::default());
+            for step in 0..60 {
+                check_all_stars(&mut cx, bits, step);
+                let used = cx.used_vertices();
+                match rand(5) {
+                    0 | 1 => {
+                        // a decoder's split with random preimage masks
+                        let v = used[rand(used.len())];
+                        let mut high = cx.vertices[v as usize];
+                        high.level = high.level.saturating_add(1);
+                        let v2 = cx.add_vertex(high);
+                        let slots = cx.listed(v).to_vec();
+                        let decoded: Vec<(Simplex, u8)> = slots
+                            .iter()
+                            .map(|&t| {
+                                let c = cx.simplices[t as usize].unwrap();
+                                let k = candidates(&c, v, v2).len();
+                                (c, 1 + rand((1 << k) - 1) as u8)
+                            })
+                            .collect();
+                        cx.split(v, v2, &slots, &decoded, &mut work);
+                    }
+                    2 => {
+                        // an encoder's merge
+                        if used.len() > 4 {
+                            let v1 = used[rand(used.len())];
+                            let v2 = used[rand(used.len())];
+                            if v1 != v2 {
+                                cx.weld(v1, v2, &mut masks, &mut work);
+                                cx.forget(v2);
+                            }
+                        }
+                    }
+                    3 => {
+                        // a triangle added or removed by another caller
+                        if rand(2) == 0 {
+                            let t = [0; 3].map(|_| used[rand(used.len())]);
+                            let s = Simplex::triangle(t[0], t[1], t[2]);
+                            if !cx.live_simplices().any(|x| x == s) {
+                                cx.add(s);
+                            }
+                        } else {
+                            let live: Vec<u32> = (0..cx.simplices.len() as u32)
+                                .filter(|&t| cx.simplices[t as usize].is_some())
+                                .collect();
+                            cx.remove(live[rand(live.len())]);
+                        }
+                    }
+                    _ => {
+                        // renumbered in a random order
+                        let mut alive = used.clone();
+                        for i in (1..alive.len()).rev() {
+                            alive.swap(i, rand(i + 1));
+                        }
+                        cx.reorder(&mut alive);
+                    }
+                }
+            }
+            check_all_stars(&mut cx, bits, 60);
+        }
     }
 
     #[test]
