@@ -85,6 +85,9 @@ pub fn encode(
                 i += 1;
             }
         }
+        // (each merge makes one vertex of two)
+        cx.star_cache
+            .set_kept(keep_stars(alive.len() - groups.len(), groups.len()));
         for &(x, y) in groups.iter().rev() {
             let start = buffer.len() as u32;
             conn.clear();
@@ -152,6 +155,16 @@ pub fn encode(
     }
     out
 }
+
+/// Whether the split contexts should keep their cached stars at a kd level where `changes` of
+/// `vertices` merge or split: a change drops the records of its vertex's neighbours, so where
+/// they are many the records are dropped before they are read again.
+fn keep_stars(changes: usize, vertices: usize) -> bool {
+    changes * STAR_CHANGES < vertices
+}
+
+/// One change in this many vertices or more at a level turns the cached stars off there.
+const STAR_CHANGES: usize = 8;
 
 /// Buffers one cell's merges or splits reuse, so that a split allocates nothing of its own.
 #[derive(Default)]
@@ -303,6 +316,9 @@ pub fn decode(
                 }
             }
         }
+        // the next level's split fraction is most like this one's
+        cx.star_cache
+            .set_kept(keep_stars(next.len() - alive.len(), alive.len()));
         *alive = next;
         // new vertices and simplices were appended far from their neighbours: renumber in kd
         // order once per bit of precision, so the next levels' star walks stay local

@@ -223,7 +223,10 @@ fn star(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
 
 /// [`star`] from `v`'s cached record, made (by the walk) when there is none.
 fn star_cached(cx: &mut Complex, v: u32, bits: u32, h: i64) -> Star {
-    let Some(&r) = cx.star_cache.get(v) else {
+    if !cx.star_cache.kept() {
+        return star_walk(cx, v, bits, h, None);
+    }
+    let Some(r) = cx.star_cache.get(v) else {
         let mut b = RecordBuilder::new();
         let st = star_walk(cx, v, bits, h, Some(&mut b));
         cx.star_cache.store(v, b.done());
@@ -312,15 +315,14 @@ fn star_walk(
                 st.neighbour(p[0], pv);
                 st.neighbour(p[1], pv);
                 st.triangle(pv, p[0], p[1]);
-                if let Some(b) = record.as_mut() {
-                    b.neighbour(x, 1);
-                    b.neighbour(y, 1);
-                }
                 // a triangle (v, x, x) has no far edge (and a zero normal)
-                if x != y {
-                    if let Some(b) = record.as_mut() {
-                        b.triangle(x, y);
+                if let Some(b) = record.as_mut() {
+                    let (i, j) = (b.neighbour(x, 1), b.neighbour(y, 1));
+                    if x != y {
+                        b.triangle(i, j);
                     }
+                }
+                if x != y {
                     if count < few.len() {
                         few[count] = (x, y);
                         at[count] = p;
@@ -722,6 +724,13 @@ mod tests {
             let (mut masks, mut work) = (MaskList::default(), Weld::default());
             for step in 0..60 {
                 check_all_stars(&mut cx, bits, step);
+                if step % 17 == 5 {
+                    // records turned off (all dropped) for a step, then made again
+                    cx.star_cache.set_kept(false);
+                    check_all_stars(&mut cx, bits, step);
+                    assert!(cx.star_cache.is_empty());
+                    cx.star_cache.set_kept(true);
+                }
                 let used = cx.used_vertices();
                 match rand(5) {
                     0 | 1 => {

@@ -135,34 +135,32 @@ impl RecordBuilder {
         self.r.flags |= COLLAPSED;
     }
 
-    /// Counts `x` as a neighbour `times` more times.
+    /// Counts `x` as a neighbour `times` more times; returns its entry ([`ENTRIES`] if it
+    /// did not fit).
     #[inline]
-    pub(crate) fn neighbour(&mut self, x: u32, times: u8) {
+    pub(crate) fn neighbour(&mut self, x: u32, times: u8) -> u8 {
         let r = &mut self.r;
         let Some(i) = r.entry(x) else {
             self.fits = false;
-            return;
+            return ENTRIES as u8;
         };
         // (weights stay below 128: a record's star has few triangles)
         r.weight[i] = r.weight[i].saturating_add(times).min(128);
         self.fits &= r.weight[i] < 128;
         r.base = r.len;
+        i as u8
     }
 
-    /// Adds the star triangle `(v, x, y)` (both already neighbours, distinct): its far edge
-    /// is the next one.
+    /// Adds the star triangle `(v, x, y)` by its corners' entries (as [`Self::neighbour`]
+    /// returned them; distinct): its far edge is the next one.
     #[inline]
-    pub(crate) fn triangle(&mut self, x: u32, y: u32) {
+    pub(crate) fn triangle(&mut self, i: u8, j: u8) {
         let r = &mut self.r;
-        let base = r.base as usize;
-        let i = r.ids[..base].iter().position(|&e| e == x);
-        let j = r.ids[..base].iter().position(|&e| e == y);
-        match (i, j) {
-            (Some(i), Some(j)) if (r.tris as usize) < TRIANGLES => {
-                r.tri[r.tris as usize] = [i as u8, j as u8];
-                r.tris += 1;
-            }
-            _ => self.fits = false,
+        if (i as usize) < ENTRIES && (j as usize) < ENTRIES && (r.tris as usize) < TRIANGLES {
+            r.tri[r.tris as usize] = [i, j];
+            r.tris += 1;
+        } else {
+            self.fits = false;
         }
     }
 
@@ -222,12 +220,18 @@ impl IntoIterator for Entries {
     }
 }
 
-/// The records of a complex's vertices, indexed by vertex id (grown as records are stored).
+/// The records of a complex's vertices, indexed by vertex id (grown as records are stored),
+/// and whether each is present apart, a byte a vertex: the drops a change makes touch those
+/// bytes only, not the records' cache lines.
 #[derive(Clone, Default)]
 pub(crate) struct StarCache {
+    /// Per vertex, [`BASE`] if its record is present and [`FAR`] if its parallelograms are.
+    state: Vec<u8>,
     records: Vec<Record>,
-    /// Records present (with [`BASE`]): none means there is nothing to drop.
+    /// Records present: none means there is nothing to drop.
     present: usize,
+    /// Records are not kept ([`StarCache::set_kept`]).
+    off: bool,
 }
 
 impl std::fmt::Debug for StarCache {
@@ -237,10 +241,16 @@ impl std::fmt::Debug for StarCache {
 }
 
 impl StarCache {
-    /// `v`'s record, if one is present.
+    /// `v`'s record, if one is present (a copy, saying whether its parallelograms are).
     #[inline]
-    pub(crate) fn get(&self, v: u32) -> Option<&Record> {
-        self.records.get(v as usize).filter(|r| r.flags & BASE != 0)
+    pub(crate) fn get(&self, v: u32) -> Option<Record> {
+        let state = *self.state.get(v as usize)?;
+        if state & BASE == 0 {
+            return None;
+        }
+        let mut r = self.records[v as usize];
+        r.flags = (r.flags & !FAR) | (state & FAR);
+        Some(r)
     }
 
     /// Stores `r` as `v`'s record.
@@ -249,11 +259,30 @@ impl StarCache {
         if v >= self.records.len() {
             let n = (v + 1).max(2 * self.records.len()).max(64);
             self.records.resize(n, Record::default());
+            self.state.resize(n, 0);
         }
-        if self.records[v].flags & BASE == 0 {
+        if self.state[v] & BASE == 0 {
             self.present += 1;
         }
+        self.state[v] = BASE | (r.flags & FAR);
         self.records[v] = r;
+    }
+
+    /// Whether records are made and kept: where most vertices split or merge (the coarse kd
+    /// levels) nearly every record is dropped before it is read again, and making and dropping
+    /// them costs more than the walks they save. Turning them off drops them all.
+    pub(crate) fn set_kept(&mut self, kept: bool) {
+        if !kept && self.present > 0 {
+            self.state.fill(0);
+            self.present = 0;
+        }
+        self.off = !kept;
+    }
+
+    /// Whether records are made and kept.
+    #[inline]
+    pub(crate) fn kept(&self) -> bool {
+        !self.off
     }
 
     /// Whether no record is present (so that a change to the complex has none to drop).
@@ -265,10 +294,10 @@ impl StarCache {
     /// Drops `v`'s record.
     #[inline]
     pub(crate) fn invalidate(&mut self, v: u32) {
-        if let Some(r) = self.records.get_mut(v as usize)
-            && r.flags & BASE != 0
+        if let Some(s) = self.state.get_mut(v as usize)
+            && *s & BASE != 0
         {
-            r.flags = 0;
+            *s = 0;
             self.present -= 1;
         }
     }
@@ -276,8 +305,8 @@ impl StarCache {
     /// Drops `v`'s parallelograms (its star stays): a triangle across its far edges changed.
     #[inline]
     pub(crate) fn drop_far(&mut self, v: u32) {
-        if let Some(r) = self.records.get_mut(v as usize) {
-            r.flags &= !FAR;
+        if let Some(s) = self.state.get_mut(v as usize) {
+            *s &= !FAR;
         }
     }
 
@@ -296,23 +325,28 @@ impl StarCache {
     /// id to its new one (`u32::MAX` for a vertex that goes; a record naming one is dropped).
     pub(crate) fn renumbered(&self, alive: &[u32], new_id: &[u32]) -> StarCache {
         if self.present == 0 {
-            return StarCache::default();
+            return StarCache {
+                off: self.off,
+                ..StarCache::default()
+            };
         }
         let mut out = StarCache {
+            state: vec![0; alive.len()],
             records: vec![Record::default(); alive.len()],
             present: 0,
+            off: self.off,
         };
         for (i, &v) in alive.iter().enumerate() {
-            let Some(r) = self.get(v) else {
+            let Some(mut r) = self.get(v) else {
                 continue;
             };
-            let mut r = *r;
             let mut kept = true;
             for id in &mut r.ids[..r.len as usize] {
                 *id = new_id[*id as usize];
                 kept &= *id != u32::MAX;
             }
             if kept {
+                out.state[i] = BASE | (r.flags & FAR);
                 out.records[i] = r;
                 out.present += 1;
             }
@@ -330,12 +364,12 @@ mod tests {
         let mut c = StarCache::default();
         assert!(c.get(3).is_none() && c.is_empty());
         let mut b = RecordBuilder::new();
-        b.neighbour(7, 2);
-        b.neighbour(9, 2);
-        b.triangle(7, 9);
+        let i = b.neighbour(7, 2);
+        let j = b.neighbour(9, 2);
+        b.triangle(i, j);
         c.store(3, b.done());
         assert!(!c.is_empty() && !c.get(3).unwrap().far());
-        let mut f = RecordBuilder::far(c.get(3).unwrap());
+        let mut f = RecordBuilder::far(&c.get(3).unwrap());
         f.parallelogram(0, 11);
         c.store(3, f.done());
         let r = c.get(3).unwrap();
