@@ -38,13 +38,13 @@ impl GpuContext {
     /// Opens a device that can present to `window` (the interactive viewer, `tessd view`), and
     /// the window's surface: the same adapter preference and limits as [`open`](Self::open),
     /// among the adapters that support the surface. Unlike [`open`](Self::open)'s instance,
-    /// this one keeps the window-system extensions: a window needs them.
+    /// this one keeps the window-system extensions: a window needs them. The surface's formats
+    /// on the chosen adapter come with it.
     ///
     /// # Errors
     /// [`GpuError::NoAdapter`] when no adapter can draw on the window (the message says
     /// which packages give the software one), [`GpuError::DeviceRequest`] when every such
     /// adapter refuses a device, [`GpuError::Wgpu`] when the surface cannot be created.
-    /// The surface's formats on the chosen adapter come with it.
     #[allow(clippy::type_complexity)]
     pub fn open_for_window<W>(
         label: &str,
@@ -58,7 +58,7 @@ impl GpuContext {
             .create_surface(window)
             .map_err(|e| GpuError::Wgpu(format!("cannot draw on the window: {e}")))?;
         pollster::block_on(async {
-            let mut adapters: Vec<wgpu::Adapter> = instance
+            let adapters: Vec<wgpu::Adapter> = instance
                 .enumerate_adapters(wgpu::Backends::all())
                 .await
                 .into_iter()
@@ -69,18 +69,9 @@ impl GpuContext {
                     "no adapter can draw on this window".to_string(),
                 ));
             }
-            adapters.sort_by_key(|a| preference(a.get_info().device_type));
-            let mut first_error = None;
-            for adapter in adapters {
-                let formats = surface.get_capabilities(&adapter).formats;
-                match Self::open_on(adapter, label).await {
-                    Ok(context) => return Ok((context, surface, formats)),
-                    Err(e) => {
-                        first_error.get_or_insert(e);
-                    }
-                }
-            }
-            Err(first_error.expect("at least one adapter was tried"))
+            let (context, formats) =
+                Self::open_best(adapters, label, |a| surface.get_capabilities(a).formats).await?;
+            Ok((context, surface, formats))
         })
     }
 
@@ -104,12 +95,24 @@ impl GpuContext {
                 .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
             adapters.push(adapter);
         }
+        Ok(Self::open_best(adapters, label, |_| ()).await?.0)
+    }
+
+    /// Opens a device on the first of `adapters` (at least one) that gives one, in the order of
+    /// [`preference`], with what `about` says of that adapter; the first adapter's error when
+    /// none does.
+    async fn open_best<T>(
+        mut adapters: Vec<wgpu::Adapter>,
+        label: &str,
+        about: impl Fn(&wgpu::Adapter) -> T,
+    ) -> Result<(Self, T), GpuError> {
         // Stable: among adapters of one kind, wgpu's order (the backends' order) stands.
         adapters.sort_by_key(|a| preference(a.get_info().device_type));
         let mut first_error = None;
         for adapter in adapters {
+            let about = about(&adapter);
             match Self::open_on(adapter, label).await {
-                Ok(context) => return Ok(context),
+                Ok(context) => return Ok((context, about)),
                 Err(e) => {
                     first_error.get_or_insert(e);
                 }

@@ -209,8 +209,9 @@ pub fn decompress(request: Request, ctx: &JobContext) -> Result<Response, OpErro
     Ok(response)
 }
 
-/// A decoded mesh for the host: f32 positions, one face per triangle.
-fn to_mesh(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Mesh {
+/// A decoded mesh for the host: f32 positions, one face per triangle (`tessd view`'s `.tsc`
+/// worker shows its views through it too).
+pub fn to_mesh(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Mesh {
     let mut mesh = Mesh {
         positions: positions.iter().map(|p| p.map(|x| x as f32)).collect(),
         ..Mesh::default()

@@ -12,6 +12,7 @@ use tessd_simplify::{Method, SimplifyOptions};
 
 pub use super::done::Done;
 use super::subdivision::{self, Device, Job};
+use crate::ops::codec::to_mesh;
 
 /// The channel background work answers on, and how much of it is still running.
 pub struct Background {
@@ -84,7 +85,10 @@ impl Background {
                 let done = match session.view(&camera, pixel_error) {
                     Ok(view) => Done::Refined {
                         item,
-                        scene: Box::new(tessd_render::Scene::from_mesh(&view_mesh(&view))),
+                        scene: Box::new(tessd_render::Scene::from_mesh(&to_mesh(
+                            &view.positions,
+                            &view.triangles,
+                        ))),
                         cells: view.cells.len(),
                         triangles: view.triangles.len(),
                         bytes_read: view.bytes_read,
@@ -117,18 +121,6 @@ impl Drop for Background {
             let _ = handle.join();
         }
     }
-}
-
-/// A view-dependent decode as a mesh.
-fn view_mesh(view: &tessd_codec::ViewMesh) -> Mesh {
-    let mut mesh = Mesh {
-        positions: view.positions.iter().map(|p| p.map(|x| x as f32)).collect(),
-        ..Mesh::default()
-    };
-    for t in &view.triangles {
-        mesh.push_face(t);
-    }
-    mesh
 }
 
 /// The render thread's side of a `.tsc` item's worker.

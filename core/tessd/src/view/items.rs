@@ -39,6 +39,8 @@ pub struct MeshItem {
     pub shown: Option<(Scene, GpuScene)>,
     /// Triangles shown.
     pub triangles: usize,
+    /// The largest face id of the mesh shown (the next input's ids start after it).
+    pub face_ids: u32,
     /// The LOD chain once built (coarser and coarser), with each level's partition cells.
     pub lods: Option<Vec<(Mesh, Vec<tessd_simplify::Cell>)>>,
     /// The input coloured by the cells of the LOD shown, on the device (`P`: drawn instead of
@@ -168,6 +170,7 @@ impl MeshItem {
             cage: std::sync::Arc::new(cage),
             shown: None,
             triangles: 0,
+            face_ids: 0,
             lods: None,
             partition: None,
         }
@@ -209,6 +212,7 @@ impl MeshItem {
             .upload(&scene)
             .with_context(|| format!("{}: upload", self.path.display()))?;
         self.triangles = scene.vertices.len() / 3;
+        self.face_ids = scene.vertices.iter().map(|v| v.face_id).max().unwrap_or(0);
         self.shown = Some((scene, gpu));
         Ok(())
     }

@@ -148,17 +148,9 @@ impl ViewArgs {
     /// # Errors
     /// A size, vector or number out of range, naming its flag.
     pub fn options(self) -> Result<Options> {
-        let (w, h) = self
-            .size
-            .split_once(['x', 'X'])
-            .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
-            .filter(|&(w, h)| (1..=16384).contains(&w) && (1..=16384).contains(&h))
-            .ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--size must be WIDTHxHEIGHT, 1 to 16384 each, got {:?}",
-                    self.size
-                )
-            })?;
+        // the size rules of every other verb (`tessd render`'s limits), under the flag's name
+        let (w, h) = crate::ops::params::camera::parse_size(Some(&serde_json::json!(self.size)))
+            .map_err(|e| anyhow::anyhow!("--size: {}", e.message))?;
         if !(self.fov > 0.0 && self.fov < 180.0) {
             bail!("--fov must be between 0 and 180 degrees, got {}", self.fov);
         }

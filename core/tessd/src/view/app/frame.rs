@@ -220,9 +220,7 @@ pub(super) struct Shot {
 /// Faces an item's ids run over (the next item's ids start after them).
 pub(super) fn item_faces(item: &Item) -> u32 {
     match item {
-        Item::Mesh(m) => m.shown.as_ref().map_or(0, |(s, _)| {
-            s.vertices.iter().map(|v| v.face_id).max().unwrap_or(0)
-        }),
+        Item::Mesh(m) => m.face_ids,
         Item::Brep(b) => b.faces as u32,
     }
 }
